@@ -1,0 +1,30 @@
+//! patchvis bakes precomputed visibility for huge triangle meshes into a small `.pvis` file,
+//! and reads it back in a `no_std`, allocation-free reader.
+//!
+//! The pipeline follows Meruvia 2002, "Visibility preprocessing using spherical sampling of
+//! polygonal patches", and the modules follow the data:
+//!
+//! [`ooc`] (memory-mapped mesh) → [`tiling`] (patches) → [`sphere`] (sampling directions) →
+//! [`sampler`] (ID buffers → bitfields) → [`format`] (`.pvis` writer) → [`runtime`] (reader).
+//!
+//! Only [`sphere`] and [`runtime`] exist without the `bake` feature; they need nothing but
+//! `core`. See `ARCHITECTURE.md` for the invariants and `spec/FORMAT.md` for the file format.
+#![cfg_attr(not(feature = "std"), no_std)]
+#![warn(missing_docs)]
+
+pub mod runtime;
+pub mod sphere;
+
+#[cfg(feature = "bake")]
+pub mod format;
+#[cfg(feature = "bake")]
+pub mod ooc;
+#[cfg(feature = "bake")]
+pub mod progress;
+#[cfg(feature = "bake")]
+pub mod sampler;
+#[cfg(feature = "bake")]
+pub mod tiling;
+
+#[cfg(all(feature = "bake", not(feature = "std")))]
+compile_error!("the `bake` feature needs `std`");

@@ -1,0 +1,3 @@
+//! The `patchvis` command-line tool.
+
+fn main() {}
