@@ -88,11 +88,16 @@ fn ptch(counts: &[u32]) -> Vec<u8> {
 
 /// VISB with `views` rows over `patches` patches; view v sees patches p with (p + v) % 3 == 0.
 fn visb(views: u32, patches: u32) -> Vec<u8> {
+    visb_where(views, patches, |v, p| (p + v) % 3 == 0)
+}
+
+/// VISB where view v sees patch p iff `sees(v, p)`.
+fn visb_where(views: u32, patches: u32, sees: impl Fn(u32, u32) -> bool) -> Vec<u8> {
     let row_bytes = patches.div_ceil(8) as usize;
     let mut out = vec![0u8; 8 + views as usize * row_bytes];
     for v in 0..views {
         for p in 0..patches {
-            if (p + v) % 3 == 0 {
+            if sees(v, p) {
                 out[8 + v as usize * row_bytes + p as usize / 8] |= 1 << (p % 8);
             }
         }
@@ -402,7 +407,109 @@ fn errors_display_one_precise_line() {
     assert_eq!(s, "section 0x00010203 appears twice");
 }
 
+/// A level-2 file (66 views, 66 patches of one triangle) where view v sees only patch v.
+fn diagonal() -> Vec<u8> {
+    assemble(&[
+        (*b"CAMR", camr(2)),
+        (*b"PTCH", ptch(&[1; 66])),
+        (*b"VISB", visb_where(66, 66, |v, p| v == p)),
+    ])
+}
+
+/// `center + dir · scale` for the fixture's centre (1, 2, 3).
+fn eye(dir: [f32; 3], scale: f32) -> [f32; 3] {
+    [
+        1.0 + dir[0] * scale,
+        2.0 + dir[1] * scale,
+        3.0 + dir[2] * scale,
+    ]
+}
+
+#[test]
+fn query_from_a_sample_position_sees_its_view() {
+    let file = diagonal();
+    let pvis = Pvis::parse(&file).unwrap();
+    let mut scratch = vec![0u64; pvis.scratch_words()];
+    let distance = pvis.sampling().distance;
+    for v in 0..66 {
+        let vis = pvis.query(
+            eye(crate::sphere::direction(v), distance * 1.5),
+            &mut scratch,
+        );
+        assert!(!vis.inside_sphere);
+        assert!(vis.leaf.contains(&v), "view {v}: leaf {:?}", vis.leaf);
+        assert!(vis.contains(v));
+        assert_eq!(vis.count(), 3, "the leaf's three corners");
+        let mut corners = vis.leaf;
+        corners.sort();
+        assert!(vis.patches().eq(corners));
+    }
+    let vis = pvis.query([1.0, 2.0, 3.0], &mut scratch);
+    assert!(vis.inside_sphere);
+}
+
+#[test]
+fn query_is_the_or_of_the_leaf_rows() {
+    let file = valid();
+    let pvis = Pvis::parse(&file).unwrap();
+    let mut scratch = [0u64; 1];
+    let mut row = [0u64; 1];
+    for dir in [
+        [0.3, -0.2, 0.9],
+        [-1.0, 0.0, 0.0],
+        [0.5, 0.5, -0.1],
+        [0.0, 0.0, 0.0],
+    ] {
+        let vis = pvis.query(eye(dir, 1.0), &mut scratch);
+        let leaf = crate::sphere::locate(dir, 1).views;
+        assert_eq!(vis.leaf, leaf);
+        let mut expected = 0;
+        for view in leaf {
+            pvis.view_row(view, &mut row);
+            expected |= row[0];
+        }
+        assert_eq!(vis.bits(), [expected]);
+    }
+}
+
+#[test]
+fn ranges_merge_adjacent_patches() {
+    let file = valid();
+    let pvis = Pvis::parse(&file).unwrap();
+    let mut scratch = [0u64; 1];
+    // A non-finite eye gets every patch: one range over all 39 triangles.
+    let vis = pvis.query([f32::NAN, 0.0, 0.0], &mut scratch);
+    assert!(vis.inside_sphere);
+    assert_eq!(vis.count(), 10);
+    assert!(pvis.ranges(&vis).eq([(0, 39)]));
+    // Elsewhere: the merged ranges equal merging the visible patch records by hand.
+    let vis = pvis.query(eye([1.0, 0.0, 0.0], 5.0), &mut scratch);
+    let patches: Vec<u32> = vis.patches().collect();
+    let mut expected = Vec::new();
+    for p in patches {
+        let info = pvis.patch(p);
+        match expected.last_mut() {
+            Some((first, count)) if *first + *count == info.first_triangle => {
+                *count += info.triangle_count
+            }
+            _ => expected.push((info.first_triangle, info.triangle_count)),
+        }
+    }
+    assert!(ranges(&pvis, &vis).eq(expected));
+}
+
 proptest! {
+    #[test]
+    fn queries_never_panic(x in any::<f32>(), y in any::<f32>(), z in any::<f32>()) {
+        let file = diagonal();
+        let pvis = Pvis::parse(&file).unwrap();
+        let mut scratch = vec![0u64; pvis.scratch_words()];
+        let vis = pvis.query([x, y, z], &mut scratch);
+        prop_assert!(vis.count() >= 1);
+        prop_assert!(vis.patches().all(|p| p < 66));
+        prop_assert_eq!(pvis.ranges(&vis).map(|(_, c)| c).sum::<u32>(), vis.count());
+    }
+
     #[test]
     fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..600)) {
         let _ = Pvis::parse(&bytes);
@@ -436,6 +543,9 @@ proptest! {
             for p in 0..pvis.patch_count() {
                 let _ = pvis.patch(p);
             }
+            let mut scratch = vec![0u64; pvis.scratch_words()];
+            let vis = pvis.query([0.5, -7.0, 2.0], &mut scratch);
+            let _ = pvis.ranges(&vis).count();
         }
     }
 }
