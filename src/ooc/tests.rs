@@ -714,6 +714,20 @@ fn untrusted_counts_do_not_allocate_up_front() {
 }
 
 #[test]
+fn empty_elements_with_huge_counts_are_skipped_at_once() {
+    let text = format!(
+        "ply\nformat ascii 1.0\nelement nothing 4000000000\n{}element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 1 1\n2 2 2\n3 0 1 2\n",
+        HEAD.strip_prefix("ply\nformat ascii 1.0\n").unwrap()
+    );
+    assert_eq!(
+        open_bytes("nothing.ply", text.as_bytes())
+            .unwrap()
+            .triangle_count(),
+        1
+    );
+}
+
+#[test]
 fn file_system_errors() {
     let err = Mesh::open(Path::new("model.xyz")).unwrap_err();
     assert_eq!(err.kind(), MeshErrorKind::UnsupportedFormat);

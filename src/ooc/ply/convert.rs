@@ -157,6 +157,10 @@ impl Values for AsciiTokens<'_> {
         Ok(())
     }
     fn skip_element(&mut self, element: &Element) -> Result<(), Fault> {
+        if element.properties.is_empty() {
+            // Records without properties take no tokens; do not spin through a huge count.
+            return Ok(());
+        }
         for _ in 0..element.count {
             for p in &element.properties {
                 match p.ty {
