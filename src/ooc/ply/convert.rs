@@ -1,0 +1,351 @@
+//! Converting PLY reader: any encoding, any scalar types, any property order, polygons.
+//!
+//! Streams once through the body, element by element, keeping only `x, y, z` (as `f32`) and
+//! the face index lists (fan-triangulated into `u32` triples: `(i0, ik, ik+1)`); everything else
+//! is read and dropped. Reservations are capped by what the rest of the file can hold, so an
+//! untrusted header count cannot allocate before the data is seen. Cost: one pass; ASCII is
+//! dominated by number parsing (tens of MB/s), binary by the per-value byte-order match.
+
+use super::super::error::{ErrorPosition, Fault, MeshErrorKind};
+use super::binary::BinaryCursor;
+use super::header::{Element, Encoding, Header, PropertyType, ScalarType};
+use super::{Body, BoundsBuilder, Schema, reservation};
+
+/// One source of body values: ASCII tokens or binary bytes.
+trait Values {
+    /// The next scalar of type `ty`, exact in an `f64`.
+    fn scalar(&mut self, ty: ScalarType) -> Result<f64, Fault>;
+    /// A list count (an integer, checked non-negative).
+    fn list_count(&mut self, ty: ScalarType) -> Result<u64, Fault>;
+    /// Skips `count` values of `ty`.
+    fn skip(&mut self, count: u64, ty: ScalarType) -> Result<(), Fault>;
+    /// Skips a whole element.
+    fn skip_element(&mut self, element: &Element) -> Result<(), Fault>;
+    /// Where the next value starts (ASCII: skips blanks first to find its line).
+    fn position(&mut self) -> ErrorPosition;
+    /// Bytes left, for capping reservations.
+    fn remaining(&self) -> usize;
+    /// Fewest bytes one record of `element` can take in this encoding.
+    fn min_record_bytes(&self, element: &Element) -> usize;
+    /// Checks up front that a fixed-size element fits, for a clearer truncation message.
+    fn check_fits(&self, element: &Element) -> Result<(), Fault>;
+}
+
+impl Values for BinaryCursor<'_> {
+    fn scalar(&mut self, ty: ScalarType) -> Result<f64, Fault> {
+        BinaryCursor::scalar(self, ty)
+    }
+    fn list_count(&mut self, ty: ScalarType) -> Result<u64, Fault> {
+        BinaryCursor::list_count(self, ty)
+    }
+    fn skip(&mut self, count: u64, ty: ScalarType) -> Result<(), Fault> {
+        BinaryCursor::skip(self, count, ty)
+    }
+    fn skip_element(&mut self, element: &Element) -> Result<(), Fault> {
+        BinaryCursor::skip_element(self, element)
+    }
+    fn position(&mut self) -> ErrorPosition {
+        ErrorPosition::Byte(self.offset as u64)
+    }
+    fn remaining(&self) -> usize {
+        BinaryCursor::remaining(self)
+    }
+    fn min_record_bytes(&self, element: &Element) -> usize {
+        element
+            .properties
+            .iter()
+            .map(|p| match p.ty {
+                PropertyType::Scalar(s) => s.size(),
+                PropertyType::List { count, .. } => count.size(),
+            })
+            .sum()
+    }
+    fn check_fits(&self, element: &Element) -> Result<(), Fault> {
+        match element.fixed_size() {
+            Some(size) if u128::from(element.count) * size as u128 > self.remaining() as u128 => {
+                Err(self.element_truncated(element, size))
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+/// ASCII body: whitespace-separated tokens, line numbers kept for errors.
+struct AsciiTokens<'a> {
+    bytes: &'a [u8],
+    offset: usize,
+    line: u64,
+}
+
+impl<'a> AsciiTokens<'a> {
+    fn skip_blanks(&mut self) {
+        while let Some(&b) = self.bytes.get(self.offset) {
+            if !b.is_ascii_whitespace() {
+                break;
+            }
+            if b == b'\n' {
+                self.line += 1;
+            }
+            self.offset += 1;
+        }
+    }
+
+    fn next_token(&mut self, ty: ScalarType) -> Result<&'a [u8], Fault> {
+        self.skip_blanks();
+        let start = self.offset;
+        while self
+            .bytes
+            .get(self.offset)
+            .is_some_and(|b| !b.is_ascii_whitespace())
+        {
+            self.offset += 1;
+        }
+        if start == self.offset {
+            return Err(Fault::at_line(
+                MeshErrorKind::Truncated,
+                self.line,
+                format!("the file ends here, expected a {} value", ty.name()),
+            ));
+        }
+        Ok(&self.bytes[start..self.offset])
+    }
+}
+
+impl Values for AsciiTokens<'_> {
+    fn scalar(&mut self, ty: ScalarType) -> Result<f64, Fault> {
+        let token = self.next_token(ty)?;
+        let text = std::str::from_utf8(token).unwrap_or("");
+        let value = if ty.is_integer() {
+            let (lo, hi) = ty.integer_range();
+            text.parse::<i64>()
+                .ok()
+                .filter(|v| (lo..=hi).contains(v))
+                .map(|v| v as f64)
+        } else if ty == ScalarType::F32 {
+            // Parsed as f32 directly: going through f64 could round twice.
+            text.parse::<f32>().ok().map(f64::from)
+        } else {
+            text.parse::<f64>().ok()
+        };
+        value.ok_or_else(|| {
+            Fault::at_line(
+                MeshErrorKind::BadValue,
+                self.line,
+                format!(
+                    "expected a {} value, found '{}'",
+                    ty.name(),
+                    super::super::error::snippet(token)
+                ),
+            )
+        })
+    }
+    fn list_count(&mut self, ty: ScalarType) -> Result<u64, Fault> {
+        let count = self.scalar(ty)?;
+        if count < 0.0 {
+            return Err(Fault::at_line(
+                MeshErrorKind::BadValue,
+                self.line,
+                format!("list count {count}, expected a non-negative count"),
+            ));
+        }
+        Ok(count as u64)
+    }
+    fn skip(&mut self, count: u64, ty: ScalarType) -> Result<(), Fault> {
+        for _ in 0..count {
+            self.scalar(ty)?;
+        }
+        Ok(())
+    }
+    fn skip_element(&mut self, element: &Element) -> Result<(), Fault> {
+        if element.properties.is_empty() {
+            // Records without properties take no tokens; do not spin through a huge count.
+            return Ok(());
+        }
+        for _ in 0..element.count {
+            for p in &element.properties {
+                match p.ty {
+                    PropertyType::Scalar(s) => self.skip(1, s)?,
+                    PropertyType::List { count, item } => {
+                        let n = self.list_count(count)?;
+                        self.skip(n, item)?;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+    fn position(&mut self) -> ErrorPosition {
+        self.skip_blanks();
+        ErrorPosition::Line(self.line)
+    }
+    fn remaining(&self) -> usize {
+        self.bytes.len().saturating_sub(self.offset)
+    }
+    fn min_record_bytes(&self, element: &Element) -> usize {
+        // A value and its separator.
+        2 * element.properties.len()
+    }
+    fn check_fits(&self, _: &Element) -> Result<(), Fault> {
+        Ok(())
+    }
+}
+
+/// Converts the whole body.
+pub(crate) fn read(bytes: &[u8], header: &Header, schema: &Schema) -> Result<Body, Fault> {
+    match header.encoding {
+        Encoding::Ascii => run(
+            &mut AsciiTokens {
+                bytes,
+                offset: header.body_offset,
+                line: header.body_line,
+            },
+            header,
+            schema,
+        ),
+        Encoding::BinaryLittleEndian => run(
+            &mut BinaryCursor::new(bytes, header.body_offset, false),
+            header,
+            schema,
+        ),
+        Encoding::BinaryBigEndian => run(
+            &mut BinaryCursor::new(bytes, header.body_offset, true),
+            header,
+            schema,
+        ),
+    }
+}
+
+fn run(values: &mut impl Values, header: &Header, schema: &Schema) -> Result<Body, Fault> {
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    let mut bounds = BoundsBuilder::new();
+    let last = schema.vertex.max(schema.face);
+    // Elements after both vertices and faces are never read.
+    for (i, element) in header.elements.iter().enumerate().take(last + 1) {
+        values.check_fits(element)?;
+        if i == schema.vertex {
+            read_vertices(values, element, schema, &mut positions, &mut bounds)?;
+        } else if i == schema.face {
+            read_faces(values, element, schema, &mut triangles)?;
+        } else {
+            values.skip_element(element)?;
+        }
+    }
+    Ok(Body::Converted {
+        positions,
+        triangles,
+        bounds: bounds.finish(),
+    })
+}
+
+fn read_vertices(
+    values: &mut impl Values,
+    element: &Element,
+    schema: &Schema,
+    positions: &mut Vec<[f32; 3]>,
+    bounds: &mut BoundsBuilder,
+) -> Result<(), Fault> {
+    positions.reserve(reservation(
+        element.count,
+        values.remaining(),
+        values.min_record_bytes(element),
+    ));
+    for v in 0..element.count {
+        let at = values.position();
+        let mut p = [0f32; 3];
+        for (i, property) in element.properties.iter().enumerate() {
+            match property.ty {
+                PropertyType::Scalar(s) => {
+                    let value = values.scalar(s)?;
+                    if let Some(k) = schema.xyz.iter().position(|&x| x == i) {
+                        p[k] = value as f32;
+                    }
+                }
+                PropertyType::List { count, item } => {
+                    let n = values.list_count(count)?;
+                    values.skip(n, item)?;
+                }
+            }
+        }
+        if !p.iter().all(|c| c.is_finite()) {
+            return Err(Fault::new(
+                MeshErrorKind::NonFinite,
+                Some(at),
+                format!(
+                    "vertex {v} is ({}, {}, {}) as float, expected finite coordinates",
+                    p[0], p[1], p[2]
+                ),
+            ));
+        }
+        bounds.add(p);
+        positions.push(p);
+    }
+    Ok(())
+}
+
+fn read_faces(
+    values: &mut impl Values,
+    element: &Element,
+    schema: &Schema,
+    triangles: &mut Vec<[u32; 3]>,
+) -> Result<(), Fault> {
+    triangles.reserve(reservation(
+        element.count,
+        values.remaining(),
+        values.min_record_bytes(element),
+    ));
+    let mut polygon: Vec<u32> = Vec::new();
+    for f in 0..element.count {
+        for (i, property) in element.properties.iter().enumerate() {
+            let PropertyType::List { count, item } = property.ty else {
+                if let PropertyType::Scalar(s) = property.ty {
+                    values.scalar(s)?;
+                }
+                continue;
+            };
+            let at = values.position();
+            let n = values.list_count(count)?;
+            if i != schema.indices {
+                values.skip(n, item)?;
+                continue;
+            }
+            if n < 3 {
+                return Err(Fault::new(
+                    MeshErrorKind::BadFace,
+                    Some(at),
+                    format!("face {f} has {n} vertices, expected at least 3"),
+                ));
+            }
+            polygon.clear();
+            for _ in 0..n {
+                let at = values.position();
+                let index = values.scalar(item)?;
+                if !(0.0..f64::from(schema.vertex_count)).contains(&index) {
+                    return Err(Fault::new(
+                        MeshErrorKind::BadIndex,
+                        Some(at),
+                        format!(
+                            "face {f} has vertex index {index}, expected < {} vertices",
+                            schema.vertex_count
+                        ),
+                    ));
+                }
+                polygon.push(index as u32);
+            }
+            for pair in polygon[1..].windows(2) {
+                triangles.push([polygon[0], pair[0], pair[1]]);
+            }
+            if u32::try_from(triangles.len()).is_err() {
+                return Err(Fault::new(
+                    MeshErrorKind::TooLarge,
+                    Some(values.position()),
+                    format!(
+                        "more than {} triangles after splitting polygons, expected u32 indices",
+                        u32::MAX
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}

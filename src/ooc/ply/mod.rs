@@ -1,0 +1,185 @@
+//! PLY input: find the vertex and face elements, then serve them in place or convert them.
+//!
+//! A binary little-endian file whose vertices carry `float x, y, z` in fixed-size records and
+//! whose faces are fixed-size records starting with `list uchar int|uint vertex_indices`, every
+//! count 3, is used in place ([`in_place`]): opening costs one validation pass over the mapped
+//! bytes. Everything else (ASCII, big-endian, `double` or integer coordinates, polygons, any
+//! property order) is converted once, streaming through the file ([`convert`]), into the
+//! owned layout of [`super::Layout`].
+
+mod binary;
+mod convert;
+pub(crate) mod header;
+mod in_place;
+
+use super::Bounds;
+use super::error::{Fault, MeshErrorKind};
+use header::{Header, PropertyType};
+
+/// Where the mesh lives in a PLY file's header: element and property indices.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Schema {
+    /// Index of the `vertex` element.
+    pub(crate) vertex: usize,
+    /// Property indices of `x`, `y`, `z` within it (all scalars).
+    pub(crate) xyz: [usize; 3],
+    pub(crate) vertex_count: u32,
+    /// Index of the `face` element.
+    pub(crate) face: usize,
+    /// Property index of its `vertex_indices` (or `vertex_index`) list, integer items.
+    pub(crate) indices: usize,
+}
+
+/// What reading a PLY body produced.
+pub(crate) enum Body {
+    /// The file's own bytes serve the mesh.
+    InPlace {
+        layout: super::Layout,
+        triangle_count: u32,
+        bounds: Bounds,
+    },
+    /// The mesh had to be converted; the caller stores it in the owned layout.
+    Converted {
+        positions: Vec<[f32; 3]>,
+        triangles: Vec<[u32; 3]>,
+        bounds: Bounds,
+    },
+}
+
+/// Parses and validates a whole PLY file.
+pub(crate) fn read(bytes: &[u8]) -> Result<(Schema, Body), Fault> {
+    let header = header::parse(bytes)?;
+    let schema = schema(&header)?;
+    if let Some(body) = in_place::try_read(bytes, &header, &schema)? {
+        return Ok((schema, body));
+    }
+    Ok((schema, convert::read(bytes, &header, &schema)?))
+}
+
+/// Locates and checks the vertex and face elements.
+fn schema(header: &Header) -> Result<Schema, Fault> {
+    use MeshErrorKind::*;
+    let end_line = header.body_line - 1;
+    let find = |name: &str| header.elements.iter().position(|e| e.name == name);
+
+    let Some(vertex) = find("vertex") else {
+        return Err(Fault::at_line(
+            NoVertices,
+            end_line,
+            "the header has no 'vertex' element, expected one with x, y and z",
+        ));
+    };
+    let element = &header.elements[vertex];
+    let mut xyz = [0; 3];
+    for (slot, name) in xyz.iter_mut().zip(["x", "y", "z"]) {
+        let Some(p) = element.property(name) else {
+            return Err(Fault::at_line(
+                MissingProperty,
+                element.line,
+                format!("element 'vertex' has no property '{name}', expected x, y and z"),
+            ));
+        };
+        if !matches!(element.properties[p].ty, PropertyType::Scalar(_)) {
+            return Err(Fault::at_line(
+                BadHeader,
+                element.line,
+                format!("vertex property '{name}' is a list, expected a scalar"),
+            ));
+        }
+        *slot = p;
+    }
+    if element.count == 0 {
+        return Err(Fault::at_line(
+            NoVertices,
+            element.line,
+            "element 'vertex' has 0 vertices, expected at least 1",
+        ));
+    }
+    let Ok(vertex_count) = u32::try_from(element.count) else {
+        return Err(Fault::at_line(
+            TooLarge,
+            element.line,
+            format!(
+                "{} vertices, expected at most {} (u32 indices)",
+                element.count,
+                u32::MAX
+            ),
+        ));
+    };
+
+    let point_cloud = || {
+        Fault::at_line(
+            NoFaces,
+            end_line,
+            format!("point cloud: the file has {vertex_count} vertices but no faces"),
+        )
+    };
+    let Some(face) = find("face") else {
+        return Err(point_cloud());
+    };
+    let element = &header.elements[face];
+    let Some(indices) = element
+        .property("vertex_indices")
+        .or_else(|| element.property("vertex_index"))
+    else {
+        return Err(Fault::at_line(
+            MissingProperty,
+            element.line,
+            "element 'face' has no 'vertex_indices' (or 'vertex_index') list",
+        ));
+    };
+    match element.properties[indices].ty {
+        PropertyType::List { item, .. } if item.is_integer() => {}
+        _ => {
+            return Err(Fault::at_line(
+                BadHeader,
+                element.line,
+                "expected 'property list <count type> <integer type> vertex_indices'",
+            ));
+        }
+    }
+    if element.count == 0 {
+        return Err(point_cloud());
+    }
+    Ok(Schema {
+        vertex,
+        xyz,
+        vertex_count,
+        face,
+        indices,
+    })
+}
+
+/// Grows bounds one point at a time; the first point sets them.
+pub(crate) struct BoundsBuilder {
+    bounds: Bounds,
+}
+
+impl BoundsBuilder {
+    pub(crate) fn new() -> BoundsBuilder {
+        BoundsBuilder {
+            bounds: Bounds {
+                min: [f32::INFINITY; 3],
+                max: [f32::NEG_INFINITY; 3],
+            },
+        }
+    }
+    #[inline]
+    pub(crate) fn add(&mut self, p: [f32; 3]) {
+        for ((lo, hi), c) in self.bounds.min.iter_mut().zip(&mut self.bounds.max).zip(p) {
+            *lo = lo.min(c);
+            *hi = hi.max(c);
+        }
+    }
+    pub(crate) fn finish(self) -> Bounds {
+        self.bounds
+    }
+}
+
+/// How many records of at least `min_record_bytes` bytes can follow in `remaining` bytes:
+/// the cap on reservations, so a header count of four billion cannot allocate before the
+/// data is seen.
+pub(crate) fn reservation(count: u64, remaining: usize, min_record_bytes: usize) -> usize {
+    let fit = remaining / min_record_bytes.max(1);
+    usize::try_from(count).map_or(fit, |c| c.min(fit))
+}
