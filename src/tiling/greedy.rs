@@ -7,8 +7,8 @@
 //! left. A patch without neighbours is a whole connected component and is set aside.
 //!
 //! Data structures, chosen so a run is O(n log n):
-//! - a binary min-heap of `(area, id, version)` with lazy invalidation: fusing bumps the
-//!   survivor's version, so older entries of both patches are skipped when popped;
+//! - a min-priority queue of `(area, id, version)` with lazy invalidation ([`super::queue`]):
+//!   fusing bumps the survivor's version, so older entries of both patches are skipped;
 //! - union–find over patch ids (a patch is named by one of its triangles), so neighbour lists
 //!   may keep stale ids and resolve them on use;
 //! - neighbour lists merged small-into-large, compacted (resolved, deduplicated) when a patch is
@@ -18,10 +18,10 @@
 //! the result is the same on every run and for every thread count.
 
 use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 
 use super::aabb::Aabb;
 use super::components::find;
+use super::queue::{FusionQueue, entry, id_and_version};
 
 /// A list is compacted once its length exceeds twice its last compacted length plus this
 /// slack. The slack spares tiny lists from constant re-compaction; the doubling keeps the
@@ -38,37 +38,6 @@ pub(crate) struct Fusion {
     compacted_len: Vec<usize>,
     alive: u32,
 }
-
-/// A heap entry; `Ord` is reversed so that `BinaryHeap` pops the smallest area, then id.
-struct Candidate {
-    area: f64,
-    id: u32,
-    version: u32,
-}
-
-impl Ord for Candidate {
-    fn cmp(&self, other: &Self) -> Ordering {
-        other
-            .area
-            .total_cmp(&self.area)
-            .then(other.id.cmp(&self.id))
-            .then(other.version.cmp(&self.version))
-    }
-}
-
-impl PartialOrd for Candidate {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-
-impl PartialEq for Candidate {
-    fn eq(&self, other: &Self) -> bool {
-        self.cmp(other) == Ordering::Equal
-    }
-}
-
-impl Eq for Candidate {}
 
 impl Fusion {
     /// One patch per triangle, with the triangles' areas, boxes and neighbour lists.
@@ -117,19 +86,17 @@ impl Fusion {
     /// Fuses patches, starting from the alive patches `seeds`, until `target` patches remain
     /// or no seed-reachable patch has a neighbour. Returns the number of fusions.
     pub fn fuse(&mut self, seeds: &[u32], target: u32) -> u32 {
-        let mut heap: BinaryHeap<Candidate> = seeds
-            .iter()
-            .map(|&p| Candidate {
-                area: self.area[p as usize],
-                id: p,
-                version: self.version[p as usize],
-            })
-            .collect();
+        let mut queue = FusionQueue::new(
+            seeds
+                .iter()
+                .map(|&p| entry(self.area[p as usize], p, self.version[p as usize]))
+                .collect(),
+        );
         let mut fusions = 0;
         while self.alive > target {
-            let Some(c) = heap.pop() else { break };
-            let p = c.id;
-            if self.parent[p as usize] != p || self.version[p as usize] != c.version {
+            let Some(e) = queue.pop() else { break };
+            let (p, version) = id_and_version(e);
+            if self.parent[p as usize] != p || self.version[p as usize] != version {
                 continue; // Stale: fused away, or re-queued with a newer area.
             }
             self.compact(p);
@@ -137,11 +104,7 @@ impl Fusion {
                 continue; // A whole connected component: set aside, never queued again.
             };
             let s = self.unite(p, q);
-            heap.push(Candidate {
-                area: self.area[s as usize],
-                id: s,
-                version: self.version[s as usize],
-            });
+            queue.push(entry(self.area[s as usize], s, self.version[s as usize]));
             fusions += 1;
         }
         fusions

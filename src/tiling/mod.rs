@@ -18,6 +18,7 @@ mod bounds;
 mod components;
 mod greedy;
 mod morton;
+mod queue;
 mod reorder;
 
 #[cfg(test)]
@@ -122,10 +123,15 @@ pub fn tile(mesh: &Mesh, target: u32) -> Result<Tiling, TilingError> {
         // Every remaining patch is a whole component; link them by proximity and go on.
         let alive = fusion.alive_ids();
         let boxed: Vec<(u32, Aabb)> = alive.iter().map(|&p| (p, fusion.bbox(p))).collect();
+        // `alive > target >= 1`, so there is a first box to start the union from.
         let all = boxed
             .iter()
-            .skip(1)
-            .fold(boxed[0].1, |m, (_, b)| m.union(b));
+            .map(|(_, b)| *b)
+            .reduce(|m, b| m.union(&b))
+            .unwrap_or(Aabb {
+                min: [0.0; 3],
+                max: [0.0; 3],
+            });
         for (p, links) in components::proximity_links(&boxed, &all) {
             fusion.set_neighbours(p, links);
         }
