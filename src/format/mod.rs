@@ -1,2 +1,163 @@
-//! The `.pvis` writer. Layout constants come from [`crate::runtime`], so writer and reader
-//! cannot drift apart. Format: `spec/FORMAT.md`.
+//! The `.pvis` writer: lays out header, section table, CAMR, PTCH, VISB and the CRC-32C
+//! trailer (spec `spec/FORMAT.md`), and writes files atomically.
+//!
+//! Every offset, length and limit comes from [`crate::runtime::consts`], so writer and reader
+//! cannot drift apart; `encode` also runs the reader over its own output. Output is
+//! byte-deterministic: the same contents give the same bytes. Cost: one pass over the
+//! visibility matrix plus one CRC and one validation pass over the output.
+
+mod atomic;
+#[cfg(test)]
+mod tests;
+
+pub use atomic::write_atomic;
+
+use crate::runtime::Pvis;
+use crate::runtime::consts::*;
+use crate::runtime::crc32c::crc32c;
+use crate::sampler::{SamplingParams, VisibilityMatrix};
+use crate::sphere;
+use crate::tiling::Patch;
+
+/// What a bake produced, ready to be encoded.
+#[derive(Clone, Copy, Debug)]
+pub struct BakeContents<'a> {
+    /// Where the sampling cameras were.
+    pub sampling: &'a SamplingParams,
+    /// Triangles in the (reordered) mesh; the patches' ranges cover exactly these.
+    pub triangle_count: u64,
+    /// The patches, ranges contiguous in order from triangle 0.
+    pub patches: &'a [Patch],
+    /// Which patches each view sees: `view_count(level)` rows of `patches.len()` bits.
+    pub visibility: &'a VisibilityMatrix,
+}
+
+/// The sections this writer emits, in file order.
+const SECTIONS: [[u8; 4]; 3] = [TAG_CAMR, TAG_PTCH, TAG_VISB];
+
+/// Encodes `contents` as a `.pvis` file.
+///
+/// # Panics
+/// If the contents break the format's rules — a broken caller contract, as the bake
+/// pipeline's own output always satisfies them: ranges not contiguous from 0 or not summing to
+/// `triangle_count`, a matrix whose size disagrees with the level or patch count, limits
+/// exceeded, non-finite values. The message is the reader's error.
+pub fn encode(contents: &BakeContents) -> Vec<u8> {
+    let params = contents.sampling;
+    let patch_count = contents.patches.len() as u64;
+    let views = sphere::view_count(params.level.min(MAX_LEVEL));
+    assert_eq!(
+        (
+            contents.visibility.views(),
+            contents.visibility.patches() as u64
+        ),
+        (views, patch_count),
+        "visibility matrix size (views, patches) disagrees with the level and patch table"
+    );
+
+    let camr = camr(params, views);
+    let ptch = ptch(contents.triangle_count, contents.patches);
+    let visb = visb(contents.visibility);
+
+    let table_end = HEADER_LEN + SECTION_ENTRY_LEN * SECTIONS.len() as u64;
+    let mut offsets = [0u64; 3];
+    let mut end = table_end;
+    for (offset, body) in offsets.iter_mut().zip([&camr, &ptch, &visb]) {
+        *offset = end.next_multiple_of(SECTION_ALIGN);
+        end = *offset + body.len() as u64;
+    }
+    let file_length = end + TRAILER_LEN;
+
+    let mut out = Vec::with_capacity(file_length as usize);
+    out.extend_from_slice(&MAGIC);
+    out.extend_from_slice(&VERSION.to_le_bytes());
+    out.extend_from_slice(&KNOWN_FLAGS.to_le_bytes());
+    out.extend_from_slice(&file_length.to_le_bytes());
+    out.extend_from_slice(&(SECTIONS.len() as u32).to_le_bytes());
+    out.extend_from_slice(&0u32.to_le_bytes());
+    for ((tag, offset), body) in SECTIONS.iter().zip(offsets).zip([&camr, &ptch, &visb]) {
+        out.extend_from_slice(tag);
+        out.extend_from_slice(&0u32.to_le_bytes());
+        out.extend_from_slice(&offset.to_le_bytes());
+        out.extend_from_slice(&(body.len() as u64).to_le_bytes());
+    }
+    for (offset, body) in offsets.iter().zip([&camr, &ptch, &visb]) {
+        out.resize(*offset as usize, 0);
+        out.extend_from_slice(body);
+    }
+    let crc = crc32c(&out);
+    out.extend_from_slice(&crc.to_le_bytes());
+    debug_assert_eq!(out.len() as u64, file_length);
+
+    if let Err(error) = Pvis::parse(&out) {
+        panic!("encode: the bake contents break the .pvis format: {error}");
+    }
+    out
+}
+
+/// § CAMR.
+fn camr(params: &SamplingParams, views: u32) -> Vec<u8> {
+    let mut out = Vec::with_capacity(CAMR_LEN as usize);
+    out.extend_from_slice(&params.level.to_le_bytes());
+    out.extend_from_slice(&views.to_le_bytes());
+    for v in params.center {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    out.extend_from_slice(&params.radius.to_le_bytes());
+    out.extend_from_slice(&params.distance().to_le_bytes());
+    out.extend_from_slice(&params.fov_deg.to_le_bytes());
+    out.extend_from_slice(&params.resolution.to_le_bytes());
+    out.extend_from_slice(&SPHERE_CONVENTION.to_le_bytes());
+    out.extend_from_slice(&0u32.to_le_bytes());
+    debug_assert_eq!(out.len() as u64, CAMR_LEN);
+    out
+}
+
+/// § PTCH.
+fn ptch(triangle_count: u64, patches: &[Patch]) -> Vec<u8> {
+    let len = PTCH_HEADER_LEN + PATCH_RECORD_LEN * patches.len() as u64;
+    let mut out = Vec::with_capacity(len as usize);
+    // A count past u32 is caught by the reader's MAX_PATCHES check on the saturated value.
+    let count = u32::try_from(patches.len()).unwrap_or(u32::MAX);
+    out.extend_from_slice(&count.to_le_bytes());
+    out.extend_from_slice(&0u32.to_le_bytes());
+    out.extend_from_slice(&triangle_count.to_le_bytes());
+    for patch in patches {
+        out.extend_from_slice(&patch.first.to_le_bytes());
+        out.extend_from_slice(&patch.count.to_le_bytes());
+        for v in patch.center {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        out.extend_from_slice(&patch.radius.to_le_bytes());
+        for v in patch.cone_axis {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        out.extend_from_slice(&patch.cone_cos.to_le_bytes());
+    }
+    out
+}
+
+/// § VISB, encoding 0: each row's `u64` words cut into `ceil(P / 8)` little-endian bytes,
+/// which is exactly the spec's "bit p is bit p % 8 of byte p / 8".
+fn visb(matrix: &VisibilityMatrix) -> Vec<u8> {
+    let row_len = row_bytes(matrix.patches()) as usize;
+    let mut out = Vec::with_capacity(VISB_HEADER_LEN as usize + matrix.views() as usize * row_len);
+    out.extend_from_slice(&ENCODING_RAW.to_le_bytes());
+    out.extend_from_slice(&0u32.to_le_bytes());
+    let tail_bits = matrix.patches() % 8;
+    for view in 0..matrix.views() {
+        let row_start = out.len();
+        for word in matrix.row(view) {
+            out.extend_from_slice(&word.to_le_bytes());
+        }
+        out.truncate(row_start + row_len);
+        // The matrix keeps bits past the last patch zero; masking makes the padding rule hold
+        // even if it did not.
+        if tail_bits != 0 {
+            if let Some(last) = out.last_mut() {
+                *last &= (1u8 << tail_bits) - 1;
+            }
+        }
+    }
+    out
+}

@@ -1,8 +1,19 @@
 //! The sampling sphere: an octahedron subdivided level by level (6, 18, 66, 258, 1026, 4098 …
 //! vertices), its stable vertex numbering, the face hierarchy and point location.
 //!
-//! Needs only `core`: the reader uses it to find the face under a view direction.
+//! Follows Meruvia 2002, §3.2.1 (sampling positions) and §3.3.1 (finding the face under a
+//! viewing ray in at most 4 tests per level). Needs only `core` (and `libm` for a correctly
+//! rounded square root): the reader uses it to find the face under a view direction.
 //! The convention is normative; see `spec/FORMAT.md`, section "Sampling sphere".
+//!
+//! Cost: numbering a vertex is O(2^level) integer steps at most (a ring walk, ≤ 128 at
+//! [`MAX_LEVEL`]); point location is 3 sign tests per level plus 3 midpoints per level.
+
+mod locate;
+mod numbering;
+
+pub use locate::{Face, children, locate, root_faces};
+pub use numbering::{LatticePoint, direction, lattice_point, level_of, parents, view_index};
 
 /// Index of a sampling view (a vertex of the subdivided octahedron). Level `l`'s views are
 /// `0..view_count(l)`, a prefix of level `l + 1`'s.
@@ -21,34 +32,26 @@ pub const fn face_count(level: u32) -> u32 {
     8 * (1 << (2 * level))
 }
 
-/// Unit direction of `view` from the sphere centre. `view` must be below
-/// `view_count(MAX_LEVEL)`.
-pub fn direction(view: ViewIndex) -> [f32; 3] {
-    todo!("{view}")
+/// `v / |v|` in f32, computed exactly as the spec prescribes: `len = sqrt((x·x + y·y) + z·z)`
+/// with a correctly rounded square root, then each component divided by `len`. Every
+/// implementation that follows these steps gets bit-identical directions.
+pub fn normalize(v: [f32; 3]) -> [f32; 3] {
+    let len = libm::sqrtf((v[0] * v[0] + v[1] * v[1]) + v[2] * v[2]);
+    [v[0] / len, v[1] / len, v[2] / len]
 }
 
-/// The two views whose sphere edge `view` splits, or `None` for the six level-0 views.
-pub fn parents(view: ViewIndex) -> Option<[ViewIndex; 2]> {
-    todo!("{view}")
+pub(crate) fn add(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
-/// The level at which `view` first appears.
-pub fn level_of(view: ViewIndex) -> u32 {
-    todo!("{view}")
+pub(crate) fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
-/// A face of the subdivided octahedron: three views, counter-clockwise seen from outside.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Face {
-    /// The corner views.
-    pub views: [ViewIndex; 3],
-    /// The corner directions (unit vectors), computed as the spec prescribes.
-    pub directions: [[f32; 3]; 3],
-}
-
-/// The leaf face at `level` containing direction `dir` (need not be normalised; the zero
-/// vector is treated as +X). At most 4 plane tests per level; directions exactly on an edge or
-/// a vertex resolve deterministically to one face.
-pub fn locate(dir: [f32; 3], level: u32) -> Face {
-    todo!("{dir:?} {level}")
+pub(crate) fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
+    (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2]
 }

@@ -1,0 +1,402 @@
+//! Validation of a whole `.pvis` file, once, at `Pvis::parse` (spec § Header … § Trailer).
+//!
+//! Checks everything a later query relies on, so that queries need no checks and cannot fail:
+//! header, CRC, section table placement, every CAMR field, every patch record, VISB length and
+//! padding bits. Order: signature, version, flags, length, checksum, then structure — a
+//! corrupted file is reported as corrupted before any of its fields is believed.
+//! Cost: one CRC pass over the file plus one pass over PTCH and the last byte of every VISB row;
+//! no allocation.
+
+use super::consts::*;
+use super::crc32c::crc32c;
+use super::stream::{FromData, Stream};
+use super::{Error, Pvis, Sampling};
+
+/// Where a section lies, as checked against the table rules.
+#[derive(Clone, Copy)]
+struct Section {
+    offset: u64,
+    length: u64,
+}
+
+/// Reads a `T` or reports how many bytes were missing.
+fn read<T: FromData>(s: &mut Stream<'_>, have: usize) -> Result<T, Error> {
+    let needed = s.offset() as u64 + T::SIZE as u64;
+    s.read::<T>().ok_or(Error::Truncated {
+        needed,
+        have: have as u64,
+    })
+}
+
+/// Reads a `u32` that must be zero (reserved fields).
+fn reserved(s: &mut Stream<'_>, have: usize, what: &'static str) -> Result<(), Error> {
+    let offset = s.offset() as u64;
+    match read::<u32>(s, have)? {
+        0 => Ok(()),
+        value => Err(Error::Invalid {
+            what,
+            offset,
+            value: value as u64,
+        }),
+    }
+}
+
+/// Reads an `f32` and checks it with `ok`.
+fn float(
+    s: &mut Stream<'_>,
+    have: usize,
+    what: &'static str,
+    ok: impl Fn(f32) -> bool,
+) -> Result<f32, Error> {
+    let offset = s.offset() as u64;
+    let value = read::<f32>(s, have)?;
+    if value.is_finite() && ok(value) {
+        Ok(value)
+    } else {
+        Err(Error::InvalidFloat {
+            what,
+            offset,
+            bits: value.to_bits(),
+        })
+    }
+}
+
+/// Reads three finite `f32`s.
+fn finite3(s: &mut Stream<'_>, have: usize, what: &'static str) -> Result<[f32; 3], Error> {
+    Ok([
+        float(s, have, what, |_| true)?,
+        float(s, have, what, |_| true)?,
+        float(s, have, what, |_| true)?,
+    ])
+}
+
+/// Converts an in-file offset to `usize`. Every offset checked against `data.len()` fits.
+fn at(offset: u64) -> usize {
+    usize::try_from(offset).unwrap_or(usize::MAX)
+}
+
+pub(super) fn parse(data: &[u8]) -> Result<Pvis<'_>, Error> {
+    let have = data.len();
+    let len = have as u64;
+
+    // § Header. The signature is compared on whatever prefix exists, so a short file of the
+    // wrong kind reads as "not a .pvis file" rather than "truncated".
+    let prefix = data.len().min(MAGIC.len());
+    if data[..prefix] != MAGIC[..prefix] {
+        return Err(Error::BadMagic);
+    }
+    if len < HEADER_LEN + TRAILER_LEN {
+        return Err(Error::Truncated {
+            needed: HEADER_LEN + TRAILER_LEN,
+            have: len,
+        });
+    }
+    let mut s = Stream::new_at(data, MAGIC.len());
+    let version = read::<u32>(&mut s, have)?;
+    if version != VERSION {
+        return Err(Error::UnsupportedVersion { found: version });
+    }
+    let flags = read::<u32>(&mut s, have)?;
+    if flags & !KNOWN_FLAGS != 0 {
+        return Err(Error::UnknownFlags { flags });
+    }
+    let file_length = read::<u64>(&mut s, have)?;
+    if file_length != len {
+        return Err(Error::LengthMismatch {
+            header: file_length,
+            actual: len,
+        });
+    }
+
+    // § Trailer.
+    let body_end = len - TRAILER_LEN;
+    let stored = read::<u32>(&mut Stream::new_at(data, at(body_end)), have)?;
+    let computed = crc32c(&data[..at(body_end)]);
+    if stored != computed {
+        return Err(Error::ChecksumMismatch { stored, computed });
+    }
+
+    let count_offset = s.offset() as u64;
+    let section_count = read::<u32>(&mut s, have)?;
+    if section_count == 0 {
+        return Err(Error::Invalid {
+            what: "header section_count must be at least 1",
+            offset: count_offset,
+            value: 0,
+        });
+    }
+    if section_count > MAX_SECTIONS {
+        return Err(Error::LimitExceeded {
+            what: "section_count",
+            value: section_count as u64,
+            limit: MAX_SECTIONS as u64,
+        });
+    }
+    reserved(&mut s, have, "header reserved field must be 0")?;
+
+    // § Section table.
+    let table_end = HEADER_LEN + SECTION_ENTRY_LEN * section_count as u64;
+    if table_end > body_end {
+        return Err(Error::Truncated {
+            needed: table_end + TRAILER_LEN,
+            have: len,
+        });
+    }
+    let (mut camr, mut ptch, mut visb) = (None, None, None);
+    let mut previous_end = table_end;
+    for _ in 0..section_count {
+        let tag = read::<[u8; 4]>(&mut s, have)?;
+        reserved(&mut s, have, "section table reserved field must be 0")?;
+        let offset = read::<u64>(&mut s, have)?;
+        let length = read::<u64>(&mut s, have)?;
+        if offset % SECTION_ALIGN != 0 {
+            return Err(Error::SectionMisaligned { tag, offset });
+        }
+        let end = offset.checked_add(length);
+        if offset < previous_end || end.is_none_or(|end| end > body_end) {
+            return Err(Error::SectionOutOfBounds {
+                tag,
+                offset,
+                length,
+                start: previous_end,
+                end: body_end,
+            });
+        }
+        // The gap before this section is unused; it must be zero so the whole file has one
+        // meaning (and so a checksum-valid file cannot smuggle data past the reader).
+        zero_gap(data, previous_end, offset)?;
+        previous_end = offset + length;
+        let slot = match tag {
+            TAG_CAMR => &mut camr,
+            TAG_PTCH => &mut ptch,
+            TAG_VISB => &mut visb,
+            // Unknown sections are skipped: forward compatibility (§ Versioning).
+            _ => continue,
+        };
+        if slot.is_some() {
+            return Err(Error::DuplicateSection { tag });
+        }
+        *slot = Some(Section { offset, length });
+    }
+    zero_gap(data, previous_end, body_end)?;
+    let camr = camr.ok_or(Error::MissingSection { tag: TAG_CAMR })?;
+    let ptch = ptch.ok_or(Error::MissingSection { tag: TAG_PTCH })?;
+    let visb = visb.ok_or(Error::MissingSection { tag: TAG_VISB })?;
+
+    let sampling = parse_camr(data, camr)?;
+    let (patch_count, triangle_count) = parse_ptch(data, ptch)?;
+    let rows_offset = parse_visb(data, visb, sampling.views, patch_count)?;
+
+    Ok(Pvis {
+        bytes: data,
+        sampling,
+        patch_count,
+        triangle_count,
+        records: &data[at(ptch.offset + PTCH_HEADER_LEN)..at(ptch.offset + ptch.length)],
+        rows: &data[at(rows_offset)..at(visb.offset + visb.length)],
+        row_bytes: at(row_bytes(patch_count)),
+        visibility_bytes: visb.length,
+    })
+}
+
+/// Checks that `data[start..end]` (unused space between sections) is zero.
+fn zero_gap(data: &[u8], start: u64, end: u64) -> Result<(), Error> {
+    let gap = data.get(at(start)..at(end)).unwrap_or(&[]);
+    match gap.iter().position(|&b| b != 0) {
+        None => Ok(()),
+        Some(i) => Err(Error::Invalid {
+            what: "bytes between sections must be 0",
+            offset: start + i as u64,
+            value: gap[i] as u64,
+        }),
+    }
+}
+
+/// § CAMR.
+fn parse_camr(data: &[u8], section: Section) -> Result<Sampling, Error> {
+    if section.length != CAMR_LEN {
+        return Err(Error::SectionLength {
+            tag: TAG_CAMR,
+            length: section.length,
+            expected: CAMR_LEN,
+        });
+    }
+    let have = data.len();
+    let mut s = Stream::new_at(data, at(section.offset));
+    let level = read::<u32>(&mut s, have)?;
+    if level > MAX_LEVEL {
+        return Err(Error::LimitExceeded {
+            what: "sphere level",
+            value: level as u64,
+            limit: MAX_LEVEL as u64,
+        });
+    }
+    let views = read::<u32>(&mut s, have)?;
+    let expected = crate::sphere::view_count(level);
+    if views != expected {
+        return Err(Error::ViewCountMismatch {
+            level,
+            found: views,
+            expected,
+        });
+    }
+    let center = finite3(&mut s, have, "CAMR center must be finite")?;
+    let radius = float(&mut s, have, "CAMR radius must be finite and > 0", |r| {
+        r > 0.0
+    })?;
+    let distance = float(
+        &mut s,
+        have,
+        "CAMR distance must be finite and >= radius",
+        |d| d >= radius,
+    )?;
+    let fov_deg = float(&mut s, have, "CAMR fov_deg must be in (0, 180)", |f| {
+        f > 0.0 && f < 180.0
+    })?;
+    let resolution_offset = s.offset() as u64;
+    let resolution = read::<u32>(&mut s, have)?;
+    if resolution == 0 {
+        return Err(Error::Invalid {
+            what: "CAMR resolution must be at least 1",
+            offset: resolution_offset,
+            value: 0,
+        });
+    }
+    let convention_offset = s.offset() as u64;
+    let convention = read::<u32>(&mut s, have)?;
+    if convention != SPHERE_CONVENTION {
+        return Err(Error::Invalid {
+            what: "CAMR sphere_convention must be 1",
+            offset: convention_offset,
+            value: convention as u64,
+        });
+    }
+    reserved(&mut s, have, "CAMR reserved field must be 0")?;
+    Ok(Sampling {
+        level,
+        views,
+        center,
+        radius,
+        distance,
+        fov_deg,
+        resolution,
+    })
+}
+
+/// § PTCH. Returns `(patch_count, triangle_count)`.
+fn parse_ptch(data: &[u8], section: Section) -> Result<(u32, u64), Error> {
+    if section.length < PTCH_HEADER_LEN {
+        return Err(Error::BadSection { tag: TAG_PTCH });
+    }
+    let have = data.len();
+    let mut s = Stream::new_at(data, at(section.offset));
+    let count_offset = s.offset() as u64;
+    let patch_count = read::<u32>(&mut s, have)?;
+    if patch_count == 0 {
+        return Err(Error::Invalid {
+            what: "PTCH patch_count must be at least 1",
+            offset: count_offset,
+            value: 0,
+        });
+    }
+    if patch_count > MAX_PATCHES {
+        return Err(Error::LimitExceeded {
+            what: "patch_count",
+            value: patch_count as u64,
+            limit: MAX_PATCHES as u64,
+        });
+    }
+    reserved(&mut s, have, "PTCH reserved field must be 0")?;
+    let triangle_count = read::<u64>(&mut s, have)?;
+    if triangle_count > u32::MAX as u64 {
+        return Err(Error::LimitExceeded {
+            what: "triangle_count",
+            value: triangle_count,
+            limit: u32::MAX as u64,
+        });
+    }
+    // Cannot overflow: patch_count ≤ 2^20.
+    let expected = PTCH_HEADER_LEN + PATCH_RECORD_LEN * patch_count as u64;
+    if section.length != expected {
+        return Err(Error::SectionLength {
+            tag: TAG_PTCH,
+            length: section.length,
+            expected,
+        });
+    }
+    let mut next_first = 0u64;
+    for patch in 0..patch_count {
+        let first = read::<u32>(&mut s, have)?;
+        let count = read::<u32>(&mut s, have)?;
+        if first as u64 != next_first || count == 0 {
+            return Err(Error::PatchRange {
+                patch,
+                first,
+                count,
+                expected_first: next_first,
+            });
+        }
+        next_first += count as u64;
+        finite3(&mut s, have, "PTCH patch center must be finite")?;
+        float(
+            &mut s,
+            have,
+            "PTCH patch radius must be finite and >= 0",
+            |r| r >= 0.0,
+        )?;
+        finite3(&mut s, have, "PTCH patch cone_axis must be finite")?;
+        float(
+            &mut s,
+            have,
+            "PTCH patch cone_cos must be in [-1, 1]",
+            |c| (-1.0..=1.0).contains(&c),
+        )?;
+    }
+    if next_first != triangle_count {
+        return Err(Error::TriangleCountMismatch {
+            header: triangle_count,
+            sum: next_first,
+        });
+    }
+    Ok((patch_count, triangle_count))
+}
+
+/// § VISB. Returns the offset of the first row.
+fn parse_visb(data: &[u8], section: Section, views: u32, patch_count: u32) -> Result<u64, Error> {
+    if section.length < VISB_HEADER_LEN {
+        return Err(Error::BadSection { tag: TAG_VISB });
+    }
+    let have = data.len();
+    let mut s = Stream::new_at(data, at(section.offset));
+    let encoding = read::<u32>(&mut s, have)?;
+    if encoding != ENCODING_RAW {
+        return Err(Error::UnsupportedEncoding { found: encoding });
+    }
+    reserved(&mut s, have, "VISB reserved field must be 0")?;
+    let row_len = row_bytes(patch_count);
+    // Cannot overflow: views ≤ 2^18, row_len ≤ 2^17.
+    let expected = VISB_HEADER_LEN + views as u64 * row_len;
+    if section.length != expected {
+        return Err(Error::SectionLength {
+            tag: TAG_VISB,
+            length: section.length,
+            expected,
+        });
+    }
+    let rows_offset = section.offset + VISB_HEADER_LEN;
+    let used_bits = patch_count % 8;
+    if used_bits != 0 {
+        let padding_mask = !0u8 << used_bits;
+        for view in 0..views {
+            let last = rows_offset + (view as u64 + 1) * row_len - 1;
+            let byte = data.get(at(last)).copied().ok_or(Error::Truncated {
+                needed: last + 1,
+                have: have as u64,
+            })?;
+            if byte & padding_mask != 0 {
+                return Err(Error::PaddingBits { view, offset: last });
+            }
+        }
+    }
+    Ok(rows_offset)
+}

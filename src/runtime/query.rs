@@ -1,0 +1,164 @@
+//! Queries against a validated file (spec § Query): the visible set of an eye position, and
+//! iterators over its patches and their merged triangle ranges.
+//!
+//! Cost: one `sphere::locate` (≤ 4 plane tests per level), three rows OR-ed into the caller's
+//! scratch; iteration is one `trailing_zeros` per visible patch. No allocation.
+
+use super::Pvis;
+use crate::sphere;
+
+/// The answer to a query: which patches are visible. Borrows the caller's scratch space.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Visible<'s> {
+    /// Whether the eye is inside the sampling sphere (closer to the centre than the sampling
+    /// cameras). The answer is then only an approximation; callers may prefer to draw all.
+    pub inside_sphere: bool,
+    /// The three views whose rows were combined (the corners of the sphere face under the eye).
+    pub leaf: [u32; 3],
+    bits: &'s [u64],
+    patch_count: u32,
+}
+
+impl<'s> Visible<'s> {
+    /// Whether patch `p` is visible (false for `p` past the last patch).
+    pub fn contains(&self, p: u32) -> bool {
+        p < self.patch_count
+            && self
+                .bits
+                .get(p as usize / 64)
+                .is_some_and(|w| w >> (p % 64) & 1 == 1)
+    }
+
+    /// The visible patches, ascending.
+    pub fn patches(&self) -> Patches<'s> {
+        Patches {
+            bits: self.bits,
+            word: 0,
+            current: self.bits.first().copied().unwrap_or(0),
+        }
+    }
+
+    /// Number of visible patches.
+    pub fn count(&self) -> u32 {
+        self.bits.iter().map(|w| w.count_ones()).sum()
+    }
+
+    /// The visible set as bits: bit `p % 64` of word `p / 64` is patch `p`; bits past the last
+    /// patch are zero.
+    pub fn bits(&self) -> &[u64] {
+        self.bits
+    }
+}
+
+/// Iterator over the visible patches, ascending. See [`Visible::patches`].
+#[derive(Clone, Debug)]
+pub struct Patches<'s> {
+    bits: &'s [u64],
+    word: usize,
+    current: u64,
+}
+
+impl Iterator for Patches<'_> {
+    type Item = u32;
+
+    fn next(&mut self) -> Option<u32> {
+        while self.current == 0 {
+            self.word += 1;
+            self.current = *self.bits.get(self.word)?;
+        }
+        let bit = self.current.trailing_zeros();
+        self.current &= self.current - 1;
+        Some(self.word as u32 * 64 + bit)
+    }
+}
+
+/// Iterator over `(first_triangle, triangle_count)` of the visible patches, with ranges of
+/// consecutive patches merged (they are adjacent: spec § PTCH). See [`ranges`].
+#[derive(Clone, Debug)]
+pub struct TriangleRanges<'v> {
+    pvis: &'v Pvis<'v>,
+    patches: Patches<'v>,
+    pending: Option<(u32, u32)>,
+}
+
+impl Iterator for TriangleRanges<'_> {
+    type Item = (u32, u32);
+
+    fn next(&mut self) -> Option<(u32, u32)> {
+        let (first, mut count) = match self.pending.take() {
+            Some(range) => range,
+            None => self.pvis.range(self.patches.next()?),
+        };
+        for p in self.patches.by_ref() {
+            let (next_first, next_count) = self.pvis.range(p);
+            // Validated ranges sum to at most u32::MAX, so this cannot overflow.
+            if next_first == first + count {
+                count += next_count;
+            } else {
+                self.pending = Some((next_first, next_count));
+                break;
+            }
+        }
+        Some((first, count))
+    }
+}
+
+/// The triangle ranges `(first, count)` of the patches in `visible`, ascending, adjacent
+/// ranges merged: what a renderer draws.
+pub fn ranges<'v>(pvis: &'v Pvis<'_>, visible: &'v Visible<'_>) -> TriangleRanges<'v> {
+    // Shorten the borrows to one lifetime; both outlive the iterator.
+    let pvis: &'v Pvis<'v> = pvis;
+    TriangleRanges {
+        pvis,
+        patches: Patches {
+            bits: visible.bits,
+            word: 0,
+            current: visible.bits.first().copied().unwrap_or(0),
+        },
+        pending: None,
+    }
+}
+
+pub(super) fn query<'s>(pvis: &Pvis<'_>, eye: [f32; 3], scratch: &'s mut [u64]) -> Visible<'s> {
+    let words = pvis.row_words();
+    assert!(
+        scratch.len() >= words,
+        "scratch holds {} words, {words} needed (Pvis::scratch_words)",
+        scratch.len()
+    );
+    let out = &mut scratch[..words];
+    out.fill(0);
+    let sampling = pvis.sampling;
+    let c = sampling.center;
+    // § Query step 1: the offset from the centre, in binary32 like the bake's cameras.
+    let d = [eye[0] - c[0], eye[1] - c[1], eye[2] - c[2]];
+    if !d.iter().all(|x| x.is_finite()) {
+        // No direction to look up: answer conservatively, every patch.
+        out.fill(!0);
+        let tail = pvis.patch_count % 64;
+        if let (Some(last), true) = (out.last_mut(), tail != 0) {
+            *last = (1u64 << tail) - 1;
+        }
+        return Visible {
+            inside_sphere: true,
+            leaf: sphere::locate([0.0; 3], sampling.level).views,
+            bits: out,
+            patch_count: pvis.patch_count,
+        };
+    }
+    // § Query step 2: in binary64, where the squares of binary32 values cannot overflow.
+    let d2: f64 = d.iter().map(|&x| x as f64 * x as f64).sum();
+    let r = sampling.distance as f64;
+    let inside_sphere = d2 < r * r;
+    // § Query steps 3–4.
+    let leaf = sphere::locate(d, sampling.level).views;
+    for view in leaf {
+        pvis.or_row(view, out);
+    }
+    Visible {
+        inside_sphere,
+        leaf,
+        bits: out,
+        patch_count: pvis.patch_count,
+    }
+}
