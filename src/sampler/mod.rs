@@ -1,8 +1,29 @@
 //! Sampling: render a patch-ID buffer from every sphere view and record which patches it shows.
+//!
+//! Meruvia 2002, section 3: each sampling view on the bounding sphere renders the mesh with
+//! one id per patch; every id left in the buffer is visible from that view. Files:
+//! `camera.rs` (the normative camera convention), `raster.rs` (watertight fixed-point
+//! rasterizer), `clip.rs` (near plane and guard band), `id_buffer.rs` (the render target).
+//! Cost: one full render per view; views run in parallel (one view per task, a buffer and
+//! scratch per worker), and the result does not depend on the number of threads.
+
+mod camera;
+mod clip;
+mod id_buffer;
+mod raster;
+#[cfg(test)]
+mod test_meshes;
+#[cfg(test)]
+mod tests;
+
+pub use camera::{Camera, MAX_RESOLUTION, NEAR_FRACTION};
+pub use id_buffer::{IdBuffer, NO_PATCH};
+pub use raster::{Rasterizer, SUBPIXEL_BITS, render_ids, render_ids_filtered};
 
 use crate::ooc::Mesh;
 use crate::progress::Progress;
 use crate::tiling::PatchId;
+use rayon::prelude::*;
 
 /// Where the sampling cameras are, shared by every view (see the spec's "Sampling sphere").
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -75,7 +96,7 @@ impl VisibilityMatrix {
 }
 
 /// Renders every view of `params` and returns which patches each one shows.
-/// `patch_of[t]` is the patch of input triangle `t`.
+/// `patch_of[t]` is the patch of input triangle `t`, below `patch_count`.
 pub fn sample(
     mesh: &Mesh,
     patch_of: &[PatchId],
@@ -83,6 +104,71 @@ pub fn sample(
     params: &SamplingParams,
     progress: &dyn Progress,
 ) -> VisibilityMatrix {
-    let _ = (mesh, patch_of, patch_count, params, progress);
-    todo!()
+    let directions: Vec<[f32; 3]> = (0..crate::sphere::view_count(params.level))
+        .map(crate::sphere::direction)
+        .collect();
+    sample_directions(mesh, patch_of, patch_count, params, &directions, progress)
+}
+
+/// [`sample`] with explicit view directions (unit vectors from the centre towards the eye):
+/// row `i` of the result is the view from `directions[i]`. `params.level` is ignored.
+pub fn sample_directions(
+    mesh: &Mesh,
+    patch_of: &[PatchId],
+    patch_count: u32,
+    params: &SamplingParams,
+    directions: &[[f32; 3]],
+    progress: &dyn Progress,
+) -> VisibilityMatrix {
+    assert_eq!(
+        patch_of.len(),
+        mesh.triangle_count() as usize,
+        "patch_of must hold one patch per triangle"
+    );
+    if let Some(bad) = patch_of.iter().find(|&&p| p >= patch_count) {
+        panic!("patch id {bad} is not below patch_count {patch_count}");
+    }
+    assert!(
+        params.radius > 0.0 && params.radius.is_finite(),
+        "sampling radius must be positive and finite, got {}",
+        params.radius
+    );
+    let views = u32::try_from(directions.len()).expect("more than 2^32 views");
+    let mut matrix = VisibilityMatrix::new(views, patch_count);
+    progress.start("sampling", views as u64);
+    if matrix.words_per_row > 0 {
+        let words_per_row = matrix.words_per_row;
+        matrix
+            .bits
+            .par_chunks_mut(words_per_row)
+            .zip(directions.par_iter())
+            .for_each_init(
+                || (IdBuffer::new(params.resolution), Rasterizer::new()),
+                |(buffer, rasterizer), (row, &direction)| {
+                    let camera = Camera::sampling(params, direction);
+                    buffer.clear();
+                    rasterizer.render(mesh, patch_of, &camera, buffer);
+                    mark_visible(buffer.ids(), row);
+                    progress.inc(1);
+                },
+            );
+    } else {
+        progress.inc(views as u64);
+    }
+    progress.finish();
+    matrix
+}
+
+/// Sets the bit of every patch id in `ids` (ignoring [`NO_PATCH`]). Neighbouring pixels
+/// mostly show the same patch, so runs of one id cost a compare per pixel.
+fn mark_visible(ids: &[u32], row: &mut [u64]) {
+    let mut previous = NO_PATCH;
+    for &id in ids {
+        if id != previous {
+            previous = id;
+            if id != NO_PATCH {
+                row[id as usize / 64] |= 1 << (id % 64);
+            }
+        }
+    }
 }

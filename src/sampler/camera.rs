@@ -1,0 +1,303 @@
+//! Pinhole cameras for ID-buffer rendering: the sampling views on the bounding sphere and
+//! general look-at cameras, and the world → homogeneous clip transform the rasterizer uses.
+//!
+//! Convention (normative; the spec's "Sampling cameras" section mirrors it):
+//! - Sampling view `v` with unit direction `d = sphere::direction(v)`: eye
+//!   `center + d · distance`, `distance = radius / sin(fov / 2)`, looking at `center`, so the
+//!   bounding sphere's silhouette touches the image edges.
+//! - Look-at basis: forward `f = normalize(target − eye)`; world up `+Y`, or `+Z` when
+//!   `|f · Y| > 0.999`; right `r = normalize(f × up)`; up `u = r × f`.
+//! - Symmetric perspective, square `resolution`² image, full field of view `fov` both ways.
+//!   Pixel `(x, y)`: `x` grows along `r`, `y` grows downwards (row 0 is the top, along `+u`);
+//!   pixel centres are at `(x + 0.5, y + 0.5)`.
+//! - Near plane at `w = near` (view-space depth along `f`); by default
+//!   `near = NEAR_FRACTION · |target − eye|`. No far plane.
+//!
+//! Setup and projection run in `f64` so that eyes far from the origin (scans in survey
+//! coordinates) keep their precision; rasterization then works in fixed point.
+//! Cost: setup is a few dozen flops; transforming a point is 3 subtractions and 9 multiply-adds.
+
+use super::SamplingParams;
+
+/// Largest supported image width/height. Bounds the fixed-point range (see `raster.rs`).
+pub const MAX_RESOLUTION: u32 = 1 << 15;
+
+/// Default near-plane distance as a fraction of the eye–target distance. Small enough that a
+/// sampling camera never clips the model for any field of view below ~175°, large enough that
+/// `1/w` stays far from `f32` overflow.
+pub const NEAR_FRACTION: f64 = 1e-3;
+
+/// Above this `|forward · Y|` the camera takes `+Z` as world up, since `+Y` would give an
+/// ill-conditioned right vector.
+const UP_SWITCH_COS: f64 = 0.999;
+
+/// A perspective camera producing a square image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    eye: [f64; 3],
+    right: [f64; 3],
+    up: [f64; 3],
+    forward: [f64; 3],
+    fov_deg: f64,
+    resolution: u32,
+    near: f64,
+    /// `resolution / 2`.
+    half: f64,
+    /// `resolution / 2 / tan(fov / 2)`: pixels per unit of `x / w`.
+    scale: f64,
+}
+
+impl Camera {
+    /// A camera at `eye` looking at `target` with full field of view `fov_deg` (degrees) and a
+    /// `resolution`² image; near plane `NEAR_FRACTION · |target − eye|`.
+    ///
+    /// Panics (caller contract) unless the inputs are finite, `eye != target`,
+    /// `0 < fov_deg < 180` and `1 <= resolution <= MAX_RESOLUTION`.
+    pub fn look_at(eye: [f32; 3], target: [f32; 3], fov_deg: f32, resolution: u32) -> Camera {
+        Camera::look_at_f64(widen(eye), widen(target), fov_deg as f64, resolution)
+    }
+
+    /// The camera of a sampling view looking along `-direction` at `params.center` from
+    /// `params.center + direction · distance` (direction need not be normalised).
+    pub fn sampling(params: &SamplingParams, direction: [f32; 3]) -> Camera {
+        let d = normalize(widen(direction));
+        let fov = params.fov_deg as f64;
+        let distance = params.radius as f64 / (fov.to_radians() * 0.5).sin();
+        let center = widen(params.center);
+        let eye = [
+            center[0] + d[0] * distance,
+            center[1] + d[1] * distance,
+            center[2] + d[2] * distance,
+        ];
+        Camera::look_at_f64(eye, center, fov, params.resolution)
+    }
+
+    /// The camera of sampling view `view`: [`Camera::sampling`] with `sphere::direction(view)`.
+    pub fn sampling_view(params: &SamplingParams, view: crate::sphere::ViewIndex) -> Camera {
+        Camera::sampling(params, crate::sphere::direction(view))
+    }
+
+    /// The same camera with the near plane at view-space depth `near` (> 0).
+    pub fn with_near(self, near: f64) -> Camera {
+        assert!(
+            near > 0.0 && near.is_finite(),
+            "near plane must be > 0, got {near}"
+        );
+        Camera { near, ..self }
+    }
+
+    fn look_at_f64(eye: [f64; 3], target: [f64; 3], fov_deg: f64, resolution: u32) -> Camera {
+        assert!(
+            eye.iter().chain(&target).all(|c| c.is_finite()),
+            "camera eye {eye:?} and target {target:?} must be finite"
+        );
+        assert!(
+            fov_deg > 0.0 && fov_deg < 180.0,
+            "field of view must be in (0, 180) degrees, got {fov_deg}"
+        );
+        assert!(
+            (1..=MAX_RESOLUTION).contains(&resolution),
+            "resolution must be in 1..={MAX_RESOLUTION}, got {resolution}"
+        );
+        let to_target = sub(target, eye);
+        let distance = dot(to_target, to_target).sqrt();
+        assert!(distance > 0.0, "camera eye and target coincide at {eye:?}");
+        let forward = scale3(to_target, 1.0 / distance);
+        let world_up = if forward[1].abs() > UP_SWITCH_COS {
+            [0.0, 0.0, 1.0]
+        } else {
+            [0.0, 1.0, 0.0]
+        };
+        let right = normalize(cross(forward, world_up));
+        let up = cross(right, forward);
+        let half = resolution as f64 * 0.5;
+        Camera {
+            eye,
+            right,
+            up,
+            forward,
+            fov_deg,
+            resolution,
+            near: NEAR_FRACTION * distance,
+            half,
+            scale: half / (fov_deg.to_radians() * 0.5).tan(),
+        }
+    }
+
+    /// Image width and height in pixels.
+    pub fn resolution(&self) -> u32 {
+        self.resolution
+    }
+    /// Full field of view in degrees.
+    pub fn fov_deg(&self) -> f64 {
+        self.fov_deg
+    }
+    /// Eye position.
+    pub fn eye(&self) -> [f64; 3] {
+        self.eye
+    }
+    /// Unit viewing direction `f`.
+    pub fn forward(&self) -> [f64; 3] {
+        self.forward
+    }
+    /// Unit right vector `r` (image `x` grows along it).
+    pub fn right(&self) -> [f64; 3] {
+        self.right
+    }
+    /// Unit up vector `u` (image `y` grows against it).
+    pub fn up(&self) -> [f64; 3] {
+        self.up
+    }
+    /// View-space depth of the near plane.
+    pub fn near(&self) -> f64 {
+        self.near
+    }
+
+    /// Homogeneous clip coordinates `[cx, cy, w]` of `p`: `w` is the view-space depth along
+    /// `f`, and the pixel position is `(cx / w, cy / w)`. Affine in `p`, so clipping can
+    /// interpolate these coordinates linearly.
+    #[inline]
+    pub fn clip(&self, p: [f32; 3]) -> [f64; 3] {
+        let d = sub(widen(p), self.eye);
+        let x = dot(d, self.right);
+        let y = dot(d, self.up);
+        let w = dot(d, self.forward);
+        [
+            self.scale * x + self.half * w,
+            self.half * w - self.scale * y,
+            w,
+        ]
+    }
+
+    /// Pixel coordinates of `p`, or `None` if it is nearer than the near plane.
+    pub fn project(&self, p: [f32; 3]) -> Option<[f64; 2]> {
+        let [cx, cy, w] = self.clip(p);
+        (w >= self.near).then(|| [cx / w, cy / w])
+    }
+}
+
+fn widen(p: [f32; 3]) -> [f64; 3] {
+    [p[0] as f64, p[1] as f64, p[2] as f64]
+}
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+fn scale3(a: [f64; 3], s: f64) -> [f64; 3] {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+fn normalize(a: [f64; 3]) -> [f64; 3] {
+    let len = dot(a, a).sqrt();
+    assert!(len > 0.0, "cannot normalise the zero vector");
+    scale3(a, 1.0 / len)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params(center: [f32; 3], radius: f32) -> SamplingParams {
+        SamplingParams {
+            level: 0,
+            resolution: 128,
+            fov_deg: 50.0,
+            center,
+            radius,
+        }
+    }
+
+    const DIRECTIONS: [[f32; 3]; 9] = [
+        [1.0, 0.0, 0.0],
+        [-1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, -1.0],
+        [0.577, 0.577, 0.577],
+        [0.3, -0.2, 0.9],
+        [0.001, 1.0, 0.0],
+    ];
+
+    #[test]
+    fn sampling_camera_projects_the_centre_to_the_image_centre() {
+        let p = params([10.0, -3.0, 250.0], 2.5);
+        for dir in DIRECTIONS {
+            let camera = Camera::sampling(&p, dir);
+            let [x, y] = camera.project(p.center).unwrap();
+            assert!(
+                (x - 64.0).abs() < 1e-9 && (y - 64.0).abs() < 1e-9,
+                "{dir:?}: {x} {y}"
+            );
+            let eye_distance = dot(sub(camera.eye(), widen(p.center)), camera.forward()).abs();
+            assert!((eye_distance - p.distance() as f64).abs() < 1e-4);
+        }
+    }
+
+    #[test]
+    fn bounding_sphere_touches_but_does_not_leave_the_image() {
+        let p = params([1.0, 2.0, 3.0], 4.0);
+        for dir in DIRECTIONS {
+            let camera = Camera::sampling(&p, dir);
+            let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+            // The silhouette's extreme points lie on the great circles in the (r, f) and
+            // (u, f) planes.
+            for axis in [camera.right(), camera.up()] {
+                for k in 0..100_000 {
+                    let a = k as f64 / 100_000.0 * std::f64::consts::TAU;
+                    let (s, c) = a.sin_cos();
+                    let q: [f32; 3] = std::array::from_fn(|i| {
+                        (p.center[i] as f64 + 4.0 * (c * axis[i] + s * camera.forward()[i])) as f32
+                    });
+                    let xy = camera.project(q).unwrap();
+                    for i in 0..2 {
+                        lo[i] = lo[i].min(xy[i]);
+                        hi[i] = hi[i].max(xy[i]);
+                    }
+                }
+            }
+            for i in 0..2 {
+                assert!(lo[i] > -0.01 && lo[i] < 0.01, "{dir:?} {lo:?}");
+                assert!(hi[i] < 128.01 && hi[i] > 127.99, "{dir:?} {hi:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn up_vector_switches_to_z_near_the_poles() {
+        let down = Camera::look_at([0.0, 5.0, 0.0], [0.0, 0.0, 0.0], 60.0, 16);
+        assert_eq!(down.forward(), [0.0, -1.0, 0.0]);
+        assert_eq!(down.right(), [-1.0, 0.0, 0.0]);
+        assert_eq!(down.up(), [0.0, 0.0, 1.0]);
+        let up = Camera::look_at([0.0, -5.0, 0.0], [0.0, 0.0, 0.0], 60.0, 16);
+        assert_eq!(up.right(), [1.0, 0.0, 0.0]);
+        assert_eq!(up.up(), [0.0, 0.0, 1.0]);
+        // Just outside the switch cone +Y is still world up.
+        let tilted = Camera::look_at([0.05, 1.0, 0.0], [0.0, 0.0, 0.0], 60.0, 16);
+        assert!(tilted.forward()[1].abs() < UP_SWITCH_COS);
+        assert!(tilted.up()[1] > 0.0 && tilted.right()[2].abs() > 0.99);
+    }
+
+    #[test]
+    fn image_axes_follow_right_and_down() {
+        // Looking down -Z from +Z: right is +X, up is +Y, so +X is right and +Y is the top.
+        let camera = Camera::look_at([0.0, 0.0, 5.0], [0.0, 0.0, 0.0], 90.0, 100);
+        assert_eq!(camera.right(), [1.0, 0.0, 0.0]);
+        assert_eq!(camera.up(), [0.0, 1.0, 0.0]);
+        let [x, y] = camera.project([1.0, 1.0, 0.0]).unwrap();
+        assert!(
+            (x - 60.0).abs() < 1e-9 && (y - 40.0).abs() < 1e-9,
+            "{x} {y}"
+        );
+        assert_eq!(camera.project([0.0, 0.0, 5.0]), None);
+        assert!((camera.near() - 5e-3).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,362 @@
+//! The CPU ID-buffer rasterizer: draws triangles into an [`IdBuffer`] with a depth test.
+//!
+//! Technique: half-space (edge function) rasterization as in Pineda 1988 and current GPUs.
+//! Vertices are projected once per view into a scratch buffer (a vertex is shared by about six
+//! triangles) and snapped to fixed point with `SUBPIXEL_BITS` fractional bits; edge functions
+//! are exact `i64` integers and the top-left fill rule decides pixel centres exactly on an
+//! edge, so a pixel on an edge shared by two triangles is covered exactly once: meshes
+//! rasterize watertight. Pixel centres are sampled; triangles covering none draw nothing.
+//! Triangles reaching behind the near plane or beyond the guard band are clipped first (see
+//! `clip.rs`); all others, which is every triangle of a sampling view, go straight to setup.
+//! Depth is `1/w`, interpolated affinely in screen space; a fragment wins only if strictly
+//! nearer, so with triangles drawn in input order the result is deterministic.
+//!
+//! Cost per view: one `f64` transform per vertex, ~20 integer operations of setup per
+//! triangle, and per covered bounding-box pixel three adds and a compare. Bounding boxes up
+//! to `SPAN_MIN_WIDTH` pixels wide are walked pixel by pixel; wider ones solve each row's
+//! covered span directly so large triangles cost their area, not their bounding box.
+
+use super::camera::Camera;
+use super::clip::{self, PLANE_COUNT, Plane};
+use super::id_buffer::IdBuffer;
+use crate::ooc::Mesh;
+use crate::tiling::PatchId;
+
+/// Fractional bits of snapped screen coordinates (1/256 pixel, as on D3D11-class hardware).
+pub const SUBPIXEL_BITS: u32 = 8;
+const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
+const HALF_PIXEL: i64 = SUBPIXEL / 2;
+
+/// How far, in pixels, the guard band reaches beyond each image edge. Triangles inside it are
+/// rasterized without clipping. With `MAX_RESOLUTION` = 2^15 a snapped coordinate stays below
+/// 2^28 sub-pixel units, so edge functions (products of two coordinate differences) stay
+/// below 2^59 and never overflow `i64`.
+const GUARD_BAND: f64 = (1u32 << 19) as f64;
+
+/// Clamp for snapped coordinates (sub-pixel units): a backstop against rounding at clipped
+/// vertices; clipping already keeps them within `±(MAX_RESOLUTION + GUARD_BAND) · 2^8`.
+const COORD_LIMIT: f64 = (1u32 << 28) as f64;
+
+/// Bounding boxes narrower than this many pixels are scanned pixel by pixel; wider ones solve
+/// each row's covered span first. Small triangles dominate scanned meshes, and for them the
+/// three divisions per row of span solving cost more than testing a few pixels.
+const SPAN_MIN_WIDTH: i64 = 8;
+
+// Outcodes of a projected vertex. The first five are the clip half-spaces (image edges and
+// near plane): a triangle whose three vertices are all outside one of them is invisible.
+const LEFT: u32 = 1;
+const RIGHT: u32 = 2;
+const TOP: u32 = 4;
+const BOTTOM: u32 = 8;
+const NEAR: u32 = 16;
+const GUARD: u32 = 32;
+const REJECT: u32 = LEFT | RIGHT | TOP | BOTTOM | NEAR;
+const NEEDS_CLIP: u32 = NEAR | GUARD;
+
+/// A vertex in screen space: snapped position in sub-pixel units and depth `1/w`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct ScreenVertex {
+    pub(crate) x: i32,
+    pub(crate) y: i32,
+    pub(crate) q: f32,
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct ProjectedVertex {
+    /// Valid only if `outcode & NEEDS_CLIP == 0`.
+    screen: ScreenVertex,
+    outcode: u32,
+}
+
+/// Draws every triangle `t` of `mesh` with id `patch_of[t]` into `buffer` (which is not
+/// cleared first). `patch_of.len()` must equal the triangle count and `buffer` must have the
+/// camera's resolution.
+pub fn render_ids(mesh: &Mesh, patch_of: &[PatchId], camera: &Camera, buffer: &mut IdBuffer) {
+    Rasterizer::new().render_filtered(mesh, patch_of, camera, buffer, |_| true);
+}
+
+/// Like [`render_ids`], but draws only the triangles whose patch `keep` accepts.
+pub fn render_ids_filtered(
+    mesh: &Mesh,
+    patch_of: &[PatchId],
+    camera: &Camera,
+    buffer: &mut IdBuffer,
+    keep: impl FnMut(PatchId) -> bool,
+) {
+    Rasterizer::new().render_filtered(mesh, patch_of, camera, buffer, keep);
+}
+
+/// A rasterizer with its per-view scratch (projected vertices); reuse one per thread to
+/// render many views without allocating.
+#[derive(Debug, Default)]
+pub struct Rasterizer {
+    vertices: Vec<ProjectedVertex>,
+}
+
+impl Rasterizer {
+    /// A rasterizer with empty scratch.
+    pub fn new() -> Rasterizer {
+        Rasterizer::default()
+    }
+
+    /// [`render_ids`] with this rasterizer's scratch.
+    pub fn render(
+        &mut self,
+        mesh: &Mesh,
+        patch_of: &[PatchId],
+        camera: &Camera,
+        buffer: &mut IdBuffer,
+    ) {
+        self.render_filtered(mesh, patch_of, camera, buffer, |_| true);
+    }
+
+    /// [`render_ids_filtered`] with this rasterizer's scratch.
+    pub fn render_filtered(
+        &mut self,
+        mesh: &Mesh,
+        patch_of: &[PatchId],
+        camera: &Camera,
+        buffer: &mut IdBuffer,
+        mut keep: impl FnMut(PatchId) -> bool,
+    ) {
+        assert_eq!(
+            patch_of.len(),
+            mesh.triangle_count() as usize,
+            "patch_of must hold one patch per triangle"
+        );
+        assert_eq!(
+            buffer.resolution(),
+            camera.resolution(),
+            "ID buffer and camera resolutions differ"
+        );
+        self.rasterize(
+            mesh,
+            camera,
+            |t| {
+                let id = patch_of[t as usize];
+                keep(id).then_some(id)
+            },
+            |id, index, q| buffer.plot(index, q, id),
+        );
+    }
+
+    /// Draws each triangle `t` for which `id_of(t)` is `Some(id)`, in input order, calling
+    /// `plot(id, pixel_index, depth)` for every pixel it covers (no depth test here).
+    fn rasterize(
+        &mut self,
+        mesh: &Mesh,
+        camera: &Camera,
+        mut id_of: impl FnMut(u32) -> Option<u32>,
+        mut plot: impl FnMut(u32, usize, f32),
+    ) {
+        let resolution = camera.resolution();
+        let planes = clip::planes(resolution, camera.near(), GUARD_BAND);
+        self.vertices.clear();
+        self.vertices
+            .extend((0..mesh.vertex_count()).map(|v| project(camera, &planes, mesh.position(v))));
+        for t in 0..mesh.triangle_count() {
+            let Some(id) = id_of(t) else {
+                continue;
+            };
+            let corners = mesh.triangle(t);
+            let [a, b, c] = corners.map(|v| self.vertices[v as usize]);
+            if a.outcode & b.outcode & c.outcode & REJECT != 0 {
+                continue;
+            }
+            if (a.outcode | b.outcode | c.outcode) & NEEDS_CLIP == 0 {
+                scan_triangle(
+                    [a.screen, b.screen, c.screen],
+                    resolution,
+                    SPAN_MIN_WIDTH,
+                    |index, q| plot(id, index, q),
+                );
+                continue;
+            }
+            let clipped =
+                clip::clip_triangle(corners.map(|v| camera.clip(mesh.position(v))), &planes);
+            // The clipped polygon is convex: fan it from its first vertex. Fan diagonals are
+            // shared exactly, so the fill rule keeps the polygon's interior watertight too.
+            if let [first, rest @ ..] = clipped.vertices() {
+                let first = snap(*first);
+                for pair in rest.windows(2) {
+                    scan_triangle(
+                        [first, snap(pair[0]), snap(pair[1])],
+                        resolution,
+                        SPAN_MIN_WIDTH,
+                        |index, q| plot(id, index, q),
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// Transforms `p` and classifies it against the image, near plane and guard band.
+#[inline]
+fn project(camera: &Camera, planes: &[Plane; PLANE_COUNT], p: [f32; 3]) -> ProjectedVertex {
+    let c = camera.clip(p);
+    let [cx, cy, w] = c;
+    let edge = camera.resolution() as f64 * w;
+    let mut outcode = 0;
+    outcode |= if cx < 0.0 { LEFT } else { 0 };
+    outcode |= if cx > edge { RIGHT } else { 0 };
+    outcode |= if cy < 0.0 { TOP } else { 0 };
+    outcode |= if cy > edge { BOTTOM } else { 0 };
+    // The same distance function as the clipper, so "inside" means the same to both.
+    if clip::distance(&planes[0], &c) < 0.0 {
+        outcode |= NEAR;
+    } else if planes[1..]
+        .iter()
+        .any(|plane| clip::distance(plane, &c) < 0.0)
+    {
+        outcode |= GUARD;
+    }
+    let screen = if outcode & NEEDS_CLIP == 0 {
+        snap(c)
+    } else {
+        ScreenVertex::default()
+    };
+    ProjectedVertex { screen, outcode }
+}
+
+/// Perspective division and snapping to the sub-pixel grid. `c` must have `w > 0`.
+#[inline]
+fn snap(c: [f64; 3]) -> ScreenVertex {
+    let inv_w = 1.0 / c[2];
+    let fixed = |v: f64| {
+        (v * inv_w * SUBPIXEL as f64)
+            .round()
+            .clamp(-COORD_LIMIT, COORD_LIMIT) as i32
+    };
+    ScreenVertex {
+        x: fixed(c[0]),
+        y: fixed(c[1]),
+        q: inv_w as f32,
+    }
+}
+
+/// One edge function `E(p) = (to − from) × (p − from)` (positive inside a triangle of positive
+/// area), its value at the first sample of the bounding box, and its steps per pixel.
+struct Edge {
+    start: i64,
+    step_x: i64,
+    step_y: i64,
+}
+
+impl Edge {
+    #[inline(always)]
+    fn new(from: ScreenVertex, to: ScreenVertex, sample_x: i64, sample_y: i64) -> Edge {
+        let (fx, fy) = (from.x as i64, from.y as i64);
+        let (ex, ey) = (to.x as i64 - fx, to.y as i64 - fy);
+        // Top-left rule (y points down, interior on the positive side): a top edge is
+        // horizontal with the interior below it, a left edge goes upwards. Samples exactly on
+        // other edges are excluded by requiring `E >= 1` there, i.e. biasing `E` by -1.
+        let top_left = ey < 0 || (ey == 0 && ex > 0);
+        Edge {
+            start: ex * (sample_y - fy) - ey * (sample_x - fx) - i64::from(!top_left),
+            step_x: -ey * SUBPIXEL,
+            step_y: ex * SUBPIXEL,
+        }
+    }
+}
+
+/// Calls `plot(pixel_index, depth)` for every pixel of a `resolution`² image whose centre the
+/// triangle covers under the top-left rule. Either winding; zero area draws nothing.
+#[inline(always)]
+pub(crate) fn scan_triangle(
+    tri: [ScreenVertex; 3],
+    resolution: u32,
+    span_min_width: i64,
+    mut plot: impl FnMut(usize, f32),
+) {
+    let [a, mut b, mut c] = tri;
+    let (ax, ay) = (a.x as i64, a.y as i64);
+    let mut area = (b.x as i64 - ax) * (c.y as i64 - ay) - (b.y as i64 - ay) * (c.x as i64 - ax);
+    if area == 0 {
+        return;
+    }
+    if area < 0 {
+        std::mem::swap(&mut b, &mut c);
+        area = -area;
+    }
+    // Pixels whose centres `p · 256 + 128` lie within the bounding box, clamped to the image.
+    let last = resolution as i64 - 1;
+    let min_x = a.x.min(b.x).min(c.x) as i64;
+    let max_x = a.x.max(b.x).max(c.x) as i64;
+    let min_y = a.y.min(b.y).min(c.y) as i64;
+    let max_y = a.y.max(b.y).max(c.y) as i64;
+    let x0 = ((min_x - HALF_PIXEL + SUBPIXEL - 1) >> SUBPIXEL_BITS).max(0);
+    let x1 = ((max_x - HALF_PIXEL) >> SUBPIXEL_BITS).min(last);
+    let y0 = ((min_y - HALF_PIXEL + SUBPIXEL - 1) >> SUBPIXEL_BITS).max(0);
+    let y1 = ((max_y - HALF_PIXEL) >> SUBPIXEL_BITS).min(last);
+    if x0 > x1 || y0 > y1 {
+        return;
+    }
+    let (sample_x, sample_y) = (x0 * SUBPIXEL + HALF_PIXEL, y0 * SUBPIXEL + HALF_PIXEL);
+    let e0 = Edge::new(b, c, sample_x, sample_y);
+    let e1 = Edge::new(c, a, sample_x, sample_y);
+    let e2 = Edge::new(a, b, sample_x, sample_y);
+    // Barycentric weights of b and c are e1 / area and e2 / area.
+    let inv_area = 1.0 / area as f64;
+    let kb = ((b.q - a.q) as f64 * inv_area) as f32;
+    let kc = ((c.q - a.q) as f64 * inv_area) as f32;
+    let depth = |w1: i64, w2: i64| a.q + w1 as f32 * kb + w2 as f32 * kc;
+
+    let width = x1 - x0 + 1;
+    let stride = resolution as usize;
+    let (mut r0, mut r1, mut r2) = (e0.start, e1.start, e2.start);
+    for y in y0..=y1 {
+        let row = y as usize * stride + x0 as usize;
+        if width < span_min_width {
+            let (mut w0, mut w1, mut w2) = (r0, r1, r2);
+            for k in 0..width as usize {
+                if (w0 | w1 | w2) >= 0 {
+                    plot(row + k, depth(w1, w2));
+                }
+                w0 += e0.step_x;
+                w1 += e1.step_x;
+                w2 += e2.step_x;
+            }
+        } else if let Some((lo, hi)) = covered_span([r0, r1, r2], [&e0, &e1, &e2], width - 1) {
+            for k in lo..=hi {
+                plot(
+                    row + k as usize,
+                    depth(r1 + e1.step_x * k, r2 + e2.step_x * k),
+                );
+            }
+        }
+        r0 += e0.step_y;
+        r1 += e1.step_y;
+        r2 += e2.step_y;
+    }
+}
+
+/// The pixels `k` in `0..=last` where every `value + step_x · k >= 0`, as an inclusive range.
+#[inline]
+fn covered_span(values: [i64; 3], edges: [&Edge; 3], last: i64) -> Option<(i64, i64)> {
+    let (mut lo, mut hi) = (0, last);
+    for (value, edge) in values.into_iter().zip(edges) {
+        let step = edge.step_x;
+        if value < 0 {
+            if step <= 0 {
+                return None;
+            }
+            lo = lo.max((-value + step - 1) / step);
+        } else if step < 0 {
+            hi = hi.min(value / -step);
+        }
+    }
+    (lo <= hi).then_some((lo, hi))
+}
+
+/// How many triangles of `mesh` cover each pixel (no depth test): the watertightness probe.
+#[cfg(test)]
+pub(crate) fn coverage_counts(mesh: &Mesh, camera: &Camera) -> Vec<u32> {
+    let resolution = camera.resolution() as usize;
+    let mut counts = vec![0; resolution * resolution];
+    Rasterizer::new().rasterize(mesh, camera, Some, |_, index, _| counts[index] += 1);
+    counts
+}
+
+#[cfg(test)]
+mod tests;

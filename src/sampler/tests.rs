@@ -1,0 +1,156 @@
+//! Tests of the sampling loop: known visibility, determinism, and the timing harness.
+
+use super::test_meshes::{fibonacci_directions, noisy_sphere, push_cube};
+use super::*;
+use crate::progress::NoProgress;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+fn params(center: [f32; 3], radius: f32, resolution: u32) -> SamplingParams {
+    SamplingParams {
+        level: 0,
+        resolution,
+        fov_deg: 60.0,
+        center,
+        radius,
+    }
+}
+
+/// A unit cube (faces are patches 0..6 in the order +X, −X, +Y, −Y, +Z, −Z) holding a cube of
+/// half its size (patch 6).
+fn nested_cubes() -> (Mesh, Vec<PatchId>) {
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    push_cube([0.0; 3], 1.0, &mut positions, &mut triangles);
+    push_cube([0.1, -0.05, 0.02], 0.5, &mut positions, &mut triangles);
+    let patch_of = (0..24).map(|t| (t / 2).min(6)).collect();
+    (
+        Mesh::from_memory("cubes", positions, triangles).unwrap(),
+        patch_of,
+    )
+}
+
+#[test]
+fn inner_cube_is_hidden_and_axis_views_see_their_own_face() {
+    let (mesh, patch_of) = nested_cubes();
+    let p = params([0.0; 3], 3f32.sqrt(), 64);
+    let axes = [
+        [1.0, 0.0, 0.0],
+        [-1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, -1.0],
+    ];
+    let mut directions = axes.to_vec();
+    directions.extend(fibonacci_directions(40));
+    let matrix = sample_directions(&mesh, &patch_of, 7, &p, &directions, &NoProgress);
+    assert_eq!((matrix.views(), matrix.patches()), (46, 7));
+    for view in 0..matrix.views() {
+        assert!(!matrix.get(view, 6), "view {view} sees the inner cube");
+        assert!(matrix.row(view)[0] != 0, "view {view} sees nothing");
+    }
+    for (face, _) in axes.iter().enumerate() {
+        let opposite = face ^ 1;
+        assert!(
+            matrix.get(face as u32, face as u32),
+            "face {face} from its side"
+        );
+        assert!(
+            !matrix.get(face as u32, opposite as u32),
+            "face {opposite} from face {face}"
+        );
+    }
+}
+
+struct Counter {
+    started: AtomicU64,
+    done: AtomicU64,
+    finished: AtomicU64,
+}
+
+impl Progress for Counter {
+    fn start(&self, what: &str, total: u64) {
+        assert_eq!(what, "sampling");
+        self.started.store(total, Ordering::Relaxed);
+    }
+    fn inc(&self, n: u64) {
+        self.done.fetch_add(n, Ordering::Relaxed);
+    }
+    fn finish(&self) {
+        self.finished.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+#[test]
+fn output_is_identical_for_one_and_two_threads() {
+    let mesh = noisy_sphere(20, 40, 0.3, 5);
+    let patch_of: Vec<PatchId> = (0..mesh.triangle_count()).map(|t| t / 13).collect();
+    let patch_count = patch_of.last().unwrap() + 1;
+    let p = params([0.0; 3], 1.4, 96);
+    let directions = fibonacci_directions(66);
+    let run = |threads| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let progress = Counter {
+            started: AtomicU64::new(0),
+            done: AtomicU64::new(0),
+            finished: AtomicU64::new(0),
+        };
+        let matrix = pool.install(|| {
+            sample_directions(&mesh, &patch_of, patch_count, &p, &directions, &progress)
+        });
+        assert_eq!(progress.started.load(Ordering::Relaxed), 66);
+        assert_eq!(progress.done.load(Ordering::Relaxed), 66);
+        assert_eq!(progress.finished.load(Ordering::Relaxed), 1);
+        matrix
+    };
+    let one = run(1);
+    assert_eq!(one, run(2));
+    // A bumpy sphere: every view sees something, no view sees everything.
+    for view in 0..one.views() {
+        let seen: u32 = one.row(view).iter().map(|w| w.count_ones()).sum();
+        assert!(seen > 0 && seen < patch_count, "view {view} sees {seen}");
+    }
+}
+
+/// Median time of `sample` on a ~100K-triangle closed mesh, 1026 views at 512².
+/// Run: `cargo test --release sampler::tests::timing -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn timing_100k_triangles_1026_views_512() {
+    let mesh = noisy_sphere(159, 317, 0.05, 1);
+    let patch_of: Vec<PatchId> = (0..mesh.triangle_count()).map(|t| t / 100).collect();
+    let patch_count = patch_of.last().unwrap() + 1;
+    let p = SamplingParams {
+        level: 4,
+        ..params([0.0; 3], 1.1, 512)
+    };
+    let directions = fibonacci_directions(crate::sphere::view_count(4));
+    let mut times = Vec::new();
+    let mut seen = 0;
+    for _ in 0..3 {
+        let start = std::time::Instant::now();
+        let matrix = sample_directions(&mesh, &patch_of, patch_count, &p, &directions, &NoProgress);
+        times.push(start.elapsed().as_secs_f64());
+        seen = (0..matrix.views())
+            .map(|v| {
+                matrix
+                    .row(v)
+                    .iter()
+                    .map(|w| w.count_ones() as u64)
+                    .sum::<u64>()
+            })
+            .sum();
+    }
+    times.sort_by(f64::total_cmp);
+    println!(
+        "{} triangles, {} views at 512²: median {:.3} s of {:?} on {} threads; {:.1} patches/view",
+        mesh.triangle_count(),
+        directions.len(),
+        times[1],
+        times,
+        rayon::current_num_threads(),
+        seen as f64 / directions.len() as f64
+    );
+}
