@@ -20,7 +20,6 @@
 use std::cmp::Ordering;
 
 use super::aabb::Aabb;
-use super::components::find;
 use super::queue::{FusionQueue, entry, id_and_version};
 
 /// A list is compacted once its length exceeds twice its last compacted length plus this
@@ -28,14 +27,23 @@ use super::queue::{FusionQueue, entry, id_and_version};
 /// amortised cost O(1) per appended entry.
 const COMPACT_SLACK: usize = 16;
 
+/// What the greedy reads of one patch, kept together so a visit costs one cache line (as
+/// separate arrays they cost four).
+#[derive(Clone, Copy)]
+struct Node {
+    bbox: Aabb,
+    area: f64,
+    /// Union–find parent; a patch is alive when it is its own parent.
+    parent: u32,
+    version: u32,
+    /// Length of the neighbour list when it was last compacted.
+    compacted_len: u32,
+}
+
 /// The state of a fusion: every patch, alive or already fused into another.
 pub(crate) struct Fusion {
-    parent: Vec<u32>,
-    area: Vec<f64>,
-    bbox: Vec<Aabb>,
-    version: Vec<u32>,
+    nodes: Vec<Node>,
     neighbours: Vec<Vec<u32>>,
-    compacted_len: Vec<usize>,
     alive: u32,
 }
 
@@ -44,12 +52,17 @@ impl Fusion {
     pub fn new(area: Vec<f64>, bbox: Vec<Aabb>, neighbours: Vec<Vec<u32>>) -> Fusion {
         let n = area.len();
         debug_assert!(bbox.len() == n && neighbours.len() == n);
+        let nodes = (0..n)
+            .map(|p| Node {
+                bbox: bbox[p],
+                area: area[p],
+                parent: p as u32,
+                version: 0,
+                compacted_len: neighbours[p].len() as u32,
+            })
+            .collect();
         Fusion {
-            parent: (0..n as u32).collect(),
-            compacted_len: neighbours.iter().map(Vec::len).collect(),
-            version: vec![0; n],
-            area,
-            bbox,
+            nodes,
             neighbours,
             alive: n as u32,
         }
@@ -62,25 +75,25 @@ impl Fusion {
 
     /// The ids of the alive patches, ascending.
     pub fn alive_ids(&self) -> Vec<u32> {
-        (0..self.parent.len() as u32)
-            .filter(|&p| self.parent[p as usize] == p)
+        (0..self.nodes.len() as u32)
+            .filter(|&p| self.nodes[p as usize].parent == p)
             .collect()
     }
 
     /// The bounding box of alive patch `p`.
     pub fn bbox(&self, p: u32) -> Aabb {
-        self.bbox[p as usize]
+        self.nodes[p as usize].bbox
     }
 
     /// Replaces the neighbour list of alive patch `p`.
     pub fn set_neighbours(&mut self, p: u32, list: Vec<u32>) {
-        self.compacted_len[p as usize] = list.len();
+        self.nodes[p as usize].compacted_len = list.len() as u32;
         self.neighbours[p as usize] = list;
     }
 
     /// The alive patch that triangle (or patch id) `t` belongs to.
     pub fn patch_of(&mut self, t: u32) -> u32 {
-        find(&mut self.parent, t)
+        find(&mut self.nodes, t)
     }
 
     /// Fuses patches, starting from the alive patches `seeds`, until `target` patches remain
@@ -89,14 +102,18 @@ impl Fusion {
         let mut queue = FusionQueue::new(
             seeds
                 .iter()
-                .map(|&p| entry(self.area[p as usize], p, self.version[p as usize]))
+                .map(|&p| {
+                    let node = &self.nodes[p as usize];
+                    entry(node.area, p, node.version)
+                })
                 .collect(),
         );
         let mut fusions = 0;
         while self.alive > target {
             let Some(e) = queue.pop() else { break };
             let (p, version) = id_and_version(e);
-            if self.parent[p as usize] != p || self.version[p as usize] != version {
+            let node = &self.nodes[p as usize];
+            if node.parent != p || node.version != version {
                 continue; // Stale: fused away, or re-queued with a newer area.
             }
             self.compact(p);
@@ -104,7 +121,8 @@ impl Fusion {
                 continue; // A whole connected component: set aside, never queued again.
             };
             let s = self.unite(p, q);
-            queue.push(entry(self.area[s as usize], s, self.version[s as usize]));
+            let node = &self.nodes[s as usize];
+            queue.push(entry(node.area, s, node.version));
             fusions += 1;
         }
         fusions
@@ -112,10 +130,10 @@ impl Fusion {
 
     /// The neighbour of `p` (list compacted) whose union with `p` has the smallest diagonal.
     fn most_compact_neighbour(&self, p: u32) -> Option<u32> {
-        let bp = self.bbox[p as usize];
+        let bp = self.nodes[p as usize].bbox;
         let mut best: Option<(f64, u32)> = None;
         for &q in &self.neighbours[p as usize] {
-            let d = bp.union(&self.bbox[q as usize]).diagonal_squared();
+            let d = bp.union(&self.nodes[q as usize].bbox).diagonal_squared();
             let better = match best {
                 None => true,
                 Some((bd, bq)) => d.total_cmp(&bd).then(q.cmp(&bq)) == Ordering::Less,
@@ -140,14 +158,17 @@ impl Fusion {
             Ordering::Equal => (p.min(q), p.max(q)),
         };
         let (su, lu) = (s as usize, l as usize);
-        self.parent[lu] = s;
-        self.area[su] += self.area[lu];
-        self.bbox[su] = self.bbox[su].union(&self.bbox[lu]);
-        self.version[su] += 1;
+        let absorbed_node = self.nodes[lu];
+        self.nodes[lu].parent = s;
+        let survivor = &mut self.nodes[su];
+        survivor.area += absorbed_node.area;
+        survivor.bbox = survivor.bbox.union(&absorbed_node.bbox);
+        survivor.version += 1;
+        let compacted_len = survivor.compacted_len as usize;
         let absorbed = std::mem::take(&mut self.neighbours[lu]);
         self.neighbours[su].extend_from_slice(&absorbed);
         self.alive -= 1;
-        if self.neighbours[su].len() > 2 * self.compacted_len[su] + COMPACT_SLACK {
+        if self.neighbours[su].len() > 2 * compacted_len + COMPACT_SLACK {
             self.compact(s);
         }
         s
@@ -156,14 +177,23 @@ impl Fusion {
     /// Resolves the neighbour list of alive patch `p` to alive ids, without `p` itself and
     /// without duplicates.
     fn compact(&mut self, p: u32) {
-        let mut list = std::mem::take(&mut self.neighbours[p as usize]);
+        let list = &mut self.neighbours[p as usize];
         for q in list.iter_mut() {
-            *q = find(&mut self.parent, *q);
+            *q = find(&mut self.nodes, *q);
         }
         list.retain(|&q| q != p);
         list.sort_unstable();
         list.dedup();
-        self.compacted_len[p as usize] = list.len();
-        self.neighbours[p as usize] = list;
+        self.nodes[p as usize].compacted_len = list.len() as u32;
     }
+}
+
+/// The alive patch containing `x`, halving the path on the way.
+fn find(nodes: &mut [Node], mut x: u32) -> u32 {
+    while nodes[x as usize].parent != x {
+        let up = nodes[nodes[x as usize].parent as usize].parent;
+        nodes[x as usize].parent = up;
+        x = up;
+    }
+    x
 }

@@ -2,13 +2,14 @@
 //!
 //! Every triangle starts as a patch; the smallest patch by area repeatedly fuses with the
 //! edge-adjacent patch that keeps the union's bounding-box diagonal shortest, until the target
-//! count remains ([`greedy`]). Connectivity comes from shared edges, built by sorting
-//! ([`adjacency`]). Patches never span connected components unless there are more components
+//! count remains (`greedy.rs`). Connectivity comes from shared edges, built by sorting
+//! (`adjacency.rs`). Patches never span connected components unless there are more components
 //! than patches asked for; then whole components fuse along Morton-order proximity links
-//! ([`components`]). Final ids follow a Z-order curve and triangles are reordered patch by
-//! patch ([`reorder`]); each patch gets its area, bounding sphere and normal cone ([`bounds`]).
+//! (`components.rs`). Final ids follow a Z-order curve and triangles are reordered patch by
+//! patch (`reorder.rs`); each patch gets its area, bounding sphere and normal cone (`bounds.rs`).
 //!
-//! Cost: O(n log n) time for n triangles; memory about 100 bytes per triangle at the peak.
+//! Cost: O(n log n) time for n triangles; memory about 130 bytes per triangle at the peak
+//! (while the adjacency is built), on top of the mesh.
 //! **Invariant**: the result depends only on the mesh and the target, never on the thread
 //! count (the fusion is sequential; parallel parts are per-element or sort by total keys).
 

@@ -291,7 +291,7 @@ fn degenerate_and_duplicate_triangles_join_through_valid_edges() {
             [2, 1, 0], // duplicate with the other orientation
             [0, 1, 2], // exact duplicate
             [3, 3, 3], // no edge at all: a component of its own
-            [0, 2, 1], // zero area? no: a flipped copy, joins
+            [0, 2, 1], // flipped copy: orientation is ignored, joins
         ],
     };
     let mesh = soup.mesh();
