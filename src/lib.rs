@@ -5,11 +5,11 @@
 //! polygonal patches", and the modules follow the data:
 //!
 //! [`ooc`] (memory-mapped mesh) → [`tiling`] (patches) → [`sphere`] (sampling directions) →
-//! [`sampler`] (ID buffers → bitfields) → [`format`] (`.pvis` writer) → [`runtime`] (reader).
+//! [`sampler`] (ID buffers → bitfields) → [`format`](mod@format) (`.pvis` writer) → [`runtime`] (reader).
 //!
 //! Only [`sphere`] and [`runtime`] exist without the `bake` feature; they need nothing but
 //! `core`. See `ARCHITECTURE.md` for the invariants and `spec/FORMAT.md` for the file format.
-#![cfg_attr(not(feature = "std"), no_std)]
+#![cfg_attr(not(any(feature = "std", test)), no_std)]
 #![warn(missing_docs)]
 
 pub mod runtime;

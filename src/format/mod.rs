@@ -153,10 +153,10 @@ fn visb(matrix: &VisibilityMatrix) -> Vec<u8> {
         out.truncate(row_start + row_len);
         // The matrix keeps bits past the last patch zero; masking makes the padding rule hold
         // even if it did not.
-        if tail_bits != 0 {
-            if let Some(last) = out.last_mut() {
-                *last &= (1u8 << tail_bits) - 1;
-            }
+        if tail_bits != 0
+            && let Some(last) = out.last_mut()
+        {
+            *last &= (1u8 << tail_bits) - 1;
         }
     }
     out

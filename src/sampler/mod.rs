@@ -20,6 +20,10 @@ pub use camera::{Camera, MAX_RESOLUTION, NEAR_FRACTION};
 pub use id_buffer::{IdBuffer, NO_PATCH};
 pub use raster::{Rasterizer, SUBPIXEL_BITS, render_ids, render_ids_filtered};
 
+mod bounding;
+
+pub use bounding::bounding_sphere;
+
 use crate::ooc::Mesh;
 use crate::progress::Progress;
 use crate::tiling::PatchId;

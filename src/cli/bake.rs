@@ -1,0 +1,270 @@
+//! `patchvis bake`: checked settings, then tile → sample → encode, with a timing and peak-heap
+//! record per stage, and outputs that appear only once everything succeeded.
+
+use super::args::BakeArgs;
+use super::progress::Bars;
+use super::{UsageError, alloc};
+use anyhow::{Context, Result};
+use patchvis::format::{self, BakeContents};
+use patchvis::ooc::Mesh;
+use patchvis::sampler::{self, SamplingParams};
+use patchvis::sphere::{MAX_LEVEL, view_count};
+use patchvis::tiling;
+use serde_json::json;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Largest ID-buffer side: one buffer per thread is `resolution² × 8` bytes (512 MiB here).
+const MAX_RESOLUTION: u32 = 8192;
+
+/// Bake settings after checking: every value here is usable as is.
+#[derive(Debug)]
+pub struct Settings {
+    input: PathBuf,
+    output: PathBuf,
+    patches: u32,
+    level: u32,
+    resolution: u32,
+    fov_deg: f32,
+    mesh_out: Option<PathBuf>,
+    stats: Option<PathBuf>,
+    quiet: bool,
+}
+
+impl Settings {
+    /// Checks the raw flags; a value out of range is a usage error.
+    pub fn from_args(args: BakeArgs) -> Result<Settings, UsageError> {
+        if args.patches == 0 {
+            return Err(UsageError("--patches 0: expected at least 1 patch".into()));
+        }
+        if args.level > MAX_LEVEL {
+            return Err(UsageError(format!(
+                "--level {}: expected a sphere level from 0 to {MAX_LEVEL} ({} views at most)",
+                args.level,
+                view_count(MAX_LEVEL)
+            )));
+        }
+        if args.resolution == 0 || args.resolution > MAX_RESOLUTION {
+            return Err(UsageError(format!(
+                "--resolution {}: expected 1 to {MAX_RESOLUTION} pixels",
+                args.resolution
+            )));
+        }
+        if !(args.fov.is_finite() && args.fov > 0.0 && args.fov < 180.0) {
+            return Err(UsageError(format!(
+                "--fov {}: expected degrees between 0 and 180, exclusive",
+                args.fov
+            )));
+        }
+        for out in [
+            Some(&args.output),
+            args.mesh_out.as_ref(),
+            args.stats.as_ref(),
+        ]
+        .into_iter()
+        .flatten()
+        {
+            check_output_path(out)?;
+        }
+        Ok(Settings {
+            input: args.input,
+            output: args.output,
+            patches: args.patches,
+            level: args.level,
+            resolution: args.resolution,
+            fov_deg: args.fov,
+            mesh_out: args.mesh_out,
+            stats: args.stats,
+            quiet: args.quiet,
+        })
+    }
+}
+
+/// An output must be a file in an existing directory; found out before hours of work.
+fn check_output_path(path: &Path) -> Result<(), UsageError> {
+    if path.is_dir() {
+        return Err(UsageError(format!(
+            "{}: is a directory, expected an output file path",
+            path.display()
+        )));
+    }
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !parent.is_dir() {
+        return Err(UsageError(format!(
+            "{}: directory {} does not exist",
+            path.display(),
+            parent.display()
+        )));
+    }
+    Ok(())
+}
+
+/// Time and peak heap of one stage.
+struct StageRecord {
+    name: &'static str,
+    seconds: f64,
+    peak_heap_bytes: usize,
+}
+
+fn stage<T>(records: &mut Vec<StageRecord>, name: &'static str, f: impl FnOnce() -> T) -> T {
+    alloc::reset_peak();
+    let start = Instant::now();
+    let out = f();
+    records.push(StageRecord {
+        name,
+        seconds: start.elapsed().as_secs_f64(),
+        peak_heap_bytes: alloc::peak(),
+    });
+    out
+}
+
+/// Runs `patchvis bake`.
+pub fn run(args: BakeArgs) -> Result<()> {
+    let s = Settings::from_args(args)?;
+    let bars = Bars::new(!s.quiet);
+    let start = Instant::now();
+    let mut stages = Vec::new();
+
+    let mesh = stage(&mut stages, "input", || Mesh::open(&s.input))?;
+    let tiling = stage(&mut stages, "tiling", || tiling::tile(&mesh, s.patches))
+        .with_context(|| format!("{}: tiling failed", s.input.display()))?;
+    let patch_count = tiling.patches.len() as u32;
+    let params = SamplingParams::for_mesh(&mesh, s.level, s.resolution, s.fov_deg);
+    let visibility = stage(&mut stages, "sampling", || {
+        sampler::sample(&mesh, &tiling.patch_of, patch_count, &params, &bars)
+    });
+    let contents = BakeContents {
+        sampling: &params,
+        triangle_count: u64::from(mesh.triangle_count()),
+        patches: &tiling.patches,
+        visibility: &visibility,
+    };
+    let bytes = stage(&mut stages, "encoding", || format::encode(&contents));
+    let visibility_bytes = patchvis::runtime::Pvis::parse(&bytes)
+        .map(|p| p.visibility_bytes())
+        .context("internal error: the written file does not parse")?;
+
+    // Outputs: the mesh goes to a temporary file first, so that a failure anywhere leaves
+    // no output behind.
+    let mesh_tmp = match &s.mesh_out {
+        Some(path) => Some(stage(&mut stages, "mesh-out", || {
+            write_mesh_tmp(path, &mesh, &tiling)
+        })?),
+        None => None,
+    };
+    format::write_atomic(&s.output, &bytes)
+        .with_context(|| format!("{}: cannot write", s.output.display()))?;
+    if let (Some(tmp), Some(path)) = (mesh_tmp, &s.mesh_out) {
+        tmp.persist(path)
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+    }
+
+    let views = visibility.views();
+    let seen: u64 = (0..views)
+        .map(|v| {
+            visibility
+                .row(v)
+                .iter()
+                .map(|w| u64::from(w.count_ones()))
+                .sum::<u64>()
+        })
+        .sum();
+    let visible_fraction = seen as f64 / (f64::from(views) * f64::from(patch_count));
+    let mut sizes: Vec<u32> = tiling.patches.iter().map(|p| p.count).collect();
+    sizes.sort_unstable();
+    let seconds = start.elapsed().as_secs_f64();
+
+    if let Some(path) = &s.stats {
+        let report = json!({
+            "input": s.input.display().to_string(),
+            "output": s.output.display().to_string(),
+            "triangles": mesh.triangle_count(),
+            "vertices": mesh.vertex_count(),
+            "patches": patch_count,
+            "patch_triangles": {"min": sizes[0], "median": sizes[sizes.len() / 2], "max": sizes[sizes.len() - 1]},
+            "level": s.level,
+            "views": views,
+            "resolution": s.resolution,
+            "fov_deg": s.fov_deg,
+            "visible_fraction_mean": visible_fraction,
+            "bytes": {"total": bytes.len(), "visibility": visibility_bytes},
+            "seconds": seconds,
+            "peak_heap_bytes": stages.iter().map(|r| r.peak_heap_bytes).max().unwrap_or(0),
+            "stages": stages.iter().map(|r| json!({
+                "name": r.name, "seconds": r.seconds, "peak_heap_bytes": r.peak_heap_bytes,
+            })).collect::<Vec<_>>(),
+        });
+        let text = serde_json::to_string_pretty(&report)? + "\n";
+        format::write_atomic(path, text.as_bytes())
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+    }
+
+    if !s.quiet {
+        let secs = |name: &str| {
+            stages
+                .iter()
+                .find(|r| r.name == name)
+                .map_or(0.0, |r| r.seconds)
+        };
+        println!(
+            "{}: {} triangles, {} vertices (read in {:.2} s)",
+            s.input.display(),
+            mesh.triangle_count(),
+            mesh.vertex_count(),
+            secs("input")
+        );
+        println!(
+            "tiling:   {} patches, {}/{}/{} triangles min/median/max ({:.2} s)",
+            patch_count,
+            sizes[0],
+            sizes[sizes.len() / 2],
+            sizes[sizes.len() - 1],
+            secs("tiling")
+        );
+        println!(
+            "sampling: {} views (level {}) at {}x{} px, fov {}°; a view sees {:.1}% of patches on average ({:.2} s)",
+            views,
+            s.level,
+            s.resolution,
+            s.resolution,
+            s.fov_deg,
+            100.0 * visible_fraction,
+            secs("sampling")
+        );
+        println!(
+            "wrote {}: {} bytes, visibility {} bytes ({:.2} s total)",
+            s.output.display(),
+            bytes.len(),
+            visibility_bytes,
+            seconds
+        );
+        if let Some(path) = &s.mesh_out {
+            println!("wrote {}: triangles reordered by patch", path.display());
+        }
+    }
+    Ok(())
+}
+
+fn write_mesh_tmp(
+    path: &Path,
+    mesh: &Mesh,
+    tiling: &tiling::Tiling,
+) -> Result<tempfile::NamedTempFile> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let mut tmp = tempfile::NamedTempFile::new_in(dir)
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    {
+        let mut out = BufWriter::new(tmp.as_file_mut());
+        patchvis::ooc::write_ply::write_patch_ply(&mut out, mesh, &tiling.order, &tiling.patch_of)
+            .and_then(|()| out.flush())
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+    }
+    Ok(tmp)
+}

@@ -1,0 +1,19 @@
+//! The binary's modules: flags, the commands, and the process-wide helpers they need.
+
+pub mod alloc;
+pub mod args;
+pub mod bake;
+pub mod inspect;
+pub mod progress;
+
+/// An invocation that cannot run as given (exit code 2), e.g. `--patches 0`.
+#[derive(Debug)]
+pub struct UsageError(pub String);
+
+impl std::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for UsageError {}
