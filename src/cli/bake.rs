@@ -129,9 +129,13 @@ pub fn run(args: BakeArgs) -> Result<()> {
     let start = Instant::now();
     let mut stages = Vec::new();
 
-    let mesh = stage(&mut stages, "input", || Mesh::open(&s.input))?;
-    let tiling = stage(&mut stages, "tiling", || tiling::tile(&mesh, s.patches))
-        .with_context(|| format!("{}: tiling failed", s.input.display()))?;
+    let mesh = stage(&mut stages, "input", || {
+        bars.spin("reading", || Mesh::open(&s.input))
+    })?;
+    let tiling = stage(&mut stages, "tiling", || {
+        bars.spin("tiling", || tiling::tile(&mesh, s.patches))
+    })
+    .with_context(|| format!("{}: tiling failed", s.input.display()))?;
     let patch_count = tiling.patches.len() as u32;
     let params = SamplingParams::for_mesh(&mesh, s.level, s.resolution, s.fov_deg);
     let visibility = stage(&mut stages, "sampling", || {
@@ -143,7 +147,9 @@ pub fn run(args: BakeArgs) -> Result<()> {
         patches: &tiling.patches,
         visibility: &visibility,
     };
-    let bytes = stage(&mut stages, "encoding", || format::encode(&contents));
+    let bytes = stage(&mut stages, "encoding", || {
+        bars.spin("encoding", || format::encode(&contents))
+    });
     let visibility_bytes = patchvis::runtime::Pvis::parse(&bytes)
         .map(|p| p.visibility_bytes())
         .context("internal error: the written file does not parse")?;
