@@ -9,8 +9,10 @@
 mod atomic;
 #[cfg(test)]
 mod tests;
+mod visb;
 
 pub use atomic::write_atomic;
+pub use visb::{encode_hierarchical, probabilities};
 
 use crate::runtime::Pvis;
 use crate::runtime::consts::*;
@@ -57,7 +59,7 @@ pub fn encode(contents: &BakeContents) -> Vec<u8> {
 
     let camr = camr(params, views);
     let ptch = ptch(contents.triangle_count, contents.patches);
-    let visb = visb(contents.visibility);
+    let visb = encode_hierarchical(contents.visibility, params.level.min(MAX_LEVEL));
 
     let table_end = HEADER_LEN + SECTION_ENTRY_LEN * SECTIONS.len() as u64;
     let mut offsets = [0u64; 3];
@@ -137,9 +139,9 @@ fn ptch(triangle_count: u64, patches: &[Patch]) -> Vec<u8> {
     out
 }
 
-/// § VISB, encoding 0: each row's `u64` words cut into `ceil(P / 8)` little-endian bytes,
+/// § VISB, encoding 0 (what version-1 files hold; kept for tests and comparisons): each row's `u64` words cut into `ceil(P / 8)` little-endian bytes,
 /// which is exactly the spec's "bit p is bit p % 8 of byte p / 8".
-fn visb(matrix: &VisibilityMatrix) -> Vec<u8> {
+pub fn encode_raw(matrix: &VisibilityMatrix) -> Vec<u8> {
     let row_len = row_bytes(matrix.patches()) as usize;
     let mut out = Vec::with_capacity(VISB_HEADER_LEN as usize + matrix.views() as usize * row_len);
     out.extend_from_slice(&ENCODING_RAW.to_le_bytes());
