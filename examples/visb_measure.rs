@@ -64,7 +64,7 @@ fn main() {
         None => println!("{name:<26}     n/a (tool missing)"),
     };
     show("zstd -19", external("zstd", &["-19", "-c", "-q"], &raw));
-    show("xz -9", external("xz", &["-9e", "-c", "-q"], &raw));
+    show("xz -9", external("xz", &["-9", "-c", "-q"], &raw));
     show("VISB in this file", Some(pvis.visibility_bytes() as usize));
     let mut matrix = VisibilityMatrix::new(views, p as u32);
     for v in 0..views {

@@ -12,6 +12,24 @@ use super::streaming::{CHILD_CORNERS, choose, mids, octant, planes};
 use super::{Pvis, Visible};
 use crate::sphere::{Face, children, parents, root_faces};
 
+/// Corner views of the 8 root faces by octant (spec § Faces): `(X, Y, Z)` for octants of
+/// positive orientation, else `(X, Z, Y)`, with `±X = 0/1, ±Y = 2/3, ±Z = 4/5`. Equal to
+/// `root_faces()[o].views` (tested), without computing the faces on every query.
+const ROOT_VIEWS: [[u32; 3]; 8] = {
+    let mut out = [[0; 3]; 8];
+    let mut o = 0;
+    while o < 8 {
+        let (x, y, z) = ((o & 1) as u32, (o >> 1 & 1) as u32, (o >> 2 & 1) as u32);
+        out[o] = if (x + y + z) % 2 == 0 {
+            [x, 2 + y, 4 + z]
+        } else {
+            [x, 4 + z, 2 + y]
+        };
+        o += 1;
+    }
+    out
+};
+
 /// `u32`s per inner-face record: 3 planes of 3 `f32` (as bits), then the 3 midpoint views.
 const FACE_U32S: usize = 12;
 
@@ -89,7 +107,7 @@ impl<'a, 't> Expanded<'a, 't> {
         };
         let level = pvis.sampling.level;
         let oct = octant(d);
-        let mut corners = root_faces()[oct].views;
+        let mut corners = ROOT_VIEWS[oct];
         let mut index = oct;
         let face_table = (1 + pvis.sampling.views as usize) * words;
         for k in 0..level {
@@ -136,5 +154,17 @@ fn build(face: &Face, k: u32, index: usize, level: u32, faces: &mut [u64]) {
     }
     for (c, kid) in kids.iter().enumerate() {
         build(kid, k + 1, 4 * index + c, level, faces);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn root_views_are_the_root_faces() {
+        for (o, face) in root_faces().iter().enumerate() {
+            assert_eq!(ROOT_VIEWS[o], face.views, "octant {o}");
+        }
     }
 }
