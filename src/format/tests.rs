@@ -246,3 +246,94 @@ proptest! {
         round_trip(level, &counts, &matrix);
     }
 }
+
+/// A level-1 file with encoding 1 and a correlated matrix.
+fn coded_file() -> Vec<u8> {
+    let mut matrix = VisibilityMatrix::new(18, 70);
+    for v in 0..18 {
+        for p in 0..70 {
+            if (p * 7 + v * 3) % 11 < 5 {
+                matrix.set(v, p);
+            }
+        }
+    }
+    round_trip(1, &[1; 70], &matrix)
+}
+
+#[test]
+fn every_truncated_prefix_trailing_byte_and_bit_flip_of_a_coded_file_is_refused() {
+    let bytes = coded_file();
+    assert_eq!(
+        Pvis::parse(&bytes).unwrap().encoding(),
+        ENCODING_HIERARCHICAL
+    );
+    for len in 0..bytes.len() {
+        assert!(Pvis::parse(&bytes[..len]).is_err(), "prefix of {len} bytes");
+    }
+    let mut longer = bytes.clone();
+    longer.push(0);
+    assert!(Pvis::parse(&longer).is_err());
+    let mut flipped = bytes.clone();
+    for i in 0..bytes.len() * 8 {
+        flipped[i / 8] ^= 1 << (i % 8);
+        assert!(Pvis::parse(&flipped).is_err(), "bit {i} flipped");
+        flipped[i / 8] ^= 1 << (i % 8);
+    }
+}
+
+/// Re-stamps the CRC so a structural mutation reaches the VISB checks.
+fn with_crc(mut bytes: Vec<u8>) -> Vec<u8> {
+    let n = bytes.len() - 4;
+    let crc = crc32c(&bytes[..n]);
+    bytes[n..].copy_from_slice(&crc.to_le_bytes());
+    bytes
+}
+
+#[test]
+fn coded_visb_structure_errors() {
+    let bytes = coded_file();
+    let visb = u64::from_le_bytes(bytes[32 + 48 + 8..32 + 48 + 16].try_into().unwrap()) as usize;
+    // A zero probability would collapse the range.
+    let mut zero_prob = bytes.clone();
+    zero_prob[visb + 8..visb + 10].copy_from_slice(&0u16.to_le_bytes());
+    assert!(matches!(
+        Pvis::parse(&with_crc(zero_prob)),
+        Err(crate::runtime::Error::Invalid { what, .. }) if what.contains("probability")
+    ));
+    // A wrong checkpoint.
+    let checkpoint = visb + 8 + 2 * 64;
+    let mut bad_checkpoint = bytes.clone();
+    bad_checkpoint[checkpoint] = 1;
+    assert!(matches!(
+        Pvis::parse(&with_crc(bad_checkpoint)),
+        Err(crate::runtime::Error::Invalid { what, .. }) if what.contains("checkpoint")
+    ));
+    // Encoding 1 in a version-1 file.
+    let mut v1 = bytes.clone();
+    v1[8] = 1;
+    assert_eq!(
+        Pvis::parse(&with_crc(v1)).unwrap_err(),
+        crate::runtime::Error::UnsupportedEncoding { found: 1 }
+    );
+}
+
+#[test]
+fn version_1_files_with_raw_rows_still_parse() {
+    let mut matrix = VisibilityMatrix::new(6, 3);
+    matrix.set(0, 2);
+    let v2 = round_trip(0, &[2, 1, 4], &matrix);
+    // Swap VISB for encoding 0 by hand: same layout, raw rows, version 1.
+    let raw = encode_raw(&matrix);
+    let visb = u64::from_le_bytes(v2[32 + 48 + 8..32 + 48 + 16].try_into().unwrap()) as usize;
+    let mut v1 = v2[..visb].to_vec();
+    v1[8] = 1;
+    v1[32 + 48 + 16..32 + 48 + 24].copy_from_slice(&(raw.len() as u64).to_le_bytes());
+    v1.extend_from_slice(&raw);
+    let len = v1.len() as u64 + 4;
+    v1[16..24].copy_from_slice(&len.to_le_bytes());
+    v1.extend_from_slice(&[0; 4]);
+    let v1 = with_crc(v1);
+    let pvis = Pvis::parse(&v1).unwrap();
+    assert_eq!((pvis.version(), pvis.encoding()), (1, ENCODING_RAW));
+    check_queries(&pvis, &matrix, 7);
+}

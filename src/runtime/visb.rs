@@ -228,3 +228,35 @@ pub(crate) fn ancestor_closure(targets: &[u32], out: &mut [u32]) -> usize {
     out[..n].sort_unstable();
     n
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sphere::{Face, MAX_LEVEL, children, root_faces};
+
+    /// `MAX_LANES` bounds the ancestor closure of every leaf of every level: checked
+    /// exhaustively (131,072 leaves at level 7), so the lock-step decoder never drops a lane.
+    #[test]
+    fn every_leaf_closure_fits_max_lanes() {
+        let mut faces: Vec<Face> = root_faces().to_vec();
+        for level in 0..=MAX_LEVEL {
+            let mut out = [0u32; MAX_LANES + 1];
+            let worst = faces
+                .iter()
+                .map(|f| ancestor_closure(&f.views, &mut out))
+                .max()
+                .unwrap();
+            assert_eq!(worst, 3 + 3 * level as usize, "level {level}");
+            if level < MAX_LEVEL {
+                faces = faces.iter().flat_map(children).collect();
+            }
+        }
+    }
+
+    #[test]
+    fn varints_are_bounded() {
+        assert_eq!(read_varint(&[0x85, 0x01], 0), Some((133, 2)));
+        assert_eq!(read_varint(&[0x80, 0x80, 0x80, 0x80, 0x01], 0), None);
+        assert_eq!(read_varint(&[0x80], 0), None);
+    }
+}
