@@ -268,8 +268,7 @@ fn bench(pvis: &Pvis<'_>, n: u32) -> Result<()> {
     let mut stream_scratch = vec![0u64; pvis.scratch_bound()];
     let mut streaming = pvis.streaming(&mut stream_scratch);
     let mut stay: Vec<f64> = Vec::new();
-    for b in 0..batches {
-        let base = eyes[b];
+    for &base in &eyes[..batches] {
         streaming.query(base);
         let jitter: Vec<[f32; 3]> = (0..BATCH)
             .map(|_| eye_at([0, 1, 2].map(|i| (base[i] - s.center[i]) / radius + 1e-5 * next())))
