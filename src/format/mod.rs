@@ -3,8 +3,9 @@
 //!
 //! Every offset, length and limit comes from [`crate::runtime::consts`], so writer and reader
 //! cannot drift apart; `encode` also runs the reader over its own output. Output is
-//! byte-deterministic: the same contents give the same bytes. Cost: one pass over the
-//! visibility matrix plus one CRC and one validation pass over the output.
+//! byte-deterministic: the same contents give the same bytes. VISB is written with encoding 1
+//! (`visb`: rows range-coded given their parent views). Cost: two passes over the visibility
+//! matrix plus one CRC and one validation pass over the output.
 
 mod atomic;
 #[cfg(test)]

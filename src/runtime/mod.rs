@@ -5,9 +5,12 @@
 //! arithmetic on every offset, validation at [`Pvis::parse`] and infallible accessors after.
 //! Query technique: Meruvia 2002 — the eye's direction from the model centre falls in one face
 //! of the sampling sphere, and the patches visible from the face's three corner views
-//! approximate those visible from the eye. Cost: `parse` is one pass over the file (CRC) plus
-//! one over the patch table; a query is one point location (`sphere::locate`, ≤ 4 plane tests
-//! per level) plus three rows OR-ed, `3·ceil(P/8)` bytes read.
+//! approximate those visible from the eye. Rows are stored raw (VISB encoding 0) or range-coded
+//! along the sphere hierarchy (encoding 1, `visb`, `coder`). Cost: `parse` is one pass over the
+//! file (CRC) plus one over the patch table and the VISB records; three query modes trade
+//! memory for time — [`Pvis::query`] (one row of scratch, decodes the leaf's `3 + 3·level`
+//! ancestor views in lock step), [`Streaming`] (`4 + 3·level` rows, decodes only where the path
+//! to the leaf changed) and [`Expanded`] (every row decoded once; `O(level + P/64)` a query).
 //!
 //! **Invariant:** nothing here allocates or panics on any input; the only panics are `assert!`s
 //! on caller contracts (an out-of-range patch index, a too-small scratch buffer).
