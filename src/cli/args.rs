@@ -64,6 +64,10 @@ pub struct InfoArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Also print the visibility payload's size next to the raw matrix and the raw matrix
+    /// compressed by `zstd -19` and `xz -9` (when those tools are installed).
+    #[arg(long)]
+    pub compare: bool,
 }
 
 /// `patchvis query`.
@@ -72,8 +76,13 @@ pub struct QueryArgs {
     /// The .pvis file.
     pub file: PathBuf,
     /// Camera position in model space.
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true)]
-    pub from: [f32; 3],
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true,
+          required_unless_present = "bench")]
+    pub from: Option<[f32; 3]>,
+    /// Instead of one query, time N queries per mode (expanded; streaming staying in a leaf;
+    /// streaming along a smooth orbit, counting leaf changes) and print median nanoseconds.
+    #[arg(long, value_name = "N")]
+    pub bench: Option<u32>,
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
