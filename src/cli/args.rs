@@ -22,6 +22,9 @@ pub enum Command {
     Info(InfoArgs),
     /// Which patches (and triangle ranges) a camera at a position sees.
     Query(QueryArgs),
+    /// Write a huge, real-looking test mesh (binary PLY), streaming and deterministic.
+    #[command(alias = "generate")]
+    Gen(GenArgs),
 }
 
 /// `patchvis bake`.
@@ -54,6 +57,48 @@ pub struct BakeArgs {
     /// Print nothing but errors; no progress bars.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// `patchvis gen`.
+#[derive(Debug, clap::Args)]
+pub struct GenArgs {
+    /// Which model to generate.
+    #[arg(long, value_enum)]
+    pub kind: GenKind,
+    /// About how many triangles (the model's own steps decide the exact count).
+    #[arg(long, value_name = "N")]
+    pub triangles: u64,
+    /// Output mesh (binary little-endian PLY).
+    #[arg(short, long, value_name = "OUT.ply")]
+    pub output: PathBuf,
+    /// The mesh that `subdivided-bunny` and `bunny-grid` start from.
+    #[arg(long, value_name = "MESH.ply", default_value = "assets/bunny.ply")]
+    pub source: PathBuf,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// The models `patchvis gen` writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum GenKind {
+    /// The source split k×k per triangle and displaced by smooth noise, like a dense scan.
+    SubdividedBunny,
+    /// Copies of the source on a floor grid.
+    BunnyGrid,
+    /// A closed casing around nested closed machine parts, never visible from outside.
+    Engine,
+}
+
+impl GenKind {
+    /// The flag value, for messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            GenKind::SubdividedBunny => "subdivided-bunny",
+            GenKind::BunnyGrid => "bunny-grid",
+            GenKind::Engine => "engine",
+        }
+    }
 }
 
 /// `patchvis info`.
