@@ -225,12 +225,11 @@ impl Mesh {
             let cached = dir.join(key.file_name());
             if let Ok(file) = File::open(&cached) {
                 let len = file.metadata().map(|m| m.len()).unwrap_or(0);
-                if let Ok(map) = MeshBytes::open(&file, len) {
-                    if let Some(mesh) =
-                        Mesh::from_cache(&path, map, Some(key), MeshSource::CacheHit)
-                    {
-                        return Ok(mesh);
-                    }
+                let hit = MeshBytes::open(&file, len)
+                    .ok()
+                    .and_then(|map| Mesh::from_cache(&path, map, Some(key), MeshSource::CacheHit));
+                if let Some(mesh) = hit {
+                    return Ok(mesh);
                 }
             }
         }
