@@ -6,7 +6,7 @@
 //!
 //! - [`subdivide::SubdividedMesh`]: a source mesh (the bundled bunny) with every triangle split
 //!   `k × k` (k = 2^L is L levels of midpoint subdivision) and displaced along the normal by
-//!   smooth [`noise`], so it looks like a dense scan. Split points on a source edge are numbered
+//!   smooth value noise (`noise.rs`), so it looks like a dense scan. Split points on a source edge are numbered
 //!   per edge, so neighbouring triangles share them: the output is as watertight as the source.
 //! - [`grid::BunnyGrid`]: copies of a source mesh on a floor grid, each turned about the
 //!   vertical axis.

@@ -9,7 +9,7 @@
 //! edge's lower-indexed end, so both triangles on an edge compute the same numbers), then each
 //! triangle's interior points. Shared edges therefore share vertices and the output has the
 //! source's topology (watertight where the source is). Every point is moved along its
-//! interpolated vertex normal by [`noise::fractal`](super::noise::fractal) of its position —
+//! interpolated vertex normal by `noise::fractal` of its position —
 //! a function of the point alone, so shared points stay shared.
 //!
 //! Memory: the source's edge table and vertex normals (about 40 bytes per source triangle),
