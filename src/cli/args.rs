@@ -58,6 +58,26 @@ pub struct BakeArgs {
     /// Write timings, peak heap and counts per stage as JSON.
     #[arg(long, value_name = "STATS.json")]
     pub stats: Option<PathBuf>,
+    /// A patch counts as seen from a view only if it covers at least K pixels there
+    /// (aggressive mode; 0 or 1: any pixel).
+    #[arg(long, default_value_t = 0, value_name = "K")]
+    pub min_pixels: u32,
+    /// Also mark the edge neighbours of every seen patch that may face the view
+    /// (hole filling).
+    #[arg(long)]
+    pub dilate: bool,
+    /// Patches seen from every view: comma-separated ids, or a file of ids separated by
+    /// whitespace or commas (`#` starts a comment).
+    #[arg(long, value_name = "IDS|FILE")]
+    pub always_visible: Option<String>,
+    /// Conservative rasterization: a triangle marks every pixel it touches, so patches seen
+    /// only as sub-pixel slivers are kept.
+    #[arg(long)]
+    pub conservative: bool,
+    /// Continue an interrupted bake from its checkpoint (OUT.pvis.ckpt, written after every
+    /// sphere level); a checkpoint of other inputs or settings is refused.
+    #[arg(long)]
+    pub resume: bool,
     /// Print nothing but errors; no progress bars.
     #[arg(short, long)]
     pub quiet: bool,

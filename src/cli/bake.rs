@@ -29,6 +29,7 @@ pub struct Settings {
     fov_deg: f32,
     mesh_out: Option<PathBuf>,
     stats: Option<PathBuf>,
+    options: sampler::SamplingOptions,
     quiet: bool,
     /// Heap budget in bytes (`--memory`, or [`default_memory_budget`]).
     memory_budget: u64,
@@ -96,6 +97,20 @@ impl Settings {
         {
             check_output_path(out)?;
         }
+        let always_visible = match &args.always_visible {
+            Some(spec) => parse_patch_ids(spec)?,
+            None => Vec::new(),
+        };
+        let mut checkpoint = args.output.clone().into_os_string();
+        checkpoint.push(".ckpt");
+        let options = sampler::SamplingOptions {
+            min_pixels: args.min_pixels,
+            dilate: args.dilate,
+            always_visible,
+            conservative: args.conservative,
+            checkpoint: Some(PathBuf::from(checkpoint)),
+            resume: args.resume,
+        };
         Ok(Settings {
             input: args.input,
             output: args.output,
@@ -105,10 +120,50 @@ impl Settings {
             fov_deg: args.fov,
             mesh_out: args.mesh_out,
             stats: args.stats,
+            options,
             quiet: args.quiet,
             memory_budget: args.memory.unwrap_or_else(default_memory_budget),
         })
     }
+}
+
+/// `--always-visible`: comma-separated ids, or else the path of a file of ids separated by
+/// whitespace or commas with `#` comments. Sorted, without duplicates.
+fn parse_patch_ids(spec: &str) -> Result<Vec<u32>, UsageError> {
+    let list = |text: &str, origin: &str| -> Result<Vec<u32>, UsageError> {
+        let mut ids = Vec::new();
+        for (n, line) in text.lines().enumerate() {
+            let line = line.split('#').next().unwrap_or("");
+            for word in line.split(|c: char| c == ',' || c.is_whitespace()) {
+                if word.is_empty() {
+                    continue;
+                }
+                let id = word.parse::<u32>().map_err(|_| {
+                    UsageError(format!(
+                        "--always-visible {origin}, line {}: '{word}' is not a patch id (expected a number from 0 to {})",
+                        n + 1,
+                        u32::MAX
+                    ))
+                })?;
+                ids.push(id);
+            }
+        }
+        ids.sort_unstable();
+        ids.dedup();
+        Ok(ids)
+    };
+    let looks_like_ids = spec
+        .chars()
+        .all(|c| c.is_ascii_digit() || c == ',' || c.is_whitespace());
+    if looks_like_ids {
+        return list(spec, "list");
+    }
+    let text = std::fs::read_to_string(spec).map_err(|e| {
+        UsageError(format!(
+            "--always-visible {spec}: not a list of ids, and cannot read it as a file: {e}"
+        ))
+    })?;
+    list(&text, spec)
 }
 
 /// An output must be a file in an existing directory; found out before hours of work.
@@ -172,9 +227,16 @@ pub fn run(args: BakeArgs) -> Result<()> {
     .with_context(|| format!("{}: tiling failed", s.input.display()))?;
     let patch_count = tiling.patches.len() as u32;
     let params = SamplingParams::for_mesh(&mesh, s.level, s.resolution, s.fov_deg);
+    if let Some(&bad) = s.options.always_visible.iter().find(|&&p| p >= patch_count) {
+        return Err(UsageError(format!(
+            "--always-visible {bad}: the bake has patches 0 to {}",
+            patch_count - 1
+        ))
+        .into());
+    }
     let visibility = stage(&mut stages, "sampling", || {
-        sampler::sample(&mesh, &tiling.patch_of, patch_count, &params, &bars)
-    });
+        sampler::sample_tiled(&mesh, &tiling, &params, &s.options, &bars)
+    })?;
     let contents = BakeContents {
         sampling: &params,
         triangle_count: u64::from(mesh.triangle_count()),
@@ -198,6 +260,15 @@ pub fn run(args: BakeArgs) -> Result<()> {
     };
     format::write_atomic(&s.output, &bytes)
         .with_context(|| format!("{}: cannot write", s.output.display()))?;
+    // The output is complete: its checkpoint has served its purpose.
+    if let Some(checkpoint) = &s.options.checkpoint {
+        match std::fs::remove_file(checkpoint) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(e).with_context(|| format!("{}: cannot remove", checkpoint.display()));
+            }
+            _ => {}
+        }
+    }
     if let (Some(tmp), Some(path)) = (mesh_tmp, &s.mesh_out) {
         tmp.persist(path)
             .with_context(|| format!("{}: cannot write", path.display()))?;
@@ -232,6 +303,10 @@ pub fn run(args: BakeArgs) -> Result<()> {
             "views": views,
             "resolution": s.resolution,
             "fov_deg": s.fov_deg,
+            "min_pixels": s.options.min_pixels,
+            "dilate": s.options.dilate,
+            "conservative": s.options.conservative,
+            "always_visible": s.options.always_visible.len(),
             "visible_fraction_mean": visible_fraction,
             "bytes": {"total": bytes.len(), "visibility": visibility_bytes},
             "seconds": seconds,

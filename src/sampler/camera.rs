@@ -177,6 +177,69 @@ impl Camera {
     }
 }
 
+/// Where a sphere can appear in a view (see [`Camera::sphere_bounds`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum SphereBounds {
+    /// The sphere reaches the near plane (or behind the eye): no useful bound.
+    Unbounded,
+    /// The sphere covers no pixel of the image.
+    Outside,
+    /// Every pixel the sphere's contents can touch lies in the inclusive rectangle
+    /// `[x0, y0, x1, y1]`, and no point inside is nearer than depth `nearest` (`1/w`).
+    Rect { rect: [usize; 4], nearest: f64 },
+}
+
+/// Pixels added on each side of a sphere's projected box: one for conservative
+/// rasterization (which touches the pixel a vertex lies in and its neighbour on a pixel
+/// boundary) and one for the snapping of vertices to 1/256 pixel.
+const SPHERE_RECT_MARGIN: f64 = 2.0;
+
+/// Relative widening of a sphere's nearest depth: interpolated `f32` depths can exceed the
+/// largest corner depth by a few ulps (1e-7 relative); 1e-4 is a wide margin.
+const SPHERE_DEPTH_SLACK: f64 = 1e-4;
+
+impl Camera {
+    /// A conservative screen rectangle and nearest depth of the ball of `radius` around
+    /// `center`: the view-space box around the ball projects inside the rectangle because
+    /// `x / w` over a box with `w > 0` is extremal at its corners.
+    pub(crate) fn sphere_bounds(&self, center: [f32; 3], radius: f32) -> SphereBounds {
+        let d = sub(widen(center), self.eye);
+        let r = radius as f64;
+        let (x, y, w) = (dot(d, self.right), dot(d, self.up), dot(d, self.forward));
+        let (w_near, w_far) = (w - r, w + r);
+        if w_near <= self.near {
+            return SphereBounds::Unbounded;
+        }
+        let lo_hi = |c: f64| {
+            let ratios = [
+                (c - r) / w_near,
+                (c - r) / w_far,
+                (c + r) / w_near,
+                (c + r) / w_far,
+            ];
+            let lo = ratios.iter().copied().fold(f64::MAX, f64::min);
+            let hi = ratios.iter().copied().fold(f64::MIN, f64::max);
+            (lo, hi)
+        };
+        let (x_lo, x_hi) = lo_hi(x);
+        let (y_lo, y_hi) = lo_hi(y);
+        let x0 = self.half + self.scale * x_lo - SPHERE_RECT_MARGIN;
+        let x1 = self.half + self.scale * x_hi + SPHERE_RECT_MARGIN;
+        // Image y grows downwards, against `up`.
+        let y0 = self.half - self.scale * y_hi - SPHERE_RECT_MARGIN;
+        let y1 = self.half - self.scale * y_lo + SPHERE_RECT_MARGIN;
+        let last = (self.resolution - 1) as f64;
+        if x1 < 0.0 || y1 < 0.0 || x0 > last || y0 > last {
+            return SphereBounds::Outside;
+        }
+        let clamp = |v: f64| v.clamp(0.0, last).floor() as usize;
+        SphereBounds::Rect {
+            rect: [clamp(x0), clamp(y0), clamp(x1), clamp(y1)],
+            nearest: (1.0 + SPHERE_DEPTH_SLACK) / w_near,
+        }
+    }
+}
+
 fn widen(p: [f32; 3]) -> [f64; 3] {
     [p[0] as f64, p[1] as f64, p[2] as f64]
 }

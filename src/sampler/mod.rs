@@ -8,17 +8,26 @@
 //! scratch per worker), and the result does not depend on the number of threads.
 
 mod camera;
+mod checkpoint;
 mod clip;
+mod conservative;
 mod id_buffer;
+mod key_buffer;
+mod patch_graph;
+mod patch_mesh;
 mod raster;
 #[cfg(test)]
 mod test_meshes;
 #[cfg(test)]
 mod tests;
+mod tiled;
+#[cfg(test)]
+mod tiled_tests;
 
 pub use camera::{Camera, MAX_RESOLUTION, NEAR_FRACTION};
 pub use id_buffer::{IdBuffer, NO_PATCH};
 pub use raster::{Rasterizer, SUBPIXEL_BITS, render_ids, render_ids_filtered};
+pub use tiled::{SamplingError, SamplingOptions, sample_tiled, tiled_mesh_bytes};
 
 mod bounding;
 

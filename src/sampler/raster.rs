@@ -62,7 +62,7 @@ pub(crate) struct ScreenVertex {
 }
 
 #[derive(Clone, Copy, Debug, Default)]
-struct ProjectedVertex {
+pub(crate) struct ProjectedVertex {
     /// Valid only if `outcode & NEEDS_CLIP == 0`.
     screen: ScreenVertex,
     outcode: u32,
@@ -160,41 +160,65 @@ impl Rasterizer {
                 continue;
             };
             let corners = mesh.triangle(t);
-            let [a, b, c] = corners.map(|v| self.vertices[v as usize]);
-            if a.outcode & b.outcode & c.outcode & REJECT != 0 {
-                continue;
-            }
-            if (a.outcode | b.outcode | c.outcode) & NEEDS_CLIP == 0 {
-                scan_triangle(
-                    [a.screen, b.screen, c.screen],
-                    resolution,
-                    DEFAULT_PATHS,
-                    |index, q, covered| plot(id, index, q, covered),
-                );
-                continue;
-            }
-            let clipped =
-                clip::clip_triangle(corners.map(|v| camera.clip(mesh.position(v))), &planes);
-            // The clipped polygon is convex: fan it from its first vertex. Fan diagonals are
-            // shared exactly, so the fill rule keeps the polygon's interior watertight too.
-            if let [first, rest @ ..] = clipped.vertices() {
-                let first = snap(*first);
-                for pair in rest.windows(2) {
-                    scan_triangle(
-                        [first, snap(pair[0]), snap(pair[1])],
-                        resolution,
-                        DEFAULT_PATHS,
-                        |index, q, covered| plot(id, index, q, covered),
-                    );
-                }
-            }
+            draw_triangle(
+                corners.map(|v| self.vertices[v as usize]),
+                || corners.map(|v| mesh.position(v)),
+                camera,
+                &planes,
+                |tri| {
+                    scan_triangle(tri, resolution, DEFAULT_PATHS, |index, q, covered| {
+                        plot(id, index, q, covered)
+                    })
+                },
+            );
+        }
+    }
+}
+
+/// The clip planes every view uses: near plane and guard band of `camera`.
+pub(crate) fn view_planes(camera: &Camera) -> [Plane; PLANE_COUNT] {
+    clip::planes(camera.resolution(), camera.near(), GUARD_BAND)
+}
+
+/// Draws one triangle whose corners `v` were projected with [`project`]: rejects it if all
+/// corners are outside one image edge or behind the near plane, clips it if it reaches behind
+/// the near plane or beyond the guard band (`positions` gives the world-space corners then),
+/// and hands each resulting screen triangle to `scan`. Every sampling path uses this one
+/// function, so they all produce the same fragments.
+#[inline(always)]
+pub(crate) fn draw_triangle(
+    v: [ProjectedVertex; 3],
+    positions: impl FnOnce() -> [[f32; 3]; 3],
+    camera: &Camera,
+    planes: &[Plane; PLANE_COUNT],
+    mut scan: impl FnMut([ScreenVertex; 3]),
+) {
+    let [a, b, c] = v;
+    if a.outcode & b.outcode & c.outcode & REJECT != 0 {
+        return;
+    }
+    if (a.outcode | b.outcode | c.outcode) & NEEDS_CLIP == 0 {
+        scan([a.screen, b.screen, c.screen]);
+        return;
+    }
+    let clipped = clip::clip_triangle(positions().map(|p| camera.clip(p)), planes);
+    // The clipped polygon is convex: fan it from its first vertex. Fan diagonals are shared
+    // exactly, so the fill rule keeps the polygon's interior watertight too.
+    if let [first, rest @ ..] = clipped.vertices() {
+        let first = snap(*first);
+        for pair in rest.windows(2) {
+            scan([first, snap(pair[0]), snap(pair[1])]);
         }
     }
 }
 
 /// Transforms `p` and classifies it against the image, near plane and guard band.
 #[inline]
-fn project(camera: &Camera, planes: &[Plane; PLANE_COUNT], p: [f32; 3]) -> ProjectedVertex {
+pub(crate) fn project(
+    camera: &Camera,
+    planes: &[Plane; PLANE_COUNT],
+    p: [f32; 3],
+) -> ProjectedVertex {
     let c = camera.clip(p);
     let [cx, cy, w] = c;
     let edge = camera.resolution() as f64 * w;

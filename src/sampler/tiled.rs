@@ -1,0 +1,365 @@
+//! Level-by-level tiled sampling: the production sampler. Bit-identical to a brute-force
+//! render of every triangle, at a cost that follows the visible triangles instead.
+//!
+//! Technique: the sphere's views come level by level (6, then 12, 48, 192 … new views). A
+//! view of level `l + 1` splits an edge between two views of coarser levels
+//! (`sphere::parents`), which are finished and lie next to it, so the patches they see are
+//! nearly the patches it sees. Each view draws those patches first (plus the always-visible
+//! ones), builds the farthest depth of every 8×8-pixel tile from them (one level of a
+//! hierarchical Z-buffer; Greene, Kass & Miller 1993), and then draws each remaining patch
+//! only if its bounding sphere's screen rectangle reaches a tile where the sphere's nearest
+//! depth is not strictly behind everything drawn. A patch that fails cannot change any pixel,
+//! and the packed depth/triangle keys (`key_buffer.rs`) make the buffer independent of drawing
+//! order, so the result equals the reference render ([`super::sample`]) bit for bit. The mesh
+//! is regrouped by patch (`patch_mesh.rs`), so a view transforms only the vertices of the
+//! patches it draws.
+//!
+//! Options: `min_pixels` (a patch counts only if it covers that many pixels), `dilate` (also
+//! mark edge neighbours of visible patches that may face the eye), `always_visible` (patches
+//! set in every row), `conservative` (conservative rasterization, `conservative.rs`), and a
+//! checkpoint written after each level (`checkpoint.rs`).
+//! Cost per view: a sphere test per patch, the triangles of the drawn patches, one pass over
+//! the pixels. Memory: one `resolution² × 8`-byte buffer per thread plus the regrouped mesh.
+//! **Invariant**: the result is the same for any number of threads, and with or without a
+//! resumed checkpoint.
+
+use super::camera::{Camera, SphereBounds};
+use super::checkpoint;
+use super::conservative::scan_triangle_conservative;
+use super::key_buffer::{KeyBuffer, triangle_of};
+use super::patch_graph::{PatchGraph, may_face};
+use super::patch_mesh::PatchMesh;
+use super::raster::{
+    DEFAULT_PATHS, ProjectedVertex, draw_triangle, project, scan_triangle, view_planes,
+};
+use super::{SamplingParams, VisibilityMatrix};
+use crate::ooc::Mesh;
+use crate::progress::Progress;
+use crate::sphere::{parents, view_count};
+use crate::tiling::{PatchId, Tiling};
+use rayon::prelude::*;
+use std::path::PathBuf;
+
+/// What a sampling run marks besides the point-sampled visible patches, and where it keeps
+/// its checkpoint.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SamplingOptions {
+    /// A patch counts as seen from a view only if it covers at least this many pixels (0 and
+    /// 1 both mean any pixel): the seed paper's aggressive mode.
+    pub min_pixels: u32,
+    /// Also mark every edge neighbour of a seen patch whose normal cone may face the eye.
+    pub dilate: bool,
+    /// Patches marked in every view (e.g. transparent parts that must never be culled).
+    pub always_visible: Vec<PatchId>,
+    /// Conservative rasterization: a triangle marks every pixel it touches, at its nearest
+    /// depth there, so patches seen only as sub-pixel slivers are caught.
+    pub conservative: bool,
+    /// Where to write a checkpoint after each sphere level; `None` writes none.
+    pub checkpoint: Option<PathBuf>,
+    /// Continue from the checkpoint if one exists (it must match these inputs).
+    pub resume: bool,
+}
+
+/// Why tiled sampling failed: only its checkpoint file can.
+#[derive(Debug, thiserror::Error)]
+pub enum SamplingError {
+    /// The checkpoint could not be read or written.
+    #[error("{}: cannot {action} the checkpoint: {source}", path.display())]
+    Io {
+        /// The checkpoint path.
+        path: PathBuf,
+        /// "read" or "write".
+        action: &'static str,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The checkpoint exists but belongs to other inputs or is damaged.
+    #[error("{}: {reason}", path.display())]
+    Checkpoint {
+        /// The checkpoint path.
+        path: PathBuf,
+        /// What is wrong with it.
+        reason: String,
+    },
+}
+
+/// Renders every view of `params` level by level and returns which patches each one shows,
+/// for the patches of `tiling` (a tiling of `mesh`). With default options the rows equal
+/// [`super::sample`]`(mesh, &tiling.patch_of, …)` bit for bit.
+///
+/// Panics (caller contract) if an always-visible id is not a patch of `tiling`.
+pub fn sample_tiled(
+    mesh: &Mesh,
+    tiling: &Tiling,
+    params: &SamplingParams,
+    options: &SamplingOptions,
+    progress: &dyn Progress,
+) -> Result<VisibilityMatrix, SamplingError> {
+    let patch_count = u32::try_from(tiling.patches.len()).expect("more than 2^32 patches");
+    assert!(
+        params.radius > 0.0 && params.radius.is_finite(),
+        "sampling radius must be positive and finite, got {}",
+        params.radius
+    );
+    let views = view_count(params.level);
+    let mut matrix = VisibilityMatrix::new(views, patch_count);
+    let mut always = vec![0u64; matrix.words_per_row];
+    for &p in &options.always_visible {
+        assert!(
+            p < patch_count,
+            "always-visible patch {p} is not below {patch_count}"
+        );
+        always[p as usize / 64] |= 1 << (p % 64);
+    }
+    let hash = options
+        .checkpoint
+        .as_ref()
+        .map(|_| checkpoint::input_hash(mesh, tiling, params, options));
+    let mut first_level = 0;
+    if let (true, Some(path), Some(hash)) = (options.resume, &options.checkpoint, hash)
+        && let Some(levels_done) = checkpoint::load(path, hash, &mut matrix)?
+    {
+        first_level = levels_done;
+    }
+    progress.start("sampling", u64::from(views));
+    if first_level > 0 {
+        progress.inc(u64::from(view_count(first_level - 1)));
+    }
+    let context = ViewContext {
+        mesh: PatchMesh::new(mesh, tiling),
+        tiling,
+        params,
+        options,
+        always,
+        graph: options
+            .dilate
+            .then(|| PatchGraph::new(mesh, &tiling.patch_of, patch_count)),
+    };
+    let words_per_row = matrix.words_per_row;
+    for level in first_level..=params.level {
+        let first_view = if level == 0 { 0 } else { view_count(level - 1) };
+        let (done, rest) = matrix
+            .bits
+            .split_at_mut(first_view as usize * words_per_row);
+        let done: &[u64] = done;
+        let new_rows = (view_count(level) - first_view) as usize * words_per_row;
+        rest[..new_rows]
+            .par_chunks_mut(words_per_row)
+            .enumerate()
+            .for_each_init(
+                || ViewScratch::new(params.resolution, patch_count),
+                |scratch, (i, row)| {
+                    let view = first_view + i as u32;
+                    let hints = parents(view).map(|pair| {
+                        pair.map(|p| &done[p as usize * words_per_row..][..words_per_row])
+                    });
+                    context.render_view(view, hints, scratch, row);
+                    progress.inc(1);
+                },
+            );
+        if let (Some(path), Some(hash)) = (&options.checkpoint, hash) {
+            checkpoint::save(path, hash, level + 1, view_count(level), &matrix)?;
+        }
+    }
+    progress.finish();
+    Ok(matrix)
+}
+
+/// Heap bytes [`sample_tiled`] holds besides the result and the per-thread buffers: the
+/// regrouped mesh. For memory reports.
+pub fn tiled_mesh_bytes(mesh: &Mesh, tiling: &Tiling) -> usize {
+    PatchMesh::new(mesh, tiling).heap_bytes()
+}
+
+/// Everything every view shares.
+struct ViewContext<'a> {
+    mesh: PatchMesh,
+    tiling: &'a Tiling,
+    params: &'a SamplingParams,
+    options: &'a SamplingOptions,
+    always: Vec<u64>,
+    graph: Option<PatchGraph>,
+}
+
+/// One worker's buffers.
+struct ViewScratch {
+    keys: KeyBuffer,
+    projected: Vec<ProjectedVertex>,
+    drawn: Vec<u64>,
+    pixels: Vec<u32>,
+    seen: Vec<u64>,
+}
+
+impl ViewScratch {
+    fn new(resolution: u32, patch_count: u32) -> ViewScratch {
+        let words = (patch_count as usize).div_ceil(64);
+        ViewScratch {
+            keys: KeyBuffer::new(resolution),
+            projected: Vec::new(),
+            drawn: vec![0; words],
+            pixels: vec![0; patch_count as usize],
+            seen: vec![0; words],
+        }
+    }
+}
+
+/// Calls `f` with every set bit of `words`.
+fn for_each_bit(words: impl Iterator<Item = u64>, mut f: impl FnMut(usize)) {
+    for (w, mut bits) in words.enumerate() {
+        while bits != 0 {
+            f(w * 64 + bits.trailing_zeros() as usize);
+            bits &= bits - 1;
+        }
+    }
+}
+
+impl ViewContext<'_> {
+    /// Renders `view` into `row`, drawing the patches `hints` (the parents' rows) show first.
+    fn render_view(
+        &self,
+        view: u32,
+        hints: Option<[&[u64]; 2]>,
+        scratch: &mut ViewScratch,
+        row: &mut [u64],
+    ) {
+        let camera = Camera::sampling_view(self.params, view);
+        scratch.keys.clear();
+        let patch_count = self.mesh.patch_count();
+        match hints {
+            None => (0..patch_count).for_each(|p| self.draw_patch(p, &camera, scratch)),
+            Some([a, b]) => {
+                let valid = |w: usize| {
+                    if (w + 1) * 64 <= patch_count {
+                        u64::MAX
+                    } else {
+                        (1u64 << (patch_count % 64)) - 1
+                    }
+                };
+                for (w, d) in scratch.drawn.iter_mut().enumerate() {
+                    *d = (a[w] | b[w] | self.always[w]) & valid(w);
+                }
+                let first = std::mem::take(&mut scratch.drawn);
+                for_each_bit(first.iter().copied(), |p| {
+                    self.draw_patch(p, &camera, scratch)
+                });
+                scratch.keys.build_tiles();
+                let rest = first.iter().enumerate().map(|(w, &d)| !d & valid(w));
+                for_each_bit(rest, |p| {
+                    let patch = &self.tiling.patches[p];
+                    let visible = match camera.sphere_bounds(patch.center, patch.radius) {
+                        SphereBounds::Outside => false,
+                        SphereBounds::Unbounded => true,
+                        SphereBounds::Rect { rect, nearest } => {
+                            let mut q = nearest as f32;
+                            if (q as f64) < nearest {
+                                q = q.next_up();
+                            }
+                            !q.is_finite() || !scratch.keys.occludes(rect, q.to_bits())
+                        }
+                    };
+                    if visible {
+                        self.draw_patch(p, &camera, scratch);
+                    }
+                });
+                scratch.drawn = first;
+            }
+        }
+        self.resolve(&camera, scratch, row);
+    }
+
+    /// Draws every triangle of patch `p` into the scratch key buffer.
+    fn draw_patch(&self, p: usize, camera: &Camera, scratch: &mut ViewScratch) {
+        let planes = view_planes(camera);
+        let vertices = self.mesh.vertices(p);
+        let ViewScratch {
+            keys, projected, ..
+        } = scratch;
+        projected.clear();
+        projected.extend(vertices.iter().map(|&v| project(camera, &planes, v)));
+        let (start, triangles) = self.mesh.triangles(p);
+        let order = &self.tiling.order[start..start + triangles.len()];
+        let resolution = camera.resolution();
+        let conservative = self.options.conservative;
+        for (tri, &input) in triangles.iter().zip(order) {
+            let low = !input;
+            draw_triangle(
+                tri.map(|i| projected[i as usize]),
+                || tri.map(|i| vertices[i as usize]),
+                camera,
+                &planes,
+                |screen| {
+                    let plot = |index, q, covered| keys.plot(index, q, low, covered);
+                    if conservative {
+                        scan_triangle_conservative(screen, resolution, plot);
+                    } else {
+                        scan_triangle(screen, resolution, DEFAULT_PATHS, plot);
+                    }
+                },
+            );
+        }
+    }
+
+    /// Turns the key buffer into the view's row: pixel counts, `min_pixels`, dilation and the
+    /// always-visible patches.
+    fn resolve(&self, camera: &Camera, scratch: &mut ViewScratch, row: &mut [u64]) {
+        let patch_of = &self.tiling.patch_of;
+        let min_pixels = self.options.min_pixels;
+        row.fill(0);
+        let seen = &mut scratch.seen;
+        seen.fill(0);
+        if min_pixels <= 1 {
+            let mut previous = 0u32;
+            for &key in scratch.keys.keys() {
+                let low = key as u32;
+                if low != previous {
+                    previous = low;
+                    if key != 0 {
+                        let p = patch_of[triangle_of(key) as usize];
+                        seen[p as usize / 64] |= 1 << (p % 64);
+                    }
+                }
+            }
+        } else {
+            let pixels = &mut scratch.pixels;
+            let mut previous = (0u32, u32::MAX);
+            for &key in scratch.keys.keys() {
+                let low = key as u32;
+                if low != previous.0 {
+                    previous = (
+                        low,
+                        if key == 0 {
+                            u32::MAX
+                        } else {
+                            patch_of[triangle_of(key) as usize]
+                        },
+                    );
+                }
+                if previous.1 != u32::MAX {
+                    pixels[previous.1 as usize] += 1;
+                }
+            }
+            for (p, count) in pixels.iter_mut().enumerate() {
+                if *count >= min_pixels {
+                    seen[p / 64] |= 1 << (p % 64);
+                }
+                *count = 0;
+            }
+        }
+        row.copy_from_slice(seen);
+        if let Some(graph) = &self.graph {
+            let eye = camera.eye();
+            for_each_bit(seen.iter().copied(), |p| {
+                for &q in graph.neighbours(p as PatchId) {
+                    let (w, bit) = (q as usize / 64, 1u64 << (q % 64));
+                    if row[w] & bit == 0 && may_face(&self.tiling.patches[q as usize], eye) {
+                        row[w] |= bit;
+                    }
+                }
+            });
+        }
+        for (r, a) in row.iter_mut().zip(&self.always) {
+            *r |= a;
+        }
+    }
+}

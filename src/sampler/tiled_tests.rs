@@ -1,0 +1,380 @@
+//! Tests of tiled sampling: bit-identical to brute force on the bunny and on generated meshes
+//! (including nested boxes of high depth complexity), options against an independent
+//! sequential reference, thread-count independence, checkpoints and resuming.
+
+use super::conservative::scan_triangle_conservative;
+use super::raster::{DEFAULT_PATHS, draw_triangle, project, scan_triangle, view_planes};
+use super::test_meshes::{Rng, bunny, noisy_sphere, push_cube};
+use super::*;
+use crate::progress::NoProgress;
+use crate::tiling::{Patch, Tiling, TilingStats};
+
+/// A tiling with the given patch of each triangle: bounding spheres around the patch's
+/// vertices, and a normal cone from the triangle normals (axis = mean, cosine = the smallest
+/// cosine to it, minus a margin).
+fn tiling_of(mesh: &Mesh, patch_of: Vec<PatchId>) -> Tiling {
+    let count = patch_of.iter().max().map_or(0, |m| m + 1);
+    let mut order: Vec<u32> = (0..mesh.triangle_count()).collect();
+    order.sort_by_key(|&t| patch_of[t as usize]);
+    let mut patches = Vec::new();
+    let mut first = 0;
+    for p in 0..count {
+        let tris: Vec<u32> = order
+            .iter()
+            .copied()
+            .filter(|&t| patch_of[t as usize] == p)
+            .collect();
+        let points: Vec<[f32; 3]> = tris
+            .iter()
+            .flat_map(|&t| mesh.triangle(t).map(|v| mesh.position(v)))
+            .collect();
+        let (lo, hi) = points
+            .iter()
+            .fold(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), q| {
+                (
+                    std::array::from_fn(|k| lo[k].min(q[k])),
+                    std::array::from_fn(|k| hi[k].max(q[k])),
+                )
+            });
+        let center: [f32; 3] = std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]));
+        let radius = points
+            .iter()
+            .map(|q| {
+                (0..3)
+                    .map(|k| (q[k] - center[k]).powi(2))
+                    .sum::<f32>()
+                    .sqrt()
+            })
+            .fold(0.0, f32::max)
+            * 1.001
+            + 1e-6;
+        let normals: Vec<[f32; 3]> = tris
+            .iter()
+            .map(|&t| {
+                let [a, b, c] = mesh.triangle(t).map(|v| mesh.position(v));
+                let (u, v) = (
+                    [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+                    [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+                );
+                crate::sphere::normalize(crate::sphere::cross(u, v))
+            })
+            .collect();
+        let sum = normals
+            .iter()
+            .fold([0.0; 3], |s, n| crate::sphere::add(s, *n));
+        let axis = crate::sphere::normalize(sum);
+        let cone_cos = normals
+            .iter()
+            .map(|n| crate::sphere::dot(*n, axis))
+            .fold(1.0, f32::min)
+            - 1e-3;
+        patches.push(Patch {
+            first,
+            count: tris.len() as u32,
+            area: 1.0,
+            center,
+            radius,
+            cone_axis: axis,
+            cone_cos: cone_cos.max(-1.0),
+        });
+        first += tris.len() as u32;
+    }
+    Tiling {
+        patch_of,
+        order,
+        patches,
+        stats: TilingStats::default(),
+    }
+}
+
+fn params_for(mesh: &Mesh, level: u32, resolution: u32) -> SamplingParams {
+    SamplingParams::for_mesh(mesh, level, resolution, 50.0)
+}
+
+fn tiled(
+    mesh: &Mesh,
+    tiling: &Tiling,
+    p: &SamplingParams,
+    o: &SamplingOptions,
+) -> VisibilityMatrix {
+    sample_tiled(mesh, tiling, p, o, &NoProgress).unwrap()
+}
+
+fn assert_same(a: &VisibilityMatrix, b: &VisibilityMatrix) {
+    assert_eq!((a.views(), a.patches()), (b.views(), b.patches()));
+    for v in 0..a.views() {
+        assert_eq!(a.row(v), b.row(v), "view {v}");
+    }
+}
+
+/// A large box holding a 4 × 4 × 4 grid of boxes, each holding a smaller box: seen from any
+/// view, most triangles are hidden behind several layers.
+fn boxes_in_a_box() -> Mesh {
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    push_cube([0.0; 3], 1.0, &mut positions, &mut triangles);
+    let mut rng = Rng(11);
+    for i in 0..4 {
+        for j in 0..4 {
+            for k in 0..4 {
+                let c = [i, j, k].map(|n| -0.75 + 0.5 * n as f32 + 0.05 * rng.signed());
+                push_cube(c, 0.2, &mut positions, &mut triangles);
+                push_cube(c, 0.1, &mut positions, &mut triangles);
+            }
+        }
+    }
+    Mesh::from_memory("boxes", positions, triangles).unwrap()
+}
+
+#[test]
+fn tiled_equals_brute_force_on_the_bunny() {
+    let mesh = bunny();
+    let tiling = crate::tiling::tile(&mesh, 300).unwrap();
+    let p = params_for(&mesh, 2, 80);
+    let brute = sample(&mesh, &tiling.patch_of, 300, &p, &NoProgress);
+    assert_same(
+        &tiled(&mesh, &tiling, &p, &SamplingOptions::default()),
+        &brute,
+    );
+}
+
+#[test]
+fn tiled_equals_brute_force_on_generated_meshes() {
+    let boxes = boxes_in_a_box();
+    // Boxes: one patch per face pair, so a patch is a slab of a box; and a greedy tiling.
+    let by_pairs = tiling_of(&boxes, (0..boxes.triangle_count()).map(|t| t / 4).collect());
+    let sphere = noisy_sphere(30, 60, 0.3, 9);
+    for (mesh, tiling) in [
+        (&boxes, by_pairs),
+        (&boxes, crate::tiling::tile(&boxes, 40).unwrap()),
+        (&sphere, crate::tiling::tile(&sphere, 50).unwrap()),
+    ] {
+        let p = params_for(mesh, 3, 64);
+        let count = tiling.patches.len() as u32;
+        let brute = sample(mesh, &tiling.patch_of, count, &p, &NoProgress);
+        let fast = tiled(mesh, &tiling, &p, &SamplingOptions::default());
+        assert_same(&fast, &brute);
+        // The nested boxes are hidden from every view; the outer box is always seen.
+        if mesh.triangle_count() == boxes.triangle_count() {
+            let seen: u32 = (0..fast.views())
+                .map(|v| fast.row(v).iter().map(|w| w.count_ones()).sum::<u32>())
+                .max()
+                .unwrap();
+            assert!(seen < count / 4, "a view sees {seen} of {count} patches");
+        }
+    }
+}
+
+/// The visible patches of one view by a sequential, unculled render into an [`IdBuffer`]
+/// (input order, strictly-nearer test): the reference for the options.
+fn reference_row(
+    mesh: &Mesh,
+    patch_of: &[PatchId],
+    camera: &Camera,
+    conservative: bool,
+    min_pixels: u32,
+    patches: u32,
+) -> Vec<bool> {
+    let mut buffer = IdBuffer::new(camera.resolution());
+    let planes = view_planes(camera);
+    let projected: Vec<_> = (0..mesh.vertex_count())
+        .map(|v| project(camera, &planes, mesh.position(v)))
+        .collect();
+    for t in 0..mesh.triangle_count() {
+        let corners = mesh.triangle(t);
+        let id = patch_of[t as usize];
+        draw_triangle(
+            corners.map(|v| projected[v as usize]),
+            || corners.map(|v| mesh.position(v)),
+            camera,
+            &planes,
+            |tri| {
+                let plot = |i, q, c| buffer.plot(i, q, id, c);
+                if conservative {
+                    scan_triangle_conservative(tri, camera.resolution(), plot);
+                } else {
+                    scan_triangle(tri, camera.resolution(), DEFAULT_PATHS, plot);
+                }
+            },
+        );
+    }
+    let mut counts = vec![0u32; patches as usize];
+    for &id in buffer.ids() {
+        if id != NO_PATCH {
+            counts[id as usize] += 1;
+        }
+    }
+    counts.iter().map(|&c| c >= min_pixels.max(1)).collect()
+}
+
+#[test]
+fn min_pixels_and_conservative_match_a_sequential_reference() {
+    let mesh = noisy_sphere(40, 80, 0.4, 3);
+    let tiling = crate::tiling::tile(&mesh, 120).unwrap();
+    let p = params_for(&mesh, 2, 48);
+    for (conservative, min_pixels) in [(false, 4), (true, 0), (true, 3)] {
+        let options = SamplingOptions {
+            conservative,
+            min_pixels,
+            ..SamplingOptions::default()
+        };
+        let fast = tiled(&mesh, &tiling, &p, &options);
+        let mut differs_from_plain = false;
+        let plain = tiled(&mesh, &tiling, &p, &SamplingOptions::default());
+        for v in 0..fast.views() {
+            let camera = Camera::sampling_view(&p, v);
+            let expected = reference_row(
+                &mesh,
+                &tiling.patch_of,
+                &camera,
+                conservative,
+                min_pixels,
+                120,
+            );
+            for (patch, &e) in expected.iter().enumerate() {
+                assert_eq!(
+                    fast.get(v, patch as u32),
+                    e,
+                    "view {v} patch {patch} {options:?}"
+                );
+            }
+            differs_from_plain |= fast.row(v) != plain.row(v);
+        }
+        assert!(differs_from_plain, "{options:?} changed nothing");
+    }
+}
+
+#[test]
+fn conservative_mode_catches_a_sliver_between_pixel_centres() {
+    // A thin triangle in the plane z = 0 seen head-on, narrower than a pixel and lying
+    // between two columns of pixel centres: point sampling misses it.
+    let positions = vec![[0.013, -0.5, 0.0], [0.016, -0.5, 0.0], [0.0145, 0.5, 0.0]];
+    let mesh = Mesh::from_memory("sliver", positions, vec![[0, 1, 2]]).unwrap();
+    let camera = Camera::look_at([0.0, 0.0, 3.0], [0.0; 3], 40.0, 32);
+    assert_eq!(reference_row(&mesh, &[0], &camera, false, 0, 1), [false]);
+    assert_eq!(reference_row(&mesh, &[0], &camera, true, 0, 1), [true]);
+}
+
+#[test]
+fn dilation_marks_edge_neighbours_that_may_face_the_eye() {
+    // A welded unit cube (faces share their edges; faces +X, −X, +Y, −Y, +Z, −Z as
+    // patches 0..6, outward winding) around a separate small cube (patch 6).
+    let mut positions: Vec<[f32; 3]> = (0..8)
+        .map(|i| [i & 1, (i >> 1) & 1, (i >> 2) & 1].map(|b| if b == 1 { 1.0 } else { -1.0 }))
+        .collect();
+    let quads = [
+        [1, 3, 7, 5],
+        [0, 4, 6, 2],
+        [2, 6, 7, 3],
+        [0, 1, 5, 4],
+        [4, 5, 7, 6],
+        [0, 2, 3, 1],
+    ];
+    let mut triangles: Vec<[u32; 3]> = quads
+        .iter()
+        .flat_map(|[a, b, c, d]| [[*a, *b, *c], [*a, *c, *d]])
+        .collect();
+    push_cube([0.1, -0.05, 0.02], 0.5, &mut positions, &mut triangles);
+    let mesh = Mesh::from_memory("cubes", positions, triangles).unwrap();
+    let tiling = tiling_of(&mesh, (0..24).map(|t| (t / 2).min(6)).collect());
+    let p = SamplingParams {
+        level: 0,
+        resolution: 64,
+        fov_deg: 60.0,
+        center: [0.0; 3],
+        radius: 3f32.sqrt(),
+    };
+    let plain = tiled(&mesh, &tiling, &p, &SamplingOptions::default());
+    let options = SamplingOptions {
+        dilate: true,
+        always_visible: vec![6],
+        ..SamplingOptions::default()
+    };
+    let dilated = tiled(&mesh, &tiling, &p, &options);
+    for face in 0..6u32 {
+        // Level-0 view `face` looks at cube face `face` head-on and sees nothing else.
+        let seen: Vec<u32> = (0..7).filter(|&q| plain.get(face, q)).collect();
+        assert_eq!(seen, [face]);
+        // Dilated: the four faces around it; never the opposite face; patch 6 always.
+        let marked: Vec<u32> = (0..7).filter(|&q| dilated.get(face, q)).collect();
+        let mut expected: Vec<u32> = (0..6).filter(|&q| q != face ^ 1).collect();
+        expected.push(6);
+        assert_eq!(marked, expected, "view {face}");
+    }
+}
+
+#[test]
+fn tiled_output_is_identical_for_one_and_two_threads() {
+    let mesh = boxes_in_a_box();
+    let tiling = crate::tiling::tile(&mesh, 64).unwrap();
+    let p = params_for(&mesh, 3, 48);
+    for options in [
+        SamplingOptions::default(),
+        SamplingOptions {
+            conservative: true,
+            min_pixels: 2,
+            dilate: true,
+            ..SamplingOptions::default()
+        },
+    ] {
+        let run = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| tiled(&mesh, &tiling, &p, &options))
+        };
+        assert_same(&run(1), &run(2));
+    }
+}
+
+#[test]
+fn resume_continues_from_the_checkpoint_and_refuses_a_stale_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("out.pvis.ckpt");
+    let mesh = noisy_sphere(20, 40, 0.3, 4);
+    let tiling = crate::tiling::tile(&mesh, 40).unwrap();
+    let p = params_for(&mesh, 2, 32);
+    let options = SamplingOptions {
+        checkpoint: Some(path.clone()),
+        ..SamplingOptions::default()
+    };
+    let full = tiled(&mesh, &tiling, &p, &options);
+    assert_same(
+        &full,
+        &tiled(&mesh, &tiling, &p, &SamplingOptions::default()),
+    );
+    // An interrupted bake: levels 0 and 1 done, with a marker in row 0 that only a resumed
+    // run keeps (a recomputed row 0 would not have every bit set).
+    let hash = checkpoint::input_hash(&mesh, &tiling, &p, &options);
+    let mut partial = full.clone();
+    for patch in 0..partial.patches() {
+        partial.set(0, patch);
+    }
+    checkpoint::save(&path, hash, 2, crate::sphere::view_count(1), &partial).unwrap();
+    let resume = SamplingOptions {
+        resume: true,
+        ..options.clone()
+    };
+    let resumed = tiled(&mesh, &tiling, &p, &resume);
+    assert_eq!(resumed.row(0), partial.row(0));
+    for v in 1..full.views() {
+        assert_eq!(resumed.row(v), full.row(v), "view {v}");
+    }
+    // Without --resume the checkpoint is ignored and overwritten.
+    assert_same(&tiled(&mesh, &tiling, &p, &options), &full);
+    // Other settings: refused.
+    let other = SamplingOptions {
+        min_pixels: 2,
+        ..resume.clone()
+    };
+    let err = sample_tiled(&mesh, &tiling, &p, &other, &NoProgress).unwrap_err();
+    assert!(matches!(err, SamplingError::Checkpoint { .. }), "{err}");
+    assert!(err.to_string().contains("stale checkpoint"), "{err}");
+    // A damaged file: refused with its size.
+    std::fs::write(&path, b"PVISCKPT").unwrap();
+    let err = sample_tiled(&mesh, &tiling, &p, &resume, &NoProgress).unwrap_err();
+    assert!(
+        err.to_string().contains("not a patchvis checkpoint"),
+        "{err}"
+    );
+}
