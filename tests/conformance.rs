@@ -262,8 +262,18 @@ fn valid_specs() -> Vec<ValidSpec> {
             ..base("001-level0-one-patch", 0, vec![1], 1)
         },
         base("002-level1-seven-patches", 1, vec![3, 1, 4, 1, 5, 9, 2], 2),
-        base("003-level2-64-patches", 2, (1..=64).map(|i| i % 5 + 1).collect(), 3),
-        base("004-level2-65-patches", 2, (1..=65).map(|i| i % 3 + 1).collect(), 4),
+        base(
+            "003-level2-64-patches",
+            2,
+            (1..=64).map(|i| i % 5 + 1).collect(),
+            3,
+        ),
+        base(
+            "004-level2-65-patches",
+            2,
+            (1..=65).map(|i| i % 3 + 1).collect(),
+            4,
+        ),
         ValidSpec {
             unknown_section: true,
             ..base("005-unknown-section", 1, vec![2, 2, 2, 2, 2, 2, 2], 5)
@@ -325,7 +335,7 @@ fn build_valid(spec: &ValidSpec) -> Vec<u8> {
             let seen = match view {
                 0 => true,
                 1 => false,
-                _ => mix(spec.seed << 40 ^ (view as u64) << 20 ^ patch as u64) % 3 == 0,
+                _ => mix(spec.seed << 40 ^ (view as u64) << 20 ^ patch as u64).is_multiple_of(3),
             };
             if seen {
                 matrix.set(view, patch);
@@ -342,7 +352,13 @@ fn build_valid(spec: &ValidSpec) -> Vec<u8> {
         return bytes;
     }
     let mut sections = sections_of(&bytes);
-    sections.insert(1, (*b"XTRA", b"an unknown section; version 1 readers skip it".to_vec()));
+    sections.insert(
+        1,
+        (
+            *b"XTRA",
+            b"an unknown section; version 1 readers skip it".to_vec(),
+        ),
+    );
     assemble(&sections)
 }
 
@@ -469,9 +485,15 @@ fn invalid_specs() -> Vec<(&'static str, Corruption)> {
             b[camr + 32] ^= 0x01; // resolution 256 → 257, trailer left alone
             Some(b)
         }),
-        ("108-section-count-zero", |b| with_crc(b, |b| put_u32(b, 24, 0))),
-        ("109-section-count-17", |b| with_crc(b, |b| put_u32(b, 24, 17))),
-        ("110-header-reserved-set", |b| with_crc(b, |b| put_u32(b, 28, 7))),
+        ("108-section-count-zero", |b| {
+            with_crc(b, |b| put_u32(b, 24, 0))
+        }),
+        ("109-section-count-17", |b| {
+            with_crc(b, |b| put_u32(b, 24, 17))
+        }),
+        ("110-header-reserved-set", |b| {
+            with_crc(b, |b| put_u32(b, 28, 7))
+        }),
         ("111-missing-section", |b| {
             with_crc(b, |b| {
                 let (entry, _, _) = find(b, b"PTCH");
@@ -770,7 +792,11 @@ fn check_detects_wrong_expectations() {
     std::fs::write(valid.join("a.pvis"), &bytes).unwrap();
     std::fs::write(valid.join("a.dump"), dump(&pvis)).unwrap();
     assert_eq!(check(&valid.join("a.pvis")), Ok(()));
-    std::fs::write(valid.join("a.dump"), dump(&pvis).replace("view 3:", "view 4:")).unwrap();
+    std::fs::write(
+        valid.join("a.dump"),
+        dump(&pvis).replace("view 3:", "view 4:"),
+    )
+    .unwrap();
     assert!(check(&valid.join("a.pvis")).unwrap_err().contains("view 3"));
 
     std::fs::write(invalid.join("b.pvis"), &bytes).unwrap();
@@ -780,5 +806,9 @@ fn check_detects_wrong_expectations() {
         Err("accepted an invalid vector".into())
     );
     std::fs::write(invalid.join("b.pvis"), &bytes[..bytes.len() - 1]).unwrap();
-    assert!(check(&invalid.join("b.pvis")).unwrap_err().starts_with("wrong error"));
+    assert!(
+        check(&invalid.join("b.pvis"))
+            .unwrap_err()
+            .starts_with("wrong error")
+    );
 }

@@ -22,6 +22,8 @@ pub enum Command {
     Info(InfoArgs),
     /// Which patches (and triangle ranges) a camera at a position sees.
     Query(QueryArgs),
+    /// Check a .pvis file against the format specification; report the first violation.
+    Verify(VerifyArgs),
 }
 
 /// `patchvis bake`.
@@ -59,6 +61,16 @@ pub struct BakeArgs {
 /// `patchvis info`.
 #[derive(Debug, clap::Args)]
 pub struct InfoArgs {
+    /// The .pvis file.
+    pub file: PathBuf,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `patchvis verify`.
+#[derive(Debug, clap::Args)]
+pub struct VerifyArgs {
     /// The .pvis file.
     pub file: PathBuf,
     /// Print JSON instead of text.
