@@ -2,6 +2,9 @@
 //! every valid vector, exit 1 and exactly `FILE: <the vector's expected error>` for every
 //! invalid one.
 
+#![cfg(feature = "cli")]
+
+use patchvis::runtime::consts::VERSION;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -40,7 +43,7 @@ fn valid_vectors_pass() {
         let text = stdout(&out);
         assert_eq!(text.lines().count(), 1, "{text}");
         assert!(
-            text.starts_with(&format!("{file}: OK (version 1, ")),
+            text.starts_with(&format!("{file}: OK (version {VERSION}, ")),
             "{text}"
         );
     }
