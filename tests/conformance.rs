@@ -17,7 +17,7 @@
 //! PATCHVIS_REGENERATE=1 cargo test --test conformance   # rewrite vectors and expectations
 //! ```
 //!
-//! Cost: ~40 small files; each valid vector is parsed once per prefix length (a few thousand
+//! Cost: 45 small vectors; each valid one is parsed once per prefix length (a few thousand
 //! parses, each stopping at the length check), well under a second.
 #![cfg(feature = "bake")]
 
