@@ -25,6 +25,8 @@ pub enum Command {
     /// Write a huge, real-looking test mesh (binary PLY), streaming and deterministic.
     #[command(alias = "generate")]
     Gen(GenArgs),
+    /// Check a .pvis file against the format specification; report the first violation.
+    Verify(VerifyArgs),
 }
 
 /// `patchvis bake`.
@@ -137,6 +139,16 @@ pub struct InfoArgs {
     /// compressed by `zstd -19` and `xz -9` (when those tools are installed).
     #[arg(long)]
     pub compare: bool,
+}
+
+/// `patchvis verify`.
+#[derive(Debug, clap::Args)]
+pub struct VerifyArgs {
+    /// The .pvis file.
+    pub file: PathBuf,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// `patchvis query`.

@@ -6,6 +6,7 @@ pub mod bake;
 pub mod generate;
 pub mod inspect;
 pub mod progress;
+pub mod verify;
 
 /// An invocation that cannot run as given (exit code 2), e.g. `--patches 0`.
 #[derive(Debug)]

@@ -38,14 +38,31 @@ pub struct BakeContents<'a> {
 /// The sections this writer emits, in file order.
 const SECTIONS: [[u8; 4]; 3] = [TAG_CAMR, TAG_PTCH, TAG_VISB];
 
-/// Encodes `contents` as a `.pvis` file.
+/// How the VISB section stores the rows (spec: "VISB — visibility").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VisibilityEncoding {
+    /// Encoding 0: every row whole, one bit per patch. For comparisons and simple readers.
+    Raw,
+    /// Encoding 1: each view range-coded given its two parent views. The default.
+    Hierarchical,
+}
+
+/// Encodes `contents` as a `.pvis` file with the default, context-coded payload.
+///
+/// # Panics
+/// As [`encode_with`].
+pub fn encode(contents: &BakeContents) -> Vec<u8> {
+    encode_with(contents, VisibilityEncoding::Hierarchical)
+}
+
+/// Encodes `contents` as a `.pvis` file whose payload uses `encoding`.
 ///
 /// # Panics
 /// If the contents break the format's rules — a broken caller contract, as the bake
 /// pipeline's own output always satisfies them: ranges not contiguous from 0 or not summing to
 /// `triangle_count`, a matrix whose size disagrees with the level or patch count, limits
 /// exceeded, non-finite values. The message is the reader's error.
-pub fn encode(contents: &BakeContents) -> Vec<u8> {
+pub fn encode_with(contents: &BakeContents, encoding: VisibilityEncoding) -> Vec<u8> {
     let params = contents.sampling;
     let patch_count = contents.patches.len() as u64;
     let views = sphere::view_count(params.level.min(MAX_LEVEL));
@@ -60,7 +77,12 @@ pub fn encode(contents: &BakeContents) -> Vec<u8> {
 
     let camr = camr(params, views);
     let ptch = ptch(contents.triangle_count, contents.patches);
-    let visb = encode_hierarchical(contents.visibility, params.level.min(MAX_LEVEL));
+    let visb = match encoding {
+        VisibilityEncoding::Raw => encode_raw(contents.visibility),
+        VisibilityEncoding::Hierarchical => {
+            encode_hierarchical(contents.visibility, params.level.min(MAX_LEVEL))
+        }
+    };
 
     let table_end = HEADER_LEN + SECTION_ENTRY_LEN * SECTIONS.len() as u64;
     let mut offsets = [0u64; 3];

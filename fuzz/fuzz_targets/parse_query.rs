@@ -1,0 +1,106 @@
+//! Fuzz target: arbitrary bytes → `Pvis::parse` → if accepted, every accessor, every view's
+//! row and queries from fixed and fuzzed eye positions, checked against the reader's own
+//! promises (spec § Query: the answer is the OR of the leaf's three rows; ranges are
+//! contiguous; padding bits are zero). Any panic or failed check is a reader bug.
+//!
+//! Input: the first `EYE_BYTES` bytes are two eye positions (six little-endian `f32`), the
+//! rest is the file. Each file is tried twice: as given, and with `file_length` and the CRC
+//! repaired, so that mutations get past the checksum to the structural checks.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use patchvis::runtime::Pvis;
+use patchvis::runtime::consts::TRAILER_LEN;
+use patchvis::runtime::crc32c::crc32c;
+
+/// Two fuzzed eye positions precede the file.
+const EYE_BYTES: usize = 24;
+
+/// Fixed eyes: far along the axes and a diagonal, at the origin, and non-finite.
+const FIXED_EYES: [[f32; 3]; 6] = [
+    [1e4, 0.0, 0.0],
+    [0.0, -1e4, 0.0],
+    [-3.0, 5.0, -7.0],
+    [0.0, 0.0, 0.0],
+    [f32::NAN, 1.0, 1.0],
+    [f32::NEG_INFINITY, 0.0, 0.0],
+];
+
+fuzz_target!(|data: &[u8]| {
+    let (eye_bytes, file) = data.split_at(data.len().min(EYE_BYTES));
+    let mut eyes = FIXED_EYES.to_vec();
+    for chunk in eye_bytes.chunks_exact(12) {
+        let f = |i: usize| f32::from_le_bytes(chunk[i..i + 4].try_into().unwrap());
+        eyes.push([f(0), f(4), f(8)]);
+    }
+    exercise(file, &eyes);
+    if file.len() >= 24 + TRAILER_LEN as usize {
+        let mut repaired = file.to_vec();
+        let n = repaired.len();
+        repaired[16..24].copy_from_slice(&(n as u64).to_le_bytes());
+        let crc = crc32c(&repaired[..n - 4]);
+        repaired[n - 4..].copy_from_slice(&crc.to_le_bytes());
+        exercise(&repaired, &eyes);
+    }
+});
+
+fn exercise(file: &[u8], eyes: &[[f32; 3]]) {
+    let Ok(pvis) = Pvis::parse(file) else {
+        return;
+    };
+    let sampling = pvis.sampling();
+    let patches = pvis.patch_count();
+    assert!(patches >= 1);
+    assert_eq!(pvis.total_bytes(), file.len() as u64);
+    let _ = pvis.version();
+
+    // Triangle ranges contiguous from 0, summing to triangle_count (spec § PTCH).
+    let mut next = 0u64;
+    for p in 0..patches {
+        let info = pvis.patch(p);
+        assert_eq!(u64::from(info.first_triangle), next);
+        assert!(info.triangle_count >= 1);
+        next += u64::from(info.triangle_count);
+    }
+    assert_eq!(next, pvis.triangle_count());
+
+    // Every row decodes with its padding bits zero.
+    let words = pvis.row_words();
+    let tail_mask = if patches % 64 == 0 {
+        0
+    } else {
+        !0u64 << (patches % 64)
+    };
+    let mut rows = vec![0u64; words * sampling.views as usize];
+    for (view, row) in rows.chunks_exact_mut(words).enumerate() {
+        pvis.view_row(view as u32, row);
+        assert_eq!(row[words - 1] & tail_mask, 0, "view {view}: padding bits");
+    }
+
+    let mut scratch = vec![0u64; pvis.scratch_words()];
+    for &eye in eyes {
+        let visible = pvis.query(eye, &mut scratch);
+        let finite = (0..3).all(|i| (eye[i] - sampling.center[i]).is_finite());
+        for (w, &bits) in visible.bits().iter().enumerate() {
+            let expected = if finite {
+                visible
+                    .leaf
+                    .iter()
+                    .fold(0, |acc, &v| acc | rows[v as usize * words + w])
+            } else {
+                !0 & !(if w == words - 1 { tail_mask } else { 0 })
+            };
+            assert_eq!(bits, expected, "eye {eye:?}, word {w}");
+        }
+        let listed: Vec<u32> = visible.patches().collect();
+        assert_eq!(listed.len() as u32, visible.count());
+        assert!(listed.windows(2).all(|w| w[0] < w[1]));
+        assert!(listed.iter().all(|&p| p < patches && visible.contains(p)));
+        let triangles: u64 = listed
+            .iter()
+            .map(|&p| u64::from(pvis.patch(p).triangle_count))
+            .sum();
+        let ranged: u64 = pvis.ranges(&visible).map(|(_, c)| u64::from(c)).sum();
+        assert_eq!(triangles, ranged);
+    }
+}

@@ -1,0 +1,148 @@
+/*
+ * patchvis.h — C interface to the patchvis `.pvis` reader (Rust crate `patchvis`, feature
+ * `capi`, source `src/capi.rs`). Hand-written; keep it in step with src/capi.rs.
+ *
+ * A `.pvis` file holds precomputed patch visibility for a triangle mesh (format:
+ * spec/FORMAT.md). Parse it once — that validates every byte — then ask which patches a
+ * camera at a position sees. Nothing allocates; nothing needs freeing.
+ *
+ *     PatchvisFile file;                          // caller-owned, e.g. on the stack
+ *     int32_t rc = patchvis_parse(data, len, &file);
+ *     if (rc != PATCHVIS_OK) { puts(patchvis_error_message(rc)); ... }
+ *     size_t words = patchvis_scratch_words(&file);
+ *     uint64_t *scratch = malloc(words * sizeof *scratch);
+ *     PatchvisVisible vis;
+ *     float eye[3] = {10.0f, 2.0f, -3.0f};
+ *     patchvis_query(&file, eye, scratch, words, &vis);
+ *     // patch p is visible iff (vis.bits[p / 64] >> (p % 64)) & 1
+ *
+ * Lifetime rule: the bytes given to patchvis_parse must stay valid and unmodified for as long
+ * as the PatchvisFile is used. A query's answer lives in the caller's scratch buffer and stays
+ * valid until that buffer is reused.
+ *
+ * Return codes: 0 success; negative: the API was misused (PATCHVIS_ERR_*); positive: the file
+ * was refused, one code per kind of problem (1 truncated, 2 bad signature, 3 unsupported
+ * version, 4 unknown flags, 5 length mismatch, 6 checksum mismatch, 7 missing section,
+ * 8 duplicate section, 9 section shorter than its fixed part, 10 wrong section length,
+ * 11 section out of bounds, 12 misaligned section, 13 limit exceeded, 14 invalid integer
+ * field, 15 invalid float field, 16 view count mismatch, 17 non-contiguous patch ranges,
+ * 18 triangle count mismatch, 19 unsupported visibility encoding, 20 padding bits set,
+ * 99 other). patchvis_error_message names a code; patchvis_error_detail gives the precise
+ * one-line reason with byte offsets and values.
+ *
+ * Thread safety: every function is reentrant; a parsed PatchvisFile may be queried from many
+ * threads at once, each with its own scratch buffer. No function panics, aborts or allocates.
+ *
+ * Linking: build libpatchvis.a with
+ *     cargo rustc --release --lib --no-default-features --features capi,std --crate-type staticlib
+ * and link it with the system libraries rustc prints for `--print native-static-libs`
+ * (on Linux typically -lgcc_s -lutil -lrt -lpthread -lm -ldl -lc). See tests/c/run.sh.
+ */
+#ifndef PATCHVIS_H
+#define PATCHVIS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Success. */
+#define PATCHVIS_OK 0
+/* A null pointer where one is required, or a length too large for the address space. */
+#define PATCHVIS_ERR_ARGUMENT (-1)
+/* The PatchvisFile was not filled by a successful patchvis_parse. */
+#define PATCHVIS_ERR_NOT_PARSED (-2)
+/* The scratch buffer is shorter than patchvis_scratch_words(). */
+#define PATCHVIS_ERR_SCRATCH (-3)
+/* A patch or view index past the end, or an output buffer too short for a row. */
+#define PATCHVIS_ERR_RANGE (-4)
+
+/* Size in bytes of a PatchvisFile. */
+#define PATCHVIS_FILE_SIZE 512
+
+/* A parsed file, in memory the caller owns (8-byte aligned). Opaque: do not read or write
+ * its contents; it holds pointers into the bytes given to patchvis_parse. It may be copied
+ * with memcpy; the copy has the same lifetime rule. */
+typedef struct PatchvisFile {
+    uint64_t opaque[PATCHVIS_FILE_SIZE / 8];
+} PatchvisFile;
+
+/* What a file holds (spec/FORMAT.md, sections Header, CAMR, PTCH). */
+typedef struct PatchvisInfo {
+    uint32_t version;        /* format version */
+    uint32_t patch_count;    /* number of patches, at least 1 */
+    uint64_t triangle_count; /* triangles the patches cover */
+    uint32_t level;          /* sphere subdivision level, 0..7 */
+    uint32_t views;          /* number of views, 4 * 4^level + 2 */
+    float center[3];         /* centre of the model's bounding sphere */
+    float radius;            /* its radius */
+    float distance;          /* sampling cameras' distance from the centre */
+    float fov_deg;           /* sampling cameras' full field of view, degrees */
+    uint32_t resolution;     /* ID-buffer side, pixels */
+    uint64_t total_bytes;    /* length of the file */
+    size_t scratch_words;    /* uint64_t words of scratch a query needs */
+} PatchvisInfo;
+
+/* The answer to a query (spec/FORMAT.md, section Query). */
+typedef struct PatchvisVisible {
+    /* The visible set, in the caller's scratch: patch p is visible iff
+     * (bits[p / 64] >> (p % 64)) & 1. Bits past the last patch are zero. */
+    const uint64_t *bits;
+    size_t words;            /* words at bits: ceil(patch_count / 64) */
+    uint32_t leaf[3];        /* the three views whose rows were combined */
+    uint32_t visible_count;  /* number of visible patches */
+    uint32_t inside_sphere;  /* 1 if the eye is inside the camera sphere: the answer is then
+                                approximate and a renderer may prefer to draw everything */
+} PatchvisVisible;
+
+/* sizeof(PatchvisFile) as the library was built; compare to catch a mismatched header. */
+size_t patchvis_file_size(void);
+
+/* Validates len bytes at data as a .pvis file and, on success, fills *out. `out` need not be
+ * initialised. Returns PATCHVIS_OK, a positive file-error code, or PATCHVIS_ERR_ARGUMENT (out
+ * null, or data null with len > 0). After a failure *out is marked unparsed and every other
+ * call on it returns PATCHVIS_ERR_NOT_PARSED. data must outlive every use of *out. */
+int32_t patchvis_parse(const uint8_t *data, size_t len, PatchvisFile *out);
+
+/* A static NUL-terminated description of any return code; never NULL. */
+const char *patchvis_error_message(int32_t code);
+
+/* Writes the reader's precise one-line verdict on len bytes at data — the first rule the file
+ * breaks, with byte offset and values (e.g. "section PTCH: patch 1 covers triangles 4+1,
+ * expected a non-empty range starting at 3"), or "ok" — into buf, NUL-terminated and cut to
+ * buf_len - 1 bytes. Returns the verdict's full length like snprintf (pass buf NULL, buf_len 0
+ * to size a buffer). Parses the file again. */
+size_t patchvis_error_detail(const uint8_t *data, size_t len, char *buf, size_t buf_len);
+
+/* Fills *out. Returns PATCHVIS_OK, PATCHVIS_ERR_ARGUMENT or PATCHVIS_ERR_NOT_PARSED. */
+int32_t patchvis_info(const PatchvisFile *file, PatchvisInfo *out);
+
+/* uint64_t words of scratch patchvis_query needs; 0 for NULL or an unparsed file. */
+size_t patchvis_scratch_words(const PatchvisFile *file);
+
+/* Computes the patches visible from eye (model space) into scratch and describes them in
+ * *out. An eye with a non-finite coordinate gets every patch, inside_sphere 1. scratch must
+ * hold scratch_words >= patchvis_scratch_words(file) words and must not overlap the file's
+ * bytes. Returns PATCHVIS_OK, PATCHVIS_ERR_ARGUMENT, PATCHVIS_ERR_NOT_PARSED or
+ * PATCHVIS_ERR_SCRATCH. Cost: one point location and three rows ORed. */
+int32_t patchvis_query(const PatchvisFile *file, const float eye[3], uint64_t *scratch,
+                       size_t scratch_words, PatchvisVisible *out);
+
+/* The triangle range [*first, *first + *count) of patch; consecutive patches have adjacent
+ * ranges. Returns PATCHVIS_OK, PATCHVIS_ERR_ARGUMENT, PATCHVIS_ERR_NOT_PARSED or
+ * PATCHVIS_ERR_RANGE (patch >= patch_count). */
+int32_t patchvis_patch_range(const PatchvisFile *file, uint32_t patch, uint32_t *first,
+                             uint32_t *count);
+
+/* Decodes the stored row of view into out[0 .. patchvis_scratch_words(file)), same bit
+ * layout as a query's answer. Returns PATCHVIS_OK, PATCHVIS_ERR_ARGUMENT,
+ * PATCHVIS_ERR_NOT_PARSED or PATCHVIS_ERR_RANGE (view >= views, or words too small). */
+int32_t patchvis_view_row(const PatchvisFile *file, uint32_t view, uint64_t *out, size_t words);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PATCHVIS_H */

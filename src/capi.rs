@@ -1,0 +1,493 @@
+//! C ABI over the runtime reader (feature `capi`): parse a `.pvis` held in caller memory, then
+//! query it, with no allocation. Header: `include/patchvis.h`; example: `tests/c/query.c`.
+//!
+//! Design: the caller allocates a [`PatchvisFile`] (a fixed [`PATCHVIS_FILE_SIZE`]-byte,
+//! 8-aligned block, e.g. on the stack) and [`patchvis_parse`] stores the validated reader
+//! (`runtime::Pvis`, a few slices into the caller's bytes) in it, plus a marker saying the
+//! parse succeeded. Later calls check the marker, then borrow the reader back. So a query
+//! costs what `Pvis::query` costs — no re-validation — and nothing is ever freed.
+//!
+//! **Lifetime rule:** the bytes passed to `patchvis_parse` must stay valid and unmodified for
+//! as long as the `PatchvisFile` is used; a query's answer lives in the caller's scratch.
+//!
+//! **No panics across the boundary.** `catch_unwind` needs std, and the reader is `no_std`; so
+//! every function is panic-free by construction: each caller contract the Rust API `assert!`s
+//! (patch and view in range, scratch large enough) is checked here first and reported as an
+//! error code. Every `unsafe` block is a raw-pointer access whose contract the function's
+//! `# Safety` section hands to the C caller. The reader itself keeps `forbid(unsafe_code)`.
+//!
+//! Return codes: 0 success; negative for a misuse of the API (`PATCHVIS_ERR_*` below); positive
+//! for a file the reader refused, one code per kind of `runtime::Error`.
+//!
+//! Building: `cargo rustc --release --lib --no-default-features --features capi,std
+//! --crate-type staticlib` gives `libpatchvis.a` (the normal build stays an rlib only; see
+//! `tests/c/run.sh`).
+
+use core::ffi::c_char;
+use core::fmt::{self, Write as _};
+use core::mem::{MaybeUninit, align_of, size_of};
+use core::ptr::{addr_of, addr_of_mut};
+
+use crate::runtime::{Error, Pvis};
+
+/// Size in bytes of [`PatchvisFile`]; the header's `PATCHVIS_FILE_SIZE`.
+pub const PATCHVIS_FILE_SIZE: usize = 512;
+
+/// Words of [`PatchvisFile::storage`]: the whole block less the marker word.
+const STORAGE_WORDS: usize = PATCHVIS_FILE_SIZE / 8 - 1;
+
+/// Marker in [`PatchvisFile::state`] after a successful parse (`"PVISOK"` and a 1).
+const STATE_PARSED: u64 = 0x5056_4953_4F4B_0001;
+
+// The reader must fit the caller's block, at no stricter alignment than the block's. Growing
+// `Pvis` past it (a later format version) fails here, at compile time, not in a C program.
+const _: () = assert!(size_of::<Pvis<'static>>() <= STORAGE_WORDS * size_of::<u64>());
+const _: () = assert!(align_of::<Pvis<'static>>() <= align_of::<u64>());
+
+/// Success.
+pub const PATCHVIS_OK: i32 = 0;
+/// A null pointer where one is required, or a length past `isize::MAX`.
+pub const PATCHVIS_ERR_ARGUMENT: i32 = -1;
+/// The `PatchvisFile` is not from a successful `patchvis_parse`.
+pub const PATCHVIS_ERR_NOT_PARSED: i32 = -2;
+/// The scratch buffer is shorter than `patchvis_scratch_words`.
+pub const PATCHVIS_ERR_SCRATCH: i32 = -3;
+/// A patch or view index past the end, or an output buffer too short for a row.
+pub const PATCHVIS_ERR_RANGE: i32 = -4;
+
+/// Codes for the reader's refusals, one per kind of [`Error`], in its declaration order.
+const FILE_ERRORS: [(i32, &core::ffi::CStr); 21] = [
+    (1, c"truncated"),
+    (2, c"not a .pvis file (bad signature)"),
+    (3, c"unsupported format version"),
+    (4, c"unknown header flags"),
+    (5, c"file length disagrees with the header"),
+    (6, c"checksum mismatch"),
+    (7, c"a required section is missing"),
+    (8, c"a section appears twice"),
+    (9, c"a section is shorter than its fixed part"),
+    (10, c"a section has the wrong length"),
+    (11, c"a section lies outside its allowed bytes"),
+    (12, c"a section offset is misaligned"),
+    (13, c"a resource limit is exceeded"),
+    (14, c"an integer field breaks a rule of the format"),
+    (15, c"a float field breaks a rule of the format"),
+    (16, c"view count disagrees with the sphere level"),
+    (17, c"patch triangle ranges are not contiguous"),
+    (18, c"patch ranges do not sum to the triangle count"),
+    (19, c"unsupported visibility encoding"),
+    (20, c"padding bits set in a visibility row"),
+    (99, c"invalid file"),
+];
+
+/// The code of a reader error (see `FILE_ERRORS`).
+fn file_error_code(error: &Error) -> i32 {
+    match error {
+        Error::Truncated { .. } => 1,
+        Error::BadMagic => 2,
+        Error::UnsupportedVersion { .. } => 3,
+        Error::UnknownFlags { .. } => 4,
+        Error::LengthMismatch { .. } => 5,
+        Error::ChecksumMismatch { .. } => 6,
+        Error::MissingSection { .. } => 7,
+        Error::DuplicateSection { .. } => 8,
+        Error::BadSection { .. } => 9,
+        Error::SectionLength { .. } => 10,
+        Error::SectionOutOfBounds { .. } => 11,
+        Error::SectionMisaligned { .. } => 12,
+        Error::LimitExceeded { .. } => 13,
+        Error::Invalid { .. } => 14,
+        Error::InvalidFloat { .. } => 15,
+        Error::ViewCountMismatch { .. } => 16,
+        Error::PatchRange { .. } => 17,
+        Error::TriangleCountMismatch { .. } => 18,
+        Error::UnsupportedEncoding { .. } => 19,
+        Error::PaddingBits { .. } => 20,
+        // Kinds a later reader adds keep working through the C ABI, if less precisely.
+        #[allow(unreachable_patterns)]
+        _ => 99,
+    }
+}
+
+/// A parsed file, in memory the caller provides. Opaque: only the functions here read it.
+#[repr(C)]
+pub struct PatchvisFile {
+    /// [`STATE_PARSED`] once `patchvis_parse` succeeded, 0 after it failed.
+    state: u64,
+    /// Holds a `Pvis` when `state` says so.
+    storage: [MaybeUninit<u64>; STORAGE_WORDS],
+}
+
+/// What a file holds (spec § Header, § CAMR, § PTCH).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PatchvisInfo {
+    /// Format version.
+    pub version: u32,
+    /// Number of patches (at least 1).
+    pub patch_count: u32,
+    /// Number of triangles the patches cover.
+    pub triangle_count: u64,
+    /// Sphere subdivision level.
+    pub level: u32,
+    /// Number of views, `4·4^level + 2`.
+    pub views: u32,
+    /// Centre of the bounding sphere.
+    pub center: [f32; 3],
+    /// Radius of the bounding sphere.
+    pub radius: f32,
+    /// Camera distance from the centre.
+    pub distance: f32,
+    /// Full field of view of the sampling cameras, degrees.
+    pub fov_deg: f32,
+    /// ID-buffer resolution, pixels per side.
+    pub resolution: u32,
+    /// Length of the file in bytes.
+    pub total_bytes: u64,
+    /// `u64` words of scratch a query needs (`patchvis_scratch_words`).
+    pub scratch_words: usize,
+}
+
+/// The answer to a query (spec § Query). `bits` points into the caller's scratch.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PatchvisVisible {
+    /// The visible set: bit `p % 64` of word `p / 64` is patch `p`; bits past the last patch
+    /// are zero.
+    pub bits: *const u64,
+    /// Words at `bits`: `ceil(patch_count / 64)`.
+    pub words: usize,
+    /// The three views whose rows were combined.
+    pub leaf: [u32; 3],
+    /// Number of visible patches.
+    pub visible_count: u32,
+    /// 1 if the eye is inside the camera sphere (the answer is then approximate), else 0.
+    pub inside_sphere: u32,
+}
+
+/// A byte slice from C, or `None` for a null pointer with a non-zero length or a length past
+/// what a Rust slice may span.
+///
+/// # Safety
+/// Unless null, `data` must be valid for reads of `len` bytes, unmodified for `'a`.
+unsafe fn bytes<'a>(data: *const u8, len: usize) -> Option<&'a [u8]> {
+    if len > isize::MAX as usize {
+        return None;
+    }
+    if data.is_null() {
+        return if len == 0 { Some(&[]) } else { None };
+    }
+    // SAFETY: non-null, and the caller guarantees `len` readable bytes that outlive `'a`.
+    Some(unsafe { core::slice::from_raw_parts(data, len) })
+}
+
+/// The reader stored in `file`, or the code saying why there is none.
+///
+/// # Safety
+/// Unless null, `file` must point to a `PatchvisFile` that was passed to `patchvis_parse`,
+/// whose bytes are still valid for `'a`.
+unsafe fn handle<'a>(file: *const PatchvisFile) -> Result<&'a Pvis<'a>, i32> {
+    if file.is_null() {
+        return Err(PATCHVIS_ERR_ARGUMENT);
+    }
+    // SAFETY: `file` is non-null and points to a `PatchvisFile` whose `state` `patchvis_parse`
+    // wrote (caller contract).
+    let state = unsafe { addr_of!((*file).state).read() };
+    if state != STATE_PARSED {
+        return Err(PATCHVIS_ERR_NOT_PARSED);
+    }
+    // SAFETY: the marker is written only after a `Pvis` was written to `storage`, which is
+    // large and aligned enough (the const assertions above); the bytes it borrows outlive `'a`
+    // by the caller's contract.
+    Ok(unsafe { &*addr_of!((*file).storage).cast::<Pvis<'a>>() })
+}
+
+/// Size of `PatchvisFile` as this library was built: compare with `sizeof(PatchvisFile)` to
+/// catch a header that does not match the library.
+#[unsafe(no_mangle)]
+pub extern "C" fn patchvis_file_size() -> usize {
+    size_of::<PatchvisFile>()
+}
+
+/// Validates `len` bytes at `data` as a `.pvis` file and, on success, stores the reader in
+/// `*out`. Returns 0, a positive file-error code, or `PATCHVIS_ERR_ARGUMENT`. On failure `*out`
+/// is marked unparsed, so later calls on it return `PATCHVIS_ERR_NOT_PARSED`.
+///
+/// # Safety
+/// `data` must be valid for reads of `len` bytes (it may be null if `len` is 0), and must stay
+/// valid and unmodified for as long as `*out` is used. `out` must be null or point to writable
+/// memory of `sizeof(PatchvisFile)` bytes, aligned to 8; it need not be initialised.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn patchvis_parse(
+    data: *const u8,
+    len: usize,
+    out: *mut PatchvisFile,
+) -> i32 {
+    if out.is_null() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    // SAFETY: `out` is non-null, writable and aligned (caller contract); writing through a raw
+    // field pointer reads nothing, so `*out` may be uninitialised.
+    unsafe { addr_of_mut!((*out).state).write(0) };
+    // SAFETY: caller contract on `data`/`len`, for as long as `*out` is used.
+    let Some(bytes) = (unsafe { bytes(data, len) }) else {
+        return PATCHVIS_ERR_ARGUMENT;
+    };
+    match Pvis::parse(bytes) {
+        Ok(pvis) => {
+            // SAFETY: `storage` is large and aligned enough for a `Pvis` (const assertions);
+            // `Pvis` is `Copy`, so overwriting an older one leaks nothing.
+            unsafe {
+                addr_of_mut!((*out).storage).cast::<Pvis<'_>>().write(pvis);
+                addr_of_mut!((*out).state).write(STATE_PARSED);
+            }
+            PATCHVIS_OK
+        }
+        Err(error) => file_error_code(&error),
+    }
+}
+
+/// A static, NUL-terminated description of a return code (never null; unknown codes get
+/// "unknown error code").
+#[unsafe(no_mangle)]
+pub extern "C" fn patchvis_error_message(code: i32) -> *const c_char {
+    let message = match code {
+        PATCHVIS_OK => c"ok",
+        PATCHVIS_ERR_ARGUMENT => c"invalid argument (null pointer or length too large)",
+        PATCHVIS_ERR_NOT_PARSED => c"the PatchvisFile was not filled by a successful parse",
+        PATCHVIS_ERR_SCRATCH => c"scratch buffer shorter than patchvis_scratch_words",
+        PATCHVIS_ERR_RANGE => c"patch or view index out of range, or output buffer too short",
+        _ => FILE_ERRORS
+            .iter()
+            .find(|(c, _)| *c == code)
+            .map_or(c"unknown error code", |(_, m)| *m),
+    };
+    message.as_ptr()
+}
+
+/// Writes into a byte buffer, keeping room for a NUL, and counts what did not fit.
+struct Truncating<'b> {
+    buf: &'b mut [u8],
+    written: usize,
+    full_len: usize,
+}
+
+impl fmt::Write for Truncating<'_> {
+    fn write_str(&mut self, s: &str) -> fmt::Result {
+        let room = self
+            .buf
+            .len()
+            .saturating_sub(1)
+            .saturating_sub(self.written);
+        let take = s.len().min(room);
+        if let Some(dst) = self.buf.get_mut(self.written..self.written + take) {
+            dst.copy_from_slice(&s.as_bytes()[..take]);
+            self.written += take;
+        }
+        self.full_len += s.len();
+        Ok(())
+    }
+}
+
+/// Writes the reader's precise one-line message for `len` bytes at `data` — the first rule
+/// the file breaks, with position and values, exactly as `patchvis verify` prints it, or
+/// "ok" — into `buf` (NUL-terminated, cut to `buf_len − 1` bytes). Returns the message's full
+/// length, as `snprintf` does; call with `buf_len` 0 to size a buffer. Parses the file again.
+///
+/// # Safety
+/// `data` as for `patchvis_parse` (for the duration of the call only); `buf` must be null with
+/// `buf_len` 0, or valid for writes of `buf_len` bytes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn patchvis_error_detail(
+    data: *const u8,
+    len: usize,
+    buf: *mut c_char,
+    buf_len: usize,
+) -> usize {
+    let mut empty = [];
+    let out: &mut [u8] = if buf.is_null() || buf_len == 0 || buf_len > isize::MAX as usize {
+        &mut empty
+    } else {
+        // SAFETY: non-null and valid for `buf_len` bytes of writes (caller contract).
+        unsafe { core::slice::from_raw_parts_mut(buf.cast::<u8>(), buf_len) }
+    };
+    let mut w = Truncating {
+        buf: out,
+        written: 0,
+        full_len: 0,
+    };
+    // SAFETY: caller contract on `data`/`len` for this call.
+    let _ = match unsafe { bytes(data, len) } {
+        None => w.write_str("invalid argument (null pointer or length too large)"),
+        Some(bytes) => match Pvis::parse(bytes) {
+            Ok(_) => w.write_str("ok"),
+            Err(error) => write!(w, "{error}"),
+        },
+    };
+    let (written, full_len) = (w.written, w.full_len);
+    if let Some(nul) = w.buf.get_mut(written) {
+        *nul = 0;
+    }
+    full_len
+}
+
+/// Fills `*out` with what the file holds. Returns 0, `PATCHVIS_ERR_ARGUMENT` or
+/// `PATCHVIS_ERR_NOT_PARSED`.
+///
+/// # Safety
+/// `file` as for every call: null, or a `PatchvisFile` passed to `patchvis_parse` whose bytes
+/// are still valid. `out` must be null or valid for a write of a `PatchvisInfo`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn patchvis_info(file: *const PatchvisFile, out: *mut PatchvisInfo) -> i32 {
+    // SAFETY: caller contract on `file`.
+    let pvis = match unsafe { handle(file) } {
+        Ok(pvis) => pvis,
+        Err(code) => return code,
+    };
+    if out.is_null() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    let s = pvis.sampling();
+    let info = PatchvisInfo {
+        version: pvis.version(),
+        patch_count: pvis.patch_count(),
+        triangle_count: pvis.triangle_count(),
+        level: s.level,
+        views: s.views,
+        center: s.center,
+        radius: s.radius,
+        distance: s.distance,
+        fov_deg: s.fov_deg,
+        resolution: s.resolution,
+        total_bytes: pvis.total_bytes(),
+        scratch_words: pvis.scratch_words(),
+    };
+    // SAFETY: `out` is non-null and valid for a write (caller contract).
+    unsafe { out.write(info) };
+    PATCHVIS_OK
+}
+
+/// `u64` words of scratch `patchvis_query` needs, `ceil(patch_count / 64)`; 0 for a null or
+/// unparsed `file`.
+///
+/// # Safety
+/// `file` as for every call.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn patchvis_scratch_words(file: *const PatchvisFile) -> usize {
+    // SAFETY: caller contract on `file`.
+    unsafe { handle(file) }.map_or(0, |pvis| pvis.scratch_words())
+}
+
+/// The patches visible from `eye` (model space; spec § Query), computed into `scratch` and
+/// described by `*out`. Non-finite eyes get every patch with `inside_sphere` 1. Returns 0,
+/// `PATCHVIS_ERR_ARGUMENT`, `PATCHVIS_ERR_NOT_PARSED` or `PATCHVIS_ERR_SCRATCH`.
+///
+/// # Safety
+/// `file` as for every call. `eye` must be null or point to 3 readable floats. `scratch` must
+/// be null or valid for reads and writes of `scratch_words` `uint64_t`s, and must not overlap
+/// the file's bytes; the answer stays valid until `scratch` is reused. `out` must be null or
+/// valid for a write of a `PatchvisVisible`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn patchvis_query(
+    file: *const PatchvisFile,
+    eye: *const f32,
+    scratch: *mut u64,
+    scratch_words: usize,
+    out: *mut PatchvisVisible,
+) -> i32 {
+    // SAFETY: caller contract on `file`.
+    let pvis = match unsafe { handle(file) } {
+        Ok(pvis) => pvis,
+        Err(code) => return code,
+    };
+    if eye.is_null() || scratch.is_null() || out.is_null() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    if scratch_words > isize::MAX as usize / size_of::<u64>() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    if scratch_words < pvis.scratch_words() {
+        return PATCHVIS_ERR_SCRATCH;
+    }
+    // SAFETY: `eye` is non-null and points to 3 readable floats (caller contract).
+    let eye = unsafe { [eye.read(), eye.add(1).read(), eye.add(2).read()] };
+    // SAFETY: non-null, valid for `scratch_words` words of reads and writes, not overlapping
+    // the file (caller contract); the length fits a slice (checked above).
+    let scratch = unsafe { core::slice::from_raw_parts_mut(scratch, scratch_words) };
+    let visible = pvis.query(eye, scratch);
+    let answer = PatchvisVisible {
+        bits: visible.bits().as_ptr(),
+        words: visible.bits().len(),
+        leaf: visible.leaf,
+        visible_count: visible.count(),
+        inside_sphere: u32::from(visible.inside_sphere),
+    };
+    // SAFETY: `out` is non-null and valid for a write (caller contract).
+    unsafe { out.write(answer) };
+    PATCHVIS_OK
+}
+
+/// The triangle range of `patch`: `*first` and `*count`. Returns 0, `PATCHVIS_ERR_ARGUMENT`,
+/// `PATCHVIS_ERR_NOT_PARSED` or `PATCHVIS_ERR_RANGE` (patch ≥ patch_count).
+///
+/// # Safety
+/// `file` as for every call; `first` and `count` must be null or valid for a write.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn patchvis_patch_range(
+    file: *const PatchvisFile,
+    patch: u32,
+    first: *mut u32,
+    count: *mut u32,
+) -> i32 {
+    // SAFETY: caller contract on `file`.
+    let pvis = match unsafe { handle(file) } {
+        Ok(pvis) => pvis,
+        Err(code) => return code,
+    };
+    if first.is_null() || count.is_null() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    if patch >= pvis.patch_count() {
+        return PATCHVIS_ERR_RANGE;
+    }
+    let info = pvis.patch(patch);
+    // SAFETY: both non-null and valid for a write (caller contract).
+    unsafe {
+        first.write(info.first_triangle);
+        count.write(info.triangle_count);
+    }
+    PATCHVIS_OK
+}
+
+/// Decodes the row of `view` into `out[0 .. ceil(patch_count / 64)]` (same bit layout as a
+/// query's answer). Returns 0, `PATCHVIS_ERR_ARGUMENT`, `PATCHVIS_ERR_NOT_PARSED` or
+/// `PATCHVIS_ERR_RANGE` (view ≥ views, or `words` < `patchvis_scratch_words`).
+///
+/// # Safety
+/// `file` as for every call; `out` must be null or valid for writes of `words` `uint64_t`s.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn patchvis_view_row(
+    file: *const PatchvisFile,
+    view: u32,
+    out: *mut u64,
+    words: usize,
+) -> i32 {
+    // SAFETY: caller contract on `file`.
+    let pvis = match unsafe { handle(file) } {
+        Ok(pvis) => pvis,
+        Err(code) => return code,
+    };
+    if out.is_null() || words > isize::MAX as usize / size_of::<u64>() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    if view >= pvis.sampling().views || words < pvis.row_words() {
+        return PATCHVIS_ERR_RANGE;
+    }
+    // SAFETY: non-null and valid for `words` words of writes (caller contract).
+    let out = unsafe { core::slice::from_raw_parts_mut(out, words) };
+    pvis.view_row(view, out);
+    PATCHVIS_OK
+}
+
+#[cfg(test)]
+mod tests;

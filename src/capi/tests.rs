@@ -1,0 +1,245 @@
+//! The C ABI called from Rust as C would call it, against conformance vector 002 and its
+//! expected dump (so these tests follow the vectors when the format changes).
+
+extern crate std;
+
+use std::ffi::CStr;
+use std::format;
+use std::string::String;
+use std::vec;
+use std::vec::Vec;
+
+use super::*;
+
+const VALID: &[u8] = include_bytes!("../../tests/conformance/valid/002-level1-seven-patches.pvis");
+const DUMP: &str = include_str!("../../tests/conformance/valid/002-level1-seven-patches.dump");
+const INVALID: &[u8] =
+    include_bytes!("../../tests/conformance/invalid/131-non-contiguous-patch-ranges.pvis");
+const INVALID_ERR: &str =
+    include_str!("../../tests/conformance/invalid/131-non-contiguous-patch-ranges.err");
+
+/// The value of a `key: value` line of the dump.
+fn dump_value(key: &str) -> u64 {
+    DUMP.lines()
+        .find_map(|l| l.strip_prefix(&format!("{key}: ")))
+        .unwrap()
+        .parse()
+        .unwrap()
+}
+
+fn parsed(bytes: &[u8]) -> (i32, PatchvisFile) {
+    let mut file = MaybeUninit::<PatchvisFile>::uninit();
+    // SAFETY: `bytes` outlives the handle in every test; `file` is writable and aligned.
+    let code = unsafe { patchvis_parse(bytes.as_ptr(), bytes.len(), file.as_mut_ptr()) };
+    // SAFETY: `patchvis_parse` wrote `state`, and `storage` is `MaybeUninit`.
+    (code, unsafe { file.assume_init() })
+}
+
+#[test]
+fn the_block_is_the_size_the_header_says() {
+    assert_eq!(patchvis_file_size(), PATCHVIS_FILE_SIZE);
+    assert_eq!(align_of::<PatchvisFile>(), 8);
+    // The C header's field layout, computed by hand for LP64.
+    assert_eq!(size_of::<PatchvisInfo>(), 72);
+    assert_eq!(size_of::<PatchvisVisible>(), 40);
+}
+
+#[test]
+fn info_rows_ranges_and_queries_match_the_dump() {
+    let (code, file) = parsed(VALID);
+    assert_eq!(code, PATCHVIS_OK);
+    let mut info = PatchvisInfo::default();
+    // SAFETY: `file` was parsed from `VALID`, which is static.
+    assert_eq!(unsafe { patchvis_info(&file, &mut info) }, PATCHVIS_OK);
+    assert_eq!(u64::from(info.version), dump_value("version"));
+    assert_eq!(info.total_bytes, dump_value("bytes"));
+    assert_eq!(u64::from(info.patch_count), dump_value("patches"));
+    assert_eq!(info.triangle_count, dump_value("triangles"));
+    assert_eq!(u64::from(info.level), dump_value("level"));
+    assert_eq!(u64::from(info.views), dump_value("views"));
+    // SAFETY: as above.
+    let words = unsafe { patchvis_scratch_words(&file) };
+    assert_eq!((words, info.scratch_words), (1, 1));
+
+    let mut lines = Vec::new();
+    for p in 0..info.patch_count {
+        let (mut first, mut count) = (0, 0);
+        // SAFETY: as above; both outputs are writable.
+        let code = unsafe { patchvis_patch_range(&file, p, &mut first, &mut count) };
+        assert_eq!(code, PATCHVIS_OK);
+        lines.push(format!("patch {p}: first {first} count {count}"));
+    }
+    let mut row = vec![0u64; words];
+    for v in 0..info.views {
+        // SAFETY: as above; `row` holds `words` words.
+        let code = unsafe { patchvis_view_row(&file, v, row.as_mut_ptr(), row.len()) };
+        assert_eq!(code, PATCHVIS_OK);
+        let bits: String = (0..info.patch_count)
+            .map(|p| if row[0] >> p & 1 == 1 { '1' } else { '0' })
+            .collect();
+        lines.push(format!("view {v}: {bits}"));
+    }
+    let mut scratch = vec![0u64; words];
+    for line in DUMP.lines().filter(|l| l.starts_with("query ")) {
+        let position = line["query ".len()..].split(' ').next().unwrap();
+        let eye: Vec<f32> = position.split(',').map(|t| t.parse().unwrap()).collect();
+        let mut visible = MaybeUninit::<PatchvisVisible>::uninit();
+        // SAFETY: as above; `eye` has 3 floats, `scratch` `words` words.
+        let code = unsafe {
+            patchvis_query(
+                &file,
+                eye.as_ptr(),
+                scratch.as_mut_ptr(),
+                scratch.len(),
+                visible.as_mut_ptr(),
+            )
+        };
+        assert_eq!(code, PATCHVIS_OK);
+        // SAFETY: written by the successful call.
+        let visible = unsafe { visible.assume_init() };
+        assert_eq!((visible.bits, visible.words), (scratch.as_ptr(), 1));
+        let patches: Vec<String> = (0..info.patch_count)
+            .filter(|&p| scratch[0] >> p & 1 == 1)
+            .map(|p| p.to_string())
+            .collect();
+        assert_eq!(visible.visible_count as usize, patches.len());
+        let [a, b, c] = visible.leaf;
+        lines.push(format!(
+            "query {position} -> inside {} views [{a},{b},{c}] patches [{}]",
+            visible.inside_sphere == 1,
+            patches.join(",")
+        ));
+    }
+    let expected: Vec<&str> = DUMP
+        .lines()
+        .filter(|l| l.starts_with("patch ") || l.starts_with("view ") || l.starts_with("query "))
+        .collect();
+    assert_eq!(lines, expected);
+}
+
+#[test]
+fn misuse_is_an_error_code_not_a_panic() {
+    let (_, file) = parsed(VALID);
+    let mut scratch = [0u64; 1];
+    let mut visible = MaybeUninit::<PatchvisVisible>::uninit();
+    let eye = [1.0f32, 2.0, 30.0];
+    let (mut first, mut count) = (0, 0);
+    // SAFETY: every pointer is null or valid as the functions require.
+    unsafe {
+        assert_eq!(
+            patchvis_parse(VALID.as_ptr(), VALID.len(), core::ptr::null_mut()),
+            PATCHVIS_ERR_ARGUMENT
+        );
+        let mut other = MaybeUninit::<PatchvisFile>::uninit();
+        assert_eq!(
+            patchvis_parse(core::ptr::null(), 5, other.as_mut_ptr()),
+            PATCHVIS_ERR_ARGUMENT
+        );
+        // The handle of a failed parse is marked, so it cannot be queried.
+        assert_eq!(patchvis_scratch_words(other.as_ptr()), 0);
+        assert_eq!(
+            patchvis_info(other.as_ptr(), &mut PatchvisInfo::default()),
+            PATCHVIS_ERR_NOT_PARSED
+        );
+        assert_eq!(patchvis_parse(core::ptr::null(), 0, other.as_mut_ptr()), 1);
+        assert_eq!(
+            patchvis_info(core::ptr::null(), &mut PatchvisInfo::default()),
+            PATCHVIS_ERR_ARGUMENT
+        );
+        assert_eq!(
+            patchvis_info(&file, core::ptr::null_mut()),
+            PATCHVIS_ERR_ARGUMENT
+        );
+        let q = |eye: *const f32, scratch: *mut u64, words, out| {
+            patchvis_query(&file, eye, scratch, words, out)
+        };
+        let (s, v) = (scratch.as_mut_ptr(), visible.as_mut_ptr());
+        assert_eq!(q(core::ptr::null(), s, 1, v), PATCHVIS_ERR_ARGUMENT);
+        assert_eq!(
+            q(eye.as_ptr(), core::ptr::null_mut(), 1, v),
+            PATCHVIS_ERR_ARGUMENT
+        );
+        assert_eq!(
+            q(eye.as_ptr(), s, 1, core::ptr::null_mut()),
+            PATCHVIS_ERR_ARGUMENT
+        );
+        assert_eq!(q(eye.as_ptr(), s, 0, v), PATCHVIS_ERR_SCRATCH);
+        assert_eq!(q(eye.as_ptr(), s, usize::MAX, v), PATCHVIS_ERR_ARGUMENT);
+        assert_eq!(q(eye.as_ptr(), s, 1, v), PATCHVIS_OK);
+        assert_eq!(
+            patchvis_patch_range(&file, 7, &mut first, &mut count),
+            PATCHVIS_ERR_RANGE
+        );
+        assert_eq!(
+            patchvis_patch_range(&file, 0, core::ptr::null_mut(), &mut count),
+            PATCHVIS_ERR_ARGUMENT
+        );
+        assert_eq!(patchvis_view_row(&file, 18, s, 1), PATCHVIS_ERR_RANGE);
+        assert_eq!(patchvis_view_row(&file, 0, s, 0), PATCHVIS_ERR_RANGE);
+        assert_eq!(
+            patchvis_view_row(&file, 0, core::ptr::null_mut(), 1),
+            PATCHVIS_ERR_ARGUMENT
+        );
+    }
+}
+
+#[test]
+fn refusals_have_codes_and_exact_messages() {
+    let (code, file) = parsed(INVALID);
+    assert_eq!(code, 17);
+    // SAFETY: `file` comes from `patchvis_parse`.
+    assert_eq!(unsafe { patchvis_scratch_words(&file) }, 0);
+    // SAFETY: the message is a static C string.
+    let message = unsafe { CStr::from_ptr(patchvis_error_message(code)) };
+    assert_eq!(
+        message.to_str().unwrap(),
+        "patch triangle ranges are not contiguous"
+    );
+
+    let expected = INVALID_ERR.trim_end();
+    let mut buf = [0x55 as c_char; 200];
+    // SAFETY: `INVALID` is readable; `buf` writable for its length.
+    let full = unsafe {
+        patchvis_error_detail(INVALID.as_ptr(), INVALID.len(), buf.as_mut_ptr(), buf.len())
+    };
+    assert_eq!(full, expected.len());
+    // SAFETY: NUL-terminated within `buf`.
+    let detail = unsafe { CStr::from_ptr(buf.as_ptr()) };
+    assert_eq!(detail.to_str().unwrap(), expected);
+    // Cut short like snprintf: 9 bytes and a NUL, full length returned.
+    let mut short = [0x55 as c_char; 10];
+    // SAFETY: as above.
+    let full = unsafe {
+        patchvis_error_detail(
+            INVALID.as_ptr(),
+            INVALID.len(),
+            short.as_mut_ptr(),
+            short.len(),
+        )
+    };
+    assert_eq!(full, expected.len());
+    // SAFETY: as above.
+    let cut = unsafe { CStr::from_ptr(short.as_ptr()) };
+    assert_eq!(cut.to_str().unwrap(), &expected[..9]);
+    // SAFETY: a null buffer of length 0 only sizes the message.
+    let sized =
+        unsafe { patchvis_error_detail(VALID.as_ptr(), VALID.len(), core::ptr::null_mut(), 0) };
+    assert_eq!(sized, 2, "\"ok\"");
+
+    // Every code has its own message; unknown codes have one too.
+    let codes = [-4, -3, -2, -1, 0]
+        .into_iter()
+        .chain(FILE_ERRORS.iter().map(|(c, _)| *c));
+    let mut seen = std::collections::BTreeSet::new();
+    for code in codes {
+        // SAFETY: static C strings.
+        let m = unsafe { CStr::from_ptr(patchvis_error_message(code)) };
+        assert!(
+            seen.insert(m.to_bytes().to_vec()),
+            "code {code} repeats a message"
+        );
+    }
+    // SAFETY: as above.
+    let unknown = unsafe { CStr::from_ptr(patchvis_error_message(1234)) };
+    assert_eq!(unknown.to_str().unwrap(), "unknown error code");
+}

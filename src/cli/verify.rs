@@ -1,0 +1,125 @@
+//! `patchvis verify FILE [--json]`: a full conformance check of one `.pvis` file.
+//!
+//! `Pvis::parse` already validates every MUST of `spec/FORMAT.md` (the reader answers no
+//! query before it has); on top of it this decodes every view's row through the public API and
+//! re-checks what a query relies on — patch ranges contiguous from 0 and summing to the
+//! triangle count, no bit set past the last patch — so a reader bug shows up here too rather
+//! than in a renderer. Exit 0 with a one-line summary, or exit 1 with one line
+//! `FILE: <first violation>`. Cost: one parse plus one pass over every row.
+
+use super::args::VerifyArgs;
+use patchvis::runtime::Pvis;
+use serde_json::json;
+use std::fmt::Write as _;
+use std::process::ExitCode;
+
+/// What a valid file holds, for the summary line.
+struct Summary {
+    version: u32,
+    patches: u32,
+    triangles: u64,
+    level: u32,
+    views: u32,
+    bytes: u64,
+    /// Visible (view, patch) pairs over all views.
+    visible_pairs: u64,
+}
+
+/// Runs `patchvis verify`; prints the verdict and returns the exit code (0 valid, 1 not).
+pub fn run(args: &VerifyArgs) -> ExitCode {
+    let file = args.file.display().to_string();
+    let verdict = std::fs::read(&args.file)
+        .map_err(|e| format!("cannot read: {e}"))
+        .and_then(|bytes| verify(&bytes));
+    if args.json {
+        let report = match &verdict {
+            Ok(s) => json!({
+                "file": file, "ok": true, "version": s.version, "patches": s.patches,
+                "triangles": s.triangles, "level": s.level, "views": s.views, "bytes": s.bytes,
+                "visible_pairs": s.visible_pairs,
+            }),
+            Err(violation) => json!({"file": file, "ok": false, "error": violation}),
+        };
+        println!("{report}");
+    } else {
+        match &verdict {
+            Ok(s) => println!(
+                "{file}: OK (version {}, {} patches, {} triangles, {} views at level {}, \
+                 {} bytes, {:.1}% of view-patch pairs visible)",
+                s.version,
+                s.patches,
+                s.triangles,
+                s.views,
+                s.level,
+                s.bytes,
+                100.0 * s.visible_pairs as f64 / (s.views as f64 * s.patches as f64)
+            ),
+            Err(violation) => println!("{file}: {violation}"),
+        }
+    }
+    match verdict {
+        Ok(_) => ExitCode::SUCCESS,
+        Err(_) => ExitCode::from(1),
+    }
+}
+
+/// Checks a whole file; `Err` is the first violation, as one line.
+fn verify(bytes: &[u8]) -> Result<Summary, String> {
+    let pvis = Pvis::parse(bytes).map_err(|e| e.to_string())?;
+    let sampling = pvis.sampling();
+    let patches = pvis.patch_count();
+
+    // Re-checks of what parse guarantees, through the public API only. A failure here is a
+    // reader bug, and says so.
+    let mut next = 0u64;
+    for p in 0..patches {
+        let info = pvis.patch(p);
+        if u64::from(info.first_triangle) != next || info.triangle_count == 0 {
+            return Err(reader_bug(format_args!(
+                "patch {p} covers triangles {}+{}, expected a non-empty range at {next}",
+                info.first_triangle, info.triangle_count
+            )));
+        }
+        next += u64::from(info.triangle_count);
+    }
+    if next != pvis.triangle_count() {
+        return Err(reader_bug(format_args!(
+            "patches cover {next} triangles, the file says {}",
+            pvis.triangle_count()
+        )));
+    }
+    let words = pvis.row_words();
+    let tail_bits = patches % 64;
+    let padding = if tail_bits == 0 {
+        0
+    } else {
+        !0u64 << tail_bits
+    };
+    let mut row = vec![0u64; words];
+    let mut visible_pairs = 0u64;
+    for view in 0..sampling.views {
+        pvis.view_row(view, &mut row);
+        if row.last().is_some_and(|&w| w & padding != 0) {
+            return Err(reader_bug(format_args!(
+                "view {view}: decoded row sets bits past patch {}",
+                patches - 1
+            )));
+        }
+        visible_pairs += row.iter().map(|w| u64::from(w.count_ones())).sum::<u64>();
+    }
+    Ok(Summary {
+        version: pvis.version(),
+        patches,
+        triangles: pvis.triangle_count(),
+        level: sampling.level,
+        views: sampling.views,
+        bytes: pvis.total_bytes(),
+        visible_pairs,
+    })
+}
+
+fn reader_bug(what: std::fmt::Arguments<'_>) -> String {
+    let mut line = String::from("reader bug: accepted a file where ");
+    let _ = line.write_fmt(what);
+    line
+}

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Builds libpatchvis.a (feature `capi`), compiles tests/c/query.c against include/patchvis.h
+# with `cc`, and compares its output with every conformance vector's expectation: the header
+# counts, patch ranges, view rows and query lines of each valid vector's dump, and the exact
+# error line of each invalid vector. Used by .ci/run; needs cargo and a C compiler.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+
+# A separate target dir: the staticlib's feature set would otherwise evict the main build's
+# artefacts from target/release.
+target=target/capi
+cargo rustc --quiet --release --lib --no-default-features --features capi,std \
+    --crate-type staticlib --target-dir "$target" -- --print native-static-libs \
+    2> "$target-native-libs.txt" || { cat "$target-native-libs.txt"; exit 1; }
+native=$(sed -n 's/.*native-static-libs: //p' "$target-native-libs.txt" | tail -n 1)
+
+cc -std=c11 -Wall -Wextra -Werror -pedantic -O2 -Iinclude tests/c/query.c \
+    "$target/release/libpatchvis.a" $native -o "$target/query"
+
+fail=0
+for vector in tests/conformance/valid/*.pvis; do
+    dump="${vector%.pvis}.dump"
+    mapfile -t positions < <(sed -n 's/^query \([^ ]*\) .*/\1/p' "$dump")
+    expected=$(grep -E '^(patches|triangles|level|views): |^(patch|view) [0-9]+: |^query ' "$dump")
+    if ! actual=$("$target/query" "$vector" "${positions[@]}"); then
+        echo "FAIL $vector: query.c exited with an error"; fail=1; continue
+    fi
+    if [[ "$actual" != "$expected" ]]; then
+        echo "FAIL $vector:"; diff <(echo "$expected") <(echo "$actual") | head -20; fail=1
+    fi
+done
+for vector in tests/conformance/invalid/*.pvis; do
+    expected="error: $(cat "${vector%.pvis}.err")"
+    set +e
+    actual=$("$target/query" "$vector" 2>/dev/null)
+    rc=$?
+    set -e
+    if [[ $rc -ne 1 || "$actual" != "$expected" ]]; then
+        echo "FAIL $vector: exit $rc"; diff <(echo "$expected") <(echo "$actual"); fail=1
+    fi
+done
+valid=$(ls tests/conformance/valid/*.pvis | wc -l)
+invalid=$(ls tests/conformance/invalid/*.pvis | wc -l)
+if [[ $fail -ne 0 ]]; then echo "C ABI: FAILED"; exit 1; fi
+echo "C ABI: $valid valid and $invalid invalid vectors match their expectations"

@@ -1,0 +1,847 @@
+//! Conformance vectors for the `.pvis` format (spec `spec/FORMAT.md`): one `check(path)`
+//! driver over `tests/conformance/{valid,invalid}/`, and the generator that made them.
+//!
+//! - `valid/NNN-name.pvis` + `NNN-name.dump`: the reader must accept the file and its dump
+//!   (header fields, every patch, every view's bitfield, query answers for listed positions;
+//!   format in `tests/conformance/README.md`) must match byte for byte. Every truncated prefix
+//!   and the file plus one trailing byte must be refused.
+//! - `invalid/NNN-name.pvis` + `NNN-name.err`: the reader must refuse the file with exactly
+//!   that `Error` Display line.
+//!
+//! The vectors are generated here, by the writer (`format::encode`) from small hand-specified
+//! contents, and the invalid ones by targeted corruption of a valid one (with the CRC fixed,
+//! so each reaches the check it aims at). Every run also regenerates them in memory and
+//! compares with the files, so writer, reader and the committed expectations cannot drift:
+//!
+//! ```text
+//! PATCHVIS_REGENERATE=1 cargo test --test conformance   # rewrite vectors and expectations
+//! ```
+//!
+//! Cost: 45 small vectors; each valid one is parsed once per prefix length (a few thousand
+//! parses, each stopping at the length check), well under a second.
+#![cfg(feature = "bake")]
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use patchvis::format::{BakeContents, VisibilityEncoding, encode_with};
+use patchvis::runtime::consts::{
+    HEADER_LEN, MAGIC, SECTION_ALIGN, SECTION_ENTRY_LEN, TRAILER_LEN, VERSION,
+};
+use patchvis::runtime::crc32c::crc32c;
+use patchvis::runtime::{Error, Pvis};
+use patchvis::sampler::{SamplingParams, VisibilityMatrix};
+use patchvis::sphere;
+use patchvis::tiling::Patch;
+
+/// Set to `1` to rewrite the vectors and their expectations from the generator.
+const REGENERATE_VAR: &str = "PATCHVIS_REGENERATE";
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/conformance")
+}
+
+// ---------------------------------------------------------------------------------------------
+// The driver.
+
+/// Checks one vector against its expectation file; `Err` says how it failed.
+fn check(path: &Path) -> Result<(), String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
+    let kind = path
+        .parent()
+        .and_then(Path::file_name)
+        .and_then(|n| n.to_str());
+    match kind {
+        Some("valid") => {
+            let expected = read_expectation(&path.with_extension("dump"))?;
+            let pvis = Pvis::parse(&bytes).map_err(|e| format!("refused a valid vector: {e}"))?;
+            let actual = dump(&pvis);
+            if actual != expected {
+                return Err(format!(
+                    "dump differs from {}:\n{}",
+                    path.with_extension("dump").display(),
+                    first_difference(&expected, &actual)
+                ));
+            }
+            check_prefixes_and_trailing_byte(&bytes)
+        }
+        Some("invalid") => {
+            let expected = read_expectation(&path.with_extension("err"))?;
+            match Pvis::parse(&bytes) {
+                Ok(_) => Err("accepted an invalid vector".into()),
+                Err(e) if format!("{e}\n") == expected => Ok(()),
+                Err(e) => Err(format!(
+                    "wrong error:\n  expected: {}  actual:   {e}",
+                    expected
+                )),
+            }
+        }
+        _ => Err("vector is neither in valid/ nor in invalid/".into()),
+    }
+}
+
+fn read_expectation(path: &Path) -> Result<String, String> {
+    std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Every proper prefix of a valid file, and the file plus one byte, must be refused — as
+/// truncated or as disagreeing with the header's `file_length` (spec § Header).
+fn check_prefixes_and_trailing_byte(bytes: &[u8]) -> Result<(), String> {
+    for len in 0..bytes.len() {
+        match Pvis::parse(&bytes[..len]) {
+            Err(Error::Truncated { .. } | Error::LengthMismatch { .. }) => {}
+            Err(e) => return Err(format!("prefix of {len} bytes: unexpected error {e}")),
+            Ok(_) => return Err(format!("prefix of {len} bytes was accepted")),
+        }
+    }
+    for extra in [0u8, 0xFF] {
+        let mut longer = bytes.to_vec();
+        longer.push(extra);
+        match Pvis::parse(&longer) {
+            Err(Error::LengthMismatch { header, actual })
+                if header == bytes.len() as u64 && actual == header + 1 => {}
+            other => {
+                return Err(format!(
+                    "trailing byte {extra:#04x}: expected a length mismatch, got {other:?}"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn first_difference(expected: &str, actual: &str) -> String {
+    for (i, (e, a)) in expected.lines().zip(actual.lines()).enumerate() {
+        if e != a {
+            return format!("line {}:\n  expected: {e}\n  actual:   {a}", i + 1);
+        }
+    }
+    format!(
+        "expected {} lines, got {}",
+        expected.lines().count(),
+        actual.lines().count()
+    )
+}
+
+/// The expected-dump text of a valid file (format: `tests/conformance/README.md`).
+fn dump(pvis: &Pvis<'_>) -> String {
+    let mut out = String::new();
+    let s = pvis.sampling();
+    let _ = writeln!(out, "version: {}", pvis.version());
+    let _ = writeln!(out, "bytes: {}", pvis.total_bytes());
+    let _ = writeln!(out, "patches: {}", pvis.patch_count());
+    let _ = writeln!(out, "triangles: {}", pvis.triangle_count());
+    let _ = writeln!(out, "level: {}", s.level);
+    let _ = writeln!(out, "views: {}", s.views);
+    let _ = writeln!(
+        out,
+        "camera: center {} radius {} distance {} fov {} resolution {}",
+        point(s.center),
+        s.radius,
+        s.distance,
+        s.fov_deg,
+        s.resolution
+    );
+    for p in 0..pvis.patch_count() {
+        let info = pvis.patch(p);
+        let _ = writeln!(
+            out,
+            "patch {p}: first {} count {}",
+            info.first_triangle, info.triangle_count
+        );
+        let _ = writeln!(
+            out,
+            "bounds {p}: center {} radius {} cone {} cos {}",
+            point(info.center),
+            info.radius,
+            point(info.cone_axis),
+            info.cone_cos
+        );
+    }
+    let mut row = vec![0u64; pvis.row_words()];
+    for view in 0..s.views {
+        pvis.view_row(view, &mut row);
+        let bits: String = (0..pvis.patch_count())
+            .map(|p| {
+                if row[p as usize / 64] >> (p % 64) & 1 == 1 {
+                    '1'
+                } else {
+                    '0'
+                }
+            })
+            .collect();
+        let _ = writeln!(out, "view {view}: {bits}");
+    }
+    let mut scratch = vec![0u64; pvis.scratch_words()];
+    for eye in query_positions() {
+        let visible = pvis.query(eye, &mut scratch);
+        let patches: Vec<String> = visible.patches().map(|p| p.to_string()).collect();
+        let _ = writeln!(
+            out,
+            "query {},{},{} -> inside {} views [{},{},{}] patches [{}]",
+            eye[0],
+            eye[1],
+            eye[2],
+            visible.inside_sphere,
+            visible.leaf[0],
+            visible.leaf[1],
+            visible.leaf[2],
+            patches.join(",")
+        );
+    }
+    out
+}
+
+fn point(p: [f32; 3]) -> String {
+    format!("[{}, {}, {}]", p[0], p[1], p[2])
+}
+
+/// The eye positions every dump lists: the six axes and some diagonals far outside the
+/// camera sphere, the sign of zero (spec § Point location: `-0.0` counts as positive), points
+/// inside the sphere and at the centre, and non-finite eyes (the conservative answer). Fixed
+/// numbers, not derived from the file, so the same line means the same query everywhere.
+fn query_positions() -> Vec<[f32; 3]> {
+    vec![
+        [100.0, 0.0, 0.0],
+        [-100.0, 0.0, 0.0],
+        [0.0, 100.0, 0.0],
+        [0.0, -100.0, 0.0],
+        [0.0, 0.0, 100.0],
+        [0.0, 0.0, -100.0],
+        [-0.0, -0.0, 100.0],
+        [30.0, 40.0, 50.0],
+        [-25.5, 7.25, -60.0],
+        [12.0, -80.0, 3.5],
+        [-7.0, -9.0, -11.0],
+        [1e30, -1e30, 0.5],
+        [1.0, 2.0, 3.0],
+        [1.25, 2.5, 3.0],
+        [0.0, 0.0, 0.0],
+        [f32::NAN, 0.0, 0.0],
+        [0.0, f32::INFINITY, 0.0],
+    ]
+}
+
+// ---------------------------------------------------------------------------------------------
+// The generator.
+
+/// Small hand-specified bake contents for one valid vector.
+struct ValidSpec {
+    name: &'static str,
+    level: u32,
+    /// Triangles per patch; the patch count is its length.
+    counts: Vec<u32>,
+    center: [f32; 3],
+    radius: f32,
+    fov_deg: f32,
+    resolution: u32,
+    /// Seeds the visibility pattern.
+    seed: u64,
+    /// Insert an unknown section (tag `XTRA`) between CAMR and PTCH.
+    unknown_section: bool,
+    /// Store raw rows (VISB encoding 0) instead of the context-coded payload (encoding 1).
+    raw: bool,
+}
+
+fn valid_specs() -> Vec<ValidSpec> {
+    let base = |name, level, counts: Vec<u32>, seed| ValidSpec {
+        name,
+        level,
+        counts,
+        center: [1.0, 2.0, 3.0],
+        radius: 1.5,
+        fov_deg: 60.0,
+        resolution: 256,
+        seed,
+        unknown_section: false,
+        raw: false,
+    };
+    vec![
+        ValidSpec {
+            center: [0.0; 3],
+            radius: 1.0,
+            fov_deg: 45.0,
+            resolution: 1,
+            ..base("001-level0-one-patch", 0, vec![1], 1)
+        },
+        base("002-level1-seven-patches", 1, vec![3, 1, 4, 1, 5, 9, 2], 2),
+        base(
+            "003-level2-64-patches",
+            2,
+            (1..=64).map(|i| i % 5 + 1).collect(),
+            3,
+        ),
+        base(
+            "004-level2-65-patches",
+            2,
+            (1..=65).map(|i| i % 3 + 1).collect(),
+            4,
+        ),
+        ValidSpec {
+            unknown_section: true,
+            ..base("005-unknown-section", 1, vec![2, 2, 2, 2, 2, 2, 2], 5)
+        },
+        ValidSpec {
+            center: [-1000.0, 0.5, 250.0],
+            radius: 0.001,
+            fov_deg: 179.0,
+            resolution: 4096,
+            ..base("006-level3-nine-patches-offcentre", 3, vec![7; 9], 6)
+        },
+        ValidSpec {
+            raw: true,
+            ..base(
+                "007-level1-seven-patches-raw",
+                1,
+                vec![3, 1, 4, 1, 5, 9, 2],
+                2,
+            )
+        },
+        ValidSpec {
+            raw: true,
+            ..base(
+                "008-level2-65-patches-raw",
+                2,
+                (1..=65).map(|i| i % 3 + 1).collect(),
+                4,
+            )
+        },
+    ]
+}
+
+/// A deterministic 64-bit mix (splitmix64's finaliser), for the visibility patterns.
+fn mix(mut x: u64) -> u64 {
+    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    x ^ (x >> 31)
+}
+
+/// Encodes a spec with the writer (and hand-assembles the extra section where asked).
+fn build_valid(spec: &ValidSpec) -> Vec<u8> {
+    let params = SamplingParams {
+        level: spec.level,
+        resolution: spec.resolution,
+        fov_deg: spec.fov_deg,
+        center: spec.center,
+        radius: spec.radius,
+    };
+    let mut first = 0;
+    let patches: Vec<Patch> = spec
+        .counts
+        .iter()
+        .enumerate()
+        .map(|(i, &count)| {
+            let i = i as f32;
+            let patch = Patch {
+                first,
+                count,
+                area: count as f64,
+                center: [i * 0.25, -i * 0.5, 1.0 - i],
+                radius: 0.125 * (i + 1.0),
+                cone_axis: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [0.0; 3]]
+                    [i as usize % 4],
+                cone_cos: [-1.0, 0.5, 1.0, 0.0][i as usize % 4],
+            };
+            first += count;
+            patch
+        })
+        .collect();
+    let views = sphere::view_count(spec.level);
+    let patch_count = spec.counts.len() as u32;
+    let mut matrix = VisibilityMatrix::new(views, patch_count);
+    for view in 0..views {
+        for patch in 0..patch_count {
+            // View 0 sees everything and view 1 nothing, so both extremes are covered;
+            // the rest see about a third of the patches.
+            let seen = match view {
+                0 => true,
+                1 => false,
+                _ => mix(spec.seed << 40 ^ (view as u64) << 20 ^ patch as u64).is_multiple_of(3),
+            };
+            if seen {
+                matrix.set(view, patch);
+            }
+        }
+    }
+    let contents = BakeContents {
+        sampling: &params,
+        triangle_count: first as u64,
+        patches: &patches,
+        visibility: &matrix,
+    };
+    let encoding = if spec.raw {
+        VisibilityEncoding::Raw
+    } else {
+        VisibilityEncoding::Hierarchical
+    };
+    let bytes = encode_with(&contents, encoding);
+    if !spec.unknown_section {
+        return bytes;
+    }
+    let mut sections = sections_of(&bytes);
+    sections.insert(
+        1,
+        (
+            *b"XTRA",
+            b"an unknown section; version 1 readers skip it".to_vec(),
+        ),
+    );
+    assemble(&sections)
+}
+
+/// The sections of a file, in table order: `(tag, body)`.
+fn sections_of(bytes: &[u8]) -> Vec<([u8; 4], Vec<u8>)> {
+    let count = u32_at(bytes, 24);
+    (0..count as usize)
+        .map(|i| {
+            let entry = HEADER_LEN as usize + i * SECTION_ENTRY_LEN as usize;
+            let tag = bytes[entry..entry + 4].try_into().unwrap();
+            let offset = u64_at(bytes, entry + 8) as usize;
+            let length = u64_at(bytes, entry + 16) as usize;
+            (tag, bytes[offset..offset + length].to_vec())
+        })
+        .collect()
+}
+
+/// Lays out a file by hand (spec § File layout): header, table, each section 8-aligned in
+/// the given order with zero gaps, CRC-32C trailer.
+fn assemble(sections: &[([u8; 4], Vec<u8>)]) -> Vec<u8> {
+    let table_end = HEADER_LEN + SECTION_ENTRY_LEN * sections.len() as u64;
+    let mut offsets = Vec::new();
+    let mut end = table_end;
+    for (_, body) in sections {
+        let offset = end.next_multiple_of(SECTION_ALIGN);
+        offsets.push(offset);
+        end = offset + body.len() as u64;
+    }
+    let mut out = Vec::new();
+    out.extend_from_slice(&MAGIC);
+    out.extend_from_slice(&VERSION.to_le_bytes());
+    out.extend_from_slice(&0u32.to_le_bytes());
+    out.extend_from_slice(&(end + TRAILER_LEN).to_le_bytes());
+    out.extend_from_slice(&(sections.len() as u32).to_le_bytes());
+    out.extend_from_slice(&0u32.to_le_bytes());
+    for ((tag, body), offset) in sections.iter().zip(&offsets) {
+        out.extend_from_slice(tag);
+        out.extend_from_slice(&0u32.to_le_bytes());
+        out.extend_from_slice(&offset.to_le_bytes());
+        out.extend_from_slice(&(body.len() as u64).to_le_bytes());
+    }
+    for ((_, body), offset) in sections.iter().zip(&offsets) {
+        out.resize(*offset as usize, 0);
+        out.extend_from_slice(body);
+    }
+    out.extend_from_slice(&[0; 4]);
+    fix_crc(&mut out);
+    out
+}
+
+fn u32_at(bytes: &[u8], at: usize) -> u32 {
+    u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap())
+}
+
+fn u64_at(bytes: &[u8], at: usize) -> u64 {
+    u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap())
+}
+
+fn put_u32(bytes: &mut [u8], at: usize, v: u32) {
+    bytes[at..at + 4].copy_from_slice(&v.to_le_bytes());
+}
+
+fn put_u64(bytes: &mut [u8], at: usize, v: u64) {
+    bytes[at..at + 8].copy_from_slice(&v.to_le_bytes());
+}
+
+/// Recomputes the trailer after a deliberate corruption, so the structural check is reached.
+fn fix_crc(bytes: &mut [u8]) {
+    let n = bytes.len();
+    let crc = crc32c(&bytes[..n - TRAILER_LEN as usize]);
+    bytes[n - 4..].copy_from_slice(&crc.to_le_bytes());
+}
+
+/// Where a section's table entry and body are: `(entry offset, body offset, body length)`.
+fn find(bytes: &[u8], tag: &[u8; 4]) -> (usize, usize, usize) {
+    let count = u32_at(bytes, 24) as usize;
+    (0..count)
+        .map(|i| HEADER_LEN as usize + i * SECTION_ENTRY_LEN as usize)
+        .find(|&entry| &bytes[entry..entry + 4] == tag)
+        .map(|entry| {
+            (
+                entry,
+                u64_at(bytes, entry + 8) as usize,
+                u64_at(bytes, entry + 16) as usize,
+            )
+        })
+        .expect("section present")
+}
+
+/// A corruption of the base vector; `None` when it does not apply to this file (e.g. a rule
+/// of a payload encoding the writer no longer emits).
+type Corruption = fn(Vec<u8>) -> Option<Vec<u8>>;
+
+/// The invalid vectors: each corrupts the base vector (valid 002) in one targeted way.
+fn invalid_specs() -> Vec<(&'static str, Corruption)> {
+    // Mutates, then fixes the CRC so the targeted check is the first to fail.
+    fn with_crc(mut bytes: Vec<u8>, mutate: impl FnOnce(&mut Vec<u8>)) -> Option<Vec<u8>> {
+        mutate(&mut bytes);
+        fix_crc(&mut bytes);
+        Some(bytes)
+    }
+    vec![
+        ("101-empty", |_| Some(Vec::new())),
+        ("102-bad-magic", |mut b| {
+            b[3] = b'X';
+            Some(b)
+        }),
+        ("103-text-mode-magic", |b| {
+            // A CR LF → LF conversion, as a text-mode transfer would do.
+            let mut out = b[..4].to_vec();
+            out.extend_from_slice(&b[5..]);
+            Some(out)
+        }),
+        ("104-version-99", |b| with_crc(b, |b| put_u32(b, 8, 99))),
+        ("105-flags-set", |b| with_crc(b, |b| put_u32(b, 12, 1))),
+        ("106-wrong-file-length", |b| {
+            with_crc(b, |b| {
+                let n = b.len() as u64;
+                put_u64(b, 16, n + 8)
+            })
+        }),
+        ("107-crc-mismatch", |mut b| {
+            let (_, camr, _) = find(&b, b"CAMR");
+            b[camr + 32] ^= 0x01; // resolution 256 → 257, trailer left alone
+            Some(b)
+        }),
+        ("108-section-count-zero", |b| {
+            with_crc(b, |b| put_u32(b, 24, 0))
+        }),
+        ("109-section-count-17", |b| {
+            with_crc(b, |b| put_u32(b, 24, 17))
+        }),
+        ("110-header-reserved-set", |b| {
+            with_crc(b, |b| put_u32(b, 28, 7))
+        }),
+        ("111-missing-section", |b| {
+            with_crc(b, |b| {
+                let (entry, _, _) = find(b, b"PTCH");
+                b[entry..entry + 4].copy_from_slice(b"ptch");
+            })
+        }),
+        ("112-duplicate-section", |b| {
+            with_crc(b, |b| {
+                let (entry, _, _) = find(b, b"VISB");
+                b[entry..entry + 4].copy_from_slice(b"PTCH");
+            })
+        }),
+        ("113-overlapping-sections", |b| {
+            with_crc(b, |b| {
+                let (_, camr, _) = find(b, b"CAMR");
+                let (entry, _, _) = find(b, b"PTCH");
+                put_u64(b, entry + 8, camr as u64 + 8);
+            })
+        }),
+        ("114-misaligned-offset", |b| {
+            with_crc(b, |b| {
+                let (entry, ptch, _) = find(b, b"PTCH");
+                put_u64(b, entry + 8, ptch as u64 + 4);
+            })
+        }),
+        ("115-section-past-end", |b| {
+            with_crc(b, |b| {
+                let (entry, _, len) = find(b, b"VISB");
+                put_u64(b, entry + 16, len as u64 + 1);
+            })
+        }),
+        ("116-table-reserved-set", |b| {
+            with_crc(b, |b| {
+                let (entry, _, _) = find(b, b"CAMR");
+                put_u32(b, entry + 4, 1);
+            })
+        }),
+        ("117-gap-not-zero", |b| {
+            with_crc(b, |b| {
+                let (_, camr, len) = find(b, b"CAMR");
+                let (_, ptch, _) = find(b, b"PTCH");
+                assert!(camr + len < ptch, "the base vector has a gap after CAMR");
+                b[camr + len] = 0xAA;
+            })
+        }),
+        ("118-camr-length", |b| {
+            with_crc(b, |b| {
+                let (entry, _, len) = find(b, b"CAMR");
+                put_u64(b, entry + 16, len as u64 - 4);
+            })
+        }),
+        ("119-level-8", |b| {
+            with_crc(b, |b| {
+                let (_, camr, _) = find(b, b"CAMR");
+                put_u32(b, camr, 8);
+            })
+        }),
+        ("120-view-count-mismatch", |b| {
+            with_crc(b, |b| {
+                let (_, camr, _) = find(b, b"CAMR");
+                let views = u32_at(b, camr + 4);
+                put_u32(b, camr + 4, views + 1);
+            })
+        }),
+        ("121-non-finite-center", |b| {
+            with_crc(b, |b| {
+                let (_, camr, _) = find(b, b"CAMR");
+                put_u32(b, camr + 12, f32::NAN.to_bits());
+            })
+        }),
+        ("122-non-finite-radius", |b| {
+            with_crc(b, |b| {
+                let (_, camr, _) = find(b, b"CAMR");
+                put_u32(b, camr + 20, f32::INFINITY.to_bits());
+            })
+        }),
+        ("123-zero-radius", |b| {
+            with_crc(b, |b| {
+                let (_, camr, _) = find(b, b"CAMR");
+                put_u32(b, camr + 20, 0.0f32.to_bits());
+            })
+        }),
+        ("124-distance-below-radius", |b| {
+            with_crc(b, |b| {
+                let (_, camr, _) = find(b, b"CAMR");
+                put_u32(b, camr + 24, 1.25f32.to_bits());
+            })
+        }),
+        ("125-fov-180", |b| {
+            with_crc(b, |b| {
+                let (_, camr, _) = find(b, b"CAMR");
+                put_u32(b, camr + 28, 180.0f32.to_bits());
+            })
+        }),
+        ("126-resolution-zero", |b| {
+            with_crc(b, |b| {
+                let (_, camr, _) = find(b, b"CAMR");
+                put_u32(b, camr + 32, 0);
+            })
+        }),
+        ("127-sphere-convention-2", |b| {
+            with_crc(b, |b| {
+                let (_, camr, _) = find(b, b"CAMR");
+                put_u32(b, camr + 36, 2);
+            })
+        }),
+        ("128-patch-count-zero", |b| {
+            with_crc(b, |b| {
+                let (_, ptch, _) = find(b, b"PTCH");
+                put_u32(b, ptch, 0);
+            })
+        }),
+        ("129-patch-count-over-limit", |b| {
+            with_crc(b, |b| {
+                let (_, ptch, _) = find(b, b"PTCH");
+                put_u32(b, ptch, (1 << 20) + 1);
+            })
+        }),
+        ("130-ptch-length", |b| {
+            with_crc(b, |b| {
+                let (_, ptch, _) = find(b, b"PTCH");
+                put_u32(b, ptch, 6);
+            })
+        }),
+        ("131-non-contiguous-patch-ranges", |b| {
+            with_crc(b, |b| {
+                let (_, ptch, _) = find(b, b"PTCH");
+                let first = u32_at(b, ptch + 16 + 40);
+                put_u32(b, ptch + 16 + 40, first + 1);
+            })
+        }),
+        ("132-empty-patch", |b| {
+            with_crc(b, |b| {
+                let (_, ptch, _) = find(b, b"PTCH");
+                put_u32(b, ptch + 16 + 4, 0);
+            })
+        }),
+        ("133-triangle-count-mismatch", |b| {
+            with_crc(b, |b| {
+                let (_, ptch, _) = find(b, b"PTCH");
+                let triangles = u64_at(b, ptch + 8);
+                put_u64(b, ptch + 8, triangles + 1);
+            })
+        }),
+        ("134-patch-cone-cos-above-1", |b| {
+            with_crc(b, |b| {
+                let (_, ptch, _) = find(b, b"PTCH");
+                put_u32(b, ptch + 16 + 36, 1.5f32.to_bits());
+            })
+        }),
+        ("135-patch-negative-radius", |b| {
+            with_crc(b, |b| {
+                let (_, ptch, _) = find(b, b"PTCH");
+                put_u32(b, ptch + 16 + 40 * 2 + 20, (-0.5f32).to_bits());
+            })
+        }),
+        ("136-visb-encoding-255", |b| {
+            with_crc(b, |b| {
+                let (_, visb, _) = find(b, b"VISB");
+                put_u32(b, visb, 255);
+            })
+        }),
+        ("137-padding-bit-set", |b| {
+            // Raw rows (encoding 0) only: the last bit of view 0's one-byte row is padding
+            // for 7 patches. Other encodings have their own padding rules.
+            let (_, visb, _) = find(&b, b"VISB");
+            if u32_at(&b, visb) != 0 {
+                return None;
+            }
+            with_crc(b, |b| b[visb + 8] |= 0x80)
+        }),
+        ("138-truncated-header", |b| Some(b[..20].to_vec())),
+        ("139-truncated-body", |b| Some(b[..b.len() / 2].to_vec())),
+    ]
+}
+
+/// Every vector the generator makes: `(relative path, bytes)`.
+fn generate() -> Vec<(String, Vec<u8>)> {
+    let specs = valid_specs();
+    let mut out: Vec<(String, Vec<u8>)> = specs
+        .iter()
+        .map(|spec| (format!("valid/{}.pvis", spec.name), build_valid(spec)))
+        .collect();
+    let base = out
+        .iter()
+        .find(|(name, _)| name.contains("002-"))
+        .map(|(_, bytes)| bytes.clone())
+        .expect("base vector 002");
+    // Corruptions that only apply to raw rows (encoding 0) start from the raw twin of 002.
+    let raw_base = out
+        .iter()
+        .find(|(name, _)| name.contains("007-"))
+        .map(|(_, bytes)| bytes.clone())
+        .expect("base vector 007");
+    for (name, corrupt) in invalid_specs() {
+        if let Some(bytes) = corrupt(base.clone()).or_else(|| corrupt(raw_base.clone())) {
+            out.push((format!("invalid/{name}.pvis"), bytes));
+        }
+    }
+    out
+}
+
+/// Rewrites every vector and expectation file (the directories are emptied first, so
+/// vectors the generator no longer makes disappear).
+fn regenerate(vectors: &[(String, Vec<u8>)]) {
+    for dir in ["valid", "invalid"] {
+        let dir = root().join(dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if matches!(
+                path.extension().and_then(|e| e.to_str()),
+                Some("pvis" | "dump" | "err")
+            ) {
+                std::fs::remove_file(path).unwrap();
+            }
+        }
+    }
+    for (name, bytes) in vectors {
+        let path = root().join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let (expectation, text) = match Pvis::parse(bytes) {
+            Ok(pvis) => (path.with_extension("dump"), dump(&pvis)),
+            Err(e) => (path.with_extension("err"), format!("{e}\n")),
+        };
+        let expected_dir = if name.starts_with("valid/") {
+            "dump"
+        } else {
+            "err"
+        };
+        assert_eq!(
+            expectation.extension().unwrap(),
+            expected_dir,
+            "{name}: the reader's verdict disagrees with the generator's intent"
+        );
+        std::fs::write(expectation, text).unwrap();
+    }
+}
+
+/// The vector files on disk, sorted.
+fn vector_files() -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = ["valid", "invalid"]
+        .iter()
+        .flat_map(|dir| std::fs::read_dir(root().join(dir)).unwrap())
+        .map(|entry| entry.unwrap().path())
+        .filter(|path| path.extension().is_some_and(|e| e == "pvis"))
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn conformance_vectors() {
+    let generated = generate();
+    if std::env::var_os(REGENERATE_VAR).is_some_and(|v| v == "1") {
+        regenerate(&generated);
+    }
+    let mut failures = Vec::new();
+
+    // The files must be exactly what the writer and generator make today.
+    for (name, bytes) in &generated {
+        match std::fs::read(root().join(name)) {
+            Ok(stored) if &stored == bytes => {}
+            Ok(_) => failures.push(format!("{name}: differs from what the generator makes")),
+            Err(e) => failures.push(format!("{name}: {e}")),
+        }
+    }
+    let files = vector_files();
+    if files.len() != generated.len() {
+        failures.push(format!(
+            "{} vector files on disk, the generator makes {}",
+            files.len(),
+            generated.len()
+        ));
+    }
+
+    for path in &files {
+        if let Err(why) = check(path) {
+            failures.push(format!("{}: {why}", path.display()));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} conformance failures (after an intended format change, run \
+         `{REGENERATE_VAR}=1 cargo test --test conformance` and review the diff):\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
+
+/// The driver itself must catch a wrong dump, a wrong error and an accepted invalid file.
+#[test]
+fn check_detects_wrong_expectations() {
+    let dir = tempfile::tempdir().unwrap();
+    let valid = dir.path().join("valid");
+    let invalid = dir.path().join("invalid");
+    std::fs::create_dir_all(&valid).unwrap();
+    std::fs::create_dir_all(&invalid).unwrap();
+    let bytes = build_valid(&valid_specs()[1]);
+    let pvis = Pvis::parse(&bytes).unwrap();
+
+    std::fs::write(valid.join("a.pvis"), &bytes).unwrap();
+    std::fs::write(valid.join("a.dump"), dump(&pvis)).unwrap();
+    assert_eq!(check(&valid.join("a.pvis")), Ok(()));
+    std::fs::write(
+        valid.join("a.dump"),
+        dump(&pvis).replace("view 3:", "view 4:"),
+    )
+    .unwrap();
+    assert!(check(&valid.join("a.pvis")).unwrap_err().contains("view 3"));
+
+    std::fs::write(invalid.join("b.pvis"), &bytes).unwrap();
+    std::fs::write(invalid.join("b.err"), "anything\n").unwrap();
+    assert_eq!(
+        check(&invalid.join("b.pvis")),
+        Err("accepted an invalid vector".into())
+    );
+    std::fs::write(invalid.join("b.pvis"), &bytes[..bytes.len() - 1]).unwrap();
+    assert!(
+        check(&invalid.join("b.pvis"))
+            .unwrap_err()
+            .starts_with("wrong error")
+    );
+}
