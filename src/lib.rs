@@ -32,3 +32,8 @@ pub mod tiling;
 
 #[cfg(all(feature = "bake", not(feature = "std")))]
 compile_error!("the `bake` feature needs `std`");
+
+/// Compiles the README's Rust examples as doctests, so they stay true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
