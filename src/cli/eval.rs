@@ -482,13 +482,16 @@ fn run_sweep(args: &EvalArgs) -> Result<()> {
     let points = patchvis::eval::sweep(&mesh, &settings, &bars, &mut |p| {
         if verbose {
             eprintln!(
-                "sweep: {} patches, level {}: culling {:.1}%, missed pixels {:.1} mean / {} max, identical {:.1}%, {} bytes ({:.0} s)",
+                "sweep: {} patches, level {}: culling {:.1}% (ideal {:.1}%), missed pixels {:.1} mean / {} p95 / {} max, identical {:.1}%, {} views missing a patch, {} bytes ({:.0} s)",
                 p.patches,
                 p.level,
                 100.0 * p.summary.culling_rate.mean,
+                100.0 * p.summary.ideal_culling_rate.mean,
                 p.summary.missed_pixels.mean,
+                p.summary.missed_pixels.p95,
                 p.summary.missed_pixels.max,
                 100.0 * p.summary.identical_views_fraction(),
+                p.summary.views_missing_a_patch,
                 p.file_bytes,
                 start.elapsed().as_secs_f64()
             );
