@@ -238,7 +238,7 @@ fn panel(out: &mut String, chart: &Chart, top: f64) {
         let p = px(x);
         let _ = writeln!(
             out,
-            r##"<line x1="{p}" y1="{y0}" x2="{p}" y2="{y1}" stroke="#ddd"/><text x="{p}" y="{}" text-anchor="middle">{}</text>"##,
+            r##"<line x1="{p:.1}" y1="{y0}" x2="{p:.1}" y2="{y1}" stroke="#ddd"/><text x="{p:.1}" y="{}" text-anchor="middle">{}</text>"##,
             y1 + 16.0,
             label(x)
         );
@@ -261,12 +261,12 @@ fn panel(out: &mut String, chart: &Chart, top: f64) {
             if side == Axis::Left {
                 let _ = writeln!(
                     out,
-                    r##"<line x1="{x0}" y1="{p}" x2="{x1}" y2="{p}" stroke="#eee"/>"##
+                    r##"<line x1="{x0}" y1="{p:.1}" x2="{x1}" y2="{p:.1}" stroke="#eee"/>"##
                 );
             }
             let _ = writeln!(
                 out,
-                r#"<text x="{tx}" y="{}" text-anchor="{anchor}">{}</text>"#,
+                r#"<text x="{tx}" y="{:.1}" text-anchor="{anchor}">{}</text>"#,
                 p + 4.0,
                 label(y)
             );
