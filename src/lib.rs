@@ -21,6 +21,8 @@ pub mod eval;
 #[cfg(feature = "bake")]
 pub mod format;
 #[cfg(feature = "bake")]
+pub mod generate;
+#[cfg(feature = "bake")]
 pub mod ooc;
 #[cfg(feature = "bake")]
 pub mod progress;

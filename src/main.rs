@@ -35,6 +35,7 @@ fn main() -> ExitCode {
         Command::Info(args) => cli::inspect::info(&args),
         Command::Query(args) => cli::inspect::query(&args),
         Command::Eval(args) => cli::eval::run(args),
+        Command::Gen(args) => cli::generate::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

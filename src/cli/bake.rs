@@ -6,7 +6,7 @@ use super::progress::Bars;
 use super::{UsageError, alloc};
 use anyhow::{Context, Result};
 use patchvis::format::{self, BakeContents};
-use patchvis::ooc::Mesh;
+use patchvis::ooc::{Mesh, OpenOptions, default_cache_dir};
 use patchvis::sampler::{self, SamplingParams};
 use patchvis::sphere::{MAX_LEVEL, view_count};
 use patchvis::tiling;
@@ -30,6 +30,35 @@ pub struct Settings {
     mesh_out: Option<PathBuf>,
     stats: Option<PathBuf>,
     quiet: bool,
+    /// Heap budget in bytes (`--memory`, or [`default_memory_budget`]).
+    memory_budget: u64,
+}
+
+/// Smallest default budget: below this the machine is too small to bake anything large
+/// anyway, and a tiny budget would only make conversion slow.
+const MIN_DEFAULT_BUDGET: u64 = 256 << 20;
+
+/// Half of `MemAvailable` from `/proc/meminfo` (the other half left to the page cache that
+/// serves the mapped mesh), at least [`MIN_DEFAULT_BUDGET`]; the library default where the
+/// file is missing (not Linux).
+pub fn default_memory_budget() -> u64 {
+    let available_kib = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|text| {
+            text.lines()
+                .find_map(|l| l.strip_prefix("MemAvailable:"))
+                .and_then(|rest| {
+                    rest.trim()
+                        .trim_end_matches("kB")
+                        .trim()
+                        .parse::<u64>()
+                        .ok()
+                })
+        });
+    match available_kib {
+        Some(kib) => (kib * 1024 / 2).max(MIN_DEFAULT_BUDGET),
+        None => patchvis::ooc::DEFAULT_MEMORY_BUDGET,
+    }
 }
 
 impl Settings {
@@ -77,6 +106,7 @@ impl Settings {
             mesh_out: args.mesh_out,
             stats: args.stats,
             quiet: args.quiet,
+            memory_budget: args.memory.unwrap_or_else(default_memory_budget),
         })
     }
 }
@@ -129,9 +159,17 @@ pub fn run(args: BakeArgs) -> Result<()> {
     let start = Instant::now();
     let mut stages = Vec::new();
 
-    let mesh = stage(&mut stages, "input", || Mesh::open(&s.input))?;
-    let tiling = stage(&mut stages, "tiling", || tiling::tile(&mesh, s.patches))
-        .with_context(|| format!("{}: tiling failed", s.input.display()))?;
+    let open = OpenOptions {
+        cache_dir: Some(default_cache_dir()),
+        memory_budget: s.memory_budget,
+    };
+    let mesh = stage(&mut stages, "input", || {
+        bars.spin("reading", || Mesh::open_with(&s.input, &open))
+    })?;
+    let tiling = stage(&mut stages, "tiling", || {
+        bars.spin("tiling", || tiling::tile(&mesh, s.patches))
+    })
+    .with_context(|| format!("{}: tiling failed", s.input.display()))?;
     let patch_count = tiling.patches.len() as u32;
     let params = SamplingParams::for_mesh(&mesh, s.level, s.resolution, s.fov_deg);
     let visibility = stage(&mut stages, "sampling", || {
@@ -143,7 +181,9 @@ pub fn run(args: BakeArgs) -> Result<()> {
         patches: &tiling.patches,
         visibility: &visibility,
     };
-    let bytes = stage(&mut stages, "encoding", || format::encode(&contents));
+    let bytes = stage(&mut stages, "encoding", || {
+        bars.spin("encoding", || format::encode(&contents))
+    });
     let visibility_bytes = patchvis::runtime::Pvis::parse(&bytes)
         .map(|p| p.visibility_bytes())
         .context("internal error: the written file does not parse")?;
@@ -184,6 +224,8 @@ pub fn run(args: BakeArgs) -> Result<()> {
             "output": s.output.display().to_string(),
             "triangles": mesh.triangle_count(),
             "vertices": mesh.vertex_count(),
+            "mesh_source": format!("{:?}", mesh.source()),
+            "memory_budget_bytes": s.memory_budget,
             "patches": patch_count,
             "patch_triangles": {"min": sizes[0], "median": sizes[sizes.len() / 2], "max": sizes[sizes.len() - 1]},
             "level": s.level,

@@ -197,9 +197,13 @@ impl<'m> Evaluator<'m> {
             .render(mesh, &self.identity, camera, &mut s.full);
         let full_seconds = start.elapsed().as_secs_f64();
 
-        let visible = pvis.query(eye, &mut s.answer);
+        let visible = pvis.query(eye, &mut s.scratch);
         let inside_sphere = visible.inside_sphere;
         let answer_patches = visible.count();
+        s.answer.fill(0);
+        for (word, &bits) in s.answer.iter_mut().zip(visible.bits()) {
+            *word = bits;
+        }
         let culled = self.culled_mesh(|p| visible.contains(p), &mut s.remap);
 
         s.reconstruction.clear();
@@ -307,7 +311,11 @@ struct Scratch {
     rasterizer: Rasterizer,
     full: IdBuffer,
     reconstruction: IdBuffer,
+    /// The query's scratch space.
+    scratch: Vec<u64>,
+    /// The answer's bits, one row.
     answer: Vec<u64>,
+    /// The patches the full render shows, one row.
     seen: Vec<u64>,
     remap: Vec<u32>,
 }
@@ -318,7 +326,8 @@ impl Scratch {
             rasterizer: Rasterizer::new(),
             full: IdBuffer::new(1),
             reconstruction: IdBuffer::new(1),
-            answer: vec![0; pvis.scratch_words()],
+            scratch: vec![0; pvis.scratch_words()],
+            answer: vec![0; pvis.row_words()],
             seen: vec![0; pvis.row_words()],
             remap: Vec::new(),
         }
