@@ -5,7 +5,8 @@
 //! polygonal patches", and the modules follow the data:
 //!
 //! [`ooc`] (memory-mapped mesh) → [`tiling`] (patches) → [`sphere`] (sampling directions) →
-//! [`sampler`] (ID buffers → bitfields) → [`format`](mod@format) (`.pvis` writer) → [`runtime`] (reader).
+//! [`sampler`] (ID buffers → bitfields) → [`format`](mod@format) (`.pvis` writer) → [`runtime`] (reader), and [`eval`] measures what
+//! a renderer drawing only the answer shows.
 //!
 //! Only [`sphere`] and [`runtime`] exist without the `bake` feature; they need nothing but
 //! `core`. See `ARCHITECTURE.md` for the invariants and `spec/FORMAT.md` for the file format.
@@ -17,6 +18,8 @@ pub mod capi;
 pub mod runtime;
 pub mod sphere;
 
+#[cfg(feature = "bake")]
+pub mod eval;
 #[cfg(feature = "bake")]
 pub mod format;
 #[cfg(feature = "bake")]

@@ -34,6 +34,7 @@ fn main() -> ExitCode {
         Command::Bake(args) => cli::bake::run(args),
         Command::Info(args) => cli::inspect::info(&args),
         Command::Query(args) => cli::inspect::query(&args),
+        Command::Eval(args) => cli::eval::run(args),
         Command::Gen(args) => cli::generate::run(&args),
         Command::Verify(args) => return cli::verify::run(&args),
     };

@@ -22,6 +22,8 @@ pub enum Command {
     Info(InfoArgs),
     /// Which patches (and triangle ranges) a camera at a position sees.
     Query(QueryArgs),
+    /// Measure what users see: missed pixels, culling rate, popping, frame cost, pictures.
+    Eval(EvalArgs),
     /// Write a huge, real-looking test mesh (binary PLY), streaming and deterministic.
     #[command(alias = "generate")]
     Gen(GenArgs),
@@ -167,6 +169,72 @@ pub struct QueryArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `patchvis eval`.
+#[derive(Debug, clap::Args)]
+pub struct EvalArgs {
+    /// The mesh the file was baked from: the original input, not the --mesh-out PLY (the
+    /// triangle → patch map is re-derived by tiling it again, and checked against the file).
+    pub mesh: PathBuf,
+    /// The .pvis file (not with --sweep, which bakes its own).
+    #[arg(required_unless_present = "sweep", value_name = "FILE.pvis")]
+    pub file: Option<PathBuf>,
+    /// Number of seeded random camera positions.
+    #[arg(long, default_value_t = 200, value_name = "N")]
+    pub views: u32,
+    /// Seed of the random camera positions.
+    #[arg(long, default_value_t = 1, value_name = "S")]
+    pub seed: u64,
+    /// Camera distance over the sampling distance (< 1 nearer, > 1 farther).
+    #[arg(long, default_value_t = 1.0, value_name = "K")]
+    pub distance_scale: f32,
+    /// Render resolution [default: the file's sampling resolution; 512 with --sweep].
+    #[arg(long, value_name = "PX")]
+    pub resolution: Option<u32>,
+    /// Evaluate at the sampling positions of sphere level L (at most the file's level) instead
+    /// of random ones.
+    #[arg(long, value_name = "L", conflicts_with_all = ["path", "sweep"])]
+    pub sampling_level: Option<u32>,
+    /// Evaluate frame by frame along a path: `orbit` or `orbit:N` (N frames, default 120), or a
+    /// camera path file (one camera per line: `X Y Z` or `X Y Z TX TY TZ`).
+    #[arg(long, value_name = "orbit[:N]|FILE", conflicts_with = "sweep")]
+    pub path: Option<String>,
+    /// Directory for pictures: PNGs of the worst views (full | reconstruction | difference),
+    /// and SVG plots of the path or the sweep.
+    #[arg(long, value_name = "DIR")]
+    pub png: Option<PathBuf>,
+    /// How many of the worst views get a PNG.
+    #[arg(long, default_value_t = 3, value_name = "N")]
+    pub worst: u32,
+    /// Bake the mesh for every patch count and level of the lists and evaluate each.
+    #[arg(long)]
+    pub sweep: bool,
+    /// Patch counts of the sweep.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "50,300,1000,2000,4000",
+        value_name = "P,P,.."
+    )]
+    pub sweep_patches: Vec<u32>,
+    /// Sphere levels of the sweep.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "0,1,2,3,4,5",
+        value_name = "L,L,.."
+    )]
+    pub sweep_levels: Vec<u32>,
+    /// Field of view of the sweep's bakes, degrees.
+    #[arg(long, default_value_t = 45.0, value_name = "DEG")]
+    pub fov: f32,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Print nothing but the report and errors; no progress.
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
 fn parse_point(s: &str) -> Result<[f32; 3], String> {

@@ -1,0 +1,674 @@
+//! `patchvis eval`: checked settings, then the library's evaluation (`patchvis::eval`) over
+//! random views, sampling views or a path, or a sweep of bakes; a text or JSON report, PNGs of
+//! the worst views and SVG plots.
+
+use super::UsageError;
+use super::args::EvalArgs;
+use super::progress::Bars;
+use anyhow::{Context, Result, anyhow};
+use patchvis::eval::plot::{self, Axis, Chart, Series};
+use patchvis::eval::shade::RgbImage;
+use patchvis::eval::views::{self, PathCamera};
+use patchvis::eval::{
+    EvalSummary, Evaluator, SweepPoint, SweepSettings, ViewMetrics, metrics::Summary,
+    sampling_params,
+};
+use patchvis::format::write_atomic;
+use patchvis::ooc::Mesh;
+use patchvis::runtime::Pvis;
+use patchvis::sampler::{Camera, MAX_RESOLUTION};
+use patchvis::sphere::{MAX_LEVEL, view_count};
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Frames of `--path orbit` without a count.
+const DEFAULT_ORBIT_FRAMES: u32 = 120;
+/// Resolution of `--sweep`'s bakes unless `--resolution` says otherwise (the bake default).
+const DEFAULT_SWEEP_RESOLUTION: u32 = 512;
+/// Identical frames have infinite PSNR; the path plot draws them at this height.
+const PSNR_PLOT_CAP_DB: f64 = 60.0;
+
+/// Which cameras to evaluate.
+#[derive(Debug)]
+enum Views {
+    /// Seeded random positions on the (scaled) sampling sphere.
+    Random { count: u32, seed: u64 },
+    /// The sampling positions of a sphere level.
+    Sampling { level: u32 },
+    /// An orbit of `frames` frames.
+    Orbit { frames: u32 },
+    /// Cameras from a file.
+    PathFile(PathBuf),
+}
+
+fn parse_path(spec: &str) -> Result<Views, UsageError> {
+    let Some(rest) = spec.strip_prefix("orbit") else {
+        return Ok(Views::PathFile(PathBuf::from(spec)));
+    };
+    let frames = match rest.strip_prefix(':') {
+        None if rest.is_empty() => DEFAULT_ORBIT_FRAMES,
+        Some(n) => match n.parse::<u32>() {
+            Ok(n) if n > 0 => n,
+            _ => {
+                return Err(UsageError(format!(
+                    "--path {spec}: expected orbit:N with N a positive frame count"
+                )));
+            }
+        },
+        // "orbitfoo" is a file name.
+        None => return Ok(Views::PathFile(PathBuf::from(spec))),
+    };
+    Ok(Views::Orbit { frames })
+}
+
+fn usage(condition: bool, message: impl FnOnce() -> String) -> Result<(), UsageError> {
+    if condition {
+        Err(UsageError(message()))
+    } else {
+        Ok(())
+    }
+}
+
+/// Runs `patchvis eval`.
+pub fn run(args: EvalArgs) -> Result<()> {
+    usage(
+        !(args.distance_scale.is_finite() && args.distance_scale > 0.0),
+        || {
+            format!(
+                "--distance-scale {}: expected a positive number",
+                args.distance_scale
+            )
+        },
+    )?;
+    if let Some(r) = args.resolution {
+        usage(r == 0 || r > MAX_RESOLUTION, || {
+            format!("--resolution {r}: expected 1 to {MAX_RESOLUTION} pixels")
+        })?;
+    }
+    if let Some(dir) = &args.png {
+        check_output_dir(dir)?;
+    }
+    if args.sweep {
+        return run_sweep(&args);
+    }
+    let views = match (&args.path, args.sampling_level) {
+        (Some(spec), _) => parse_path(spec)?,
+        (None, Some(level)) => Views::Sampling { level },
+        (None, None) => {
+            usage(args.views == 0, || "--views 0: expected at least 1".into())?;
+            Views::Random {
+                count: args.views,
+                seed: args.seed,
+            }
+        }
+    };
+    let file = args
+        .file
+        .clone()
+        .ok_or_else(|| UsageError("expected FILE.pvis (or --sweep)".into()))?;
+
+    let bars = Bars::new(!args.quiet && !args.json);
+    let start = Instant::now();
+    let mesh = Mesh::open(&args.mesh)?;
+    let bytes = std::fs::read(&file).with_context(|| format!("{}: cannot read", file.display()))?;
+    let pvis = Pvis::parse(&bytes).map_err(|e| anyhow!("{}: {e}", file.display()))?;
+    let evaluator = Evaluator::new(&mesh, &pvis).map_err(|e| {
+        anyhow!(
+            "{} was not baked from {} with these settings: {e}",
+            file.display(),
+            args.mesh.display()
+        )
+    })?;
+    let sampling = pvis.sampling();
+    let resolution = args.resolution.unwrap_or(sampling.resolution);
+    let params = sampling_params(&pvis, resolution, args.distance_scale);
+    let cameras: Vec<Camera> = match &views {
+        Views::Random { count, seed } => views::random_directions(*count, *seed)
+            .into_iter()
+            .map(|d| Camera::sampling(&params, d))
+            .collect(),
+        Views::Sampling { level } => {
+            usage(*level > sampling.level, || {
+                format!(
+                    "--sampling-level {level}: expected at most the file's level {}",
+                    sampling.level
+                )
+            })?;
+            (0..view_count(*level))
+                .map(|v| Camera::sampling_view(&params, v))
+                .collect()
+        }
+        Views::Orbit { frames } => views::orbit_directions(*frames)
+            .into_iter()
+            .map(|d| Camera::sampling(&params, d))
+            .collect(),
+        Views::PathFile(path) => {
+            path_cameras(path, &sampling.center, sampling.fov_deg, resolution)?
+        }
+    };
+    let metrics = evaluator.evaluate(&pvis, &cameras, &bars);
+    let summary = EvalSummary::of(&metrics);
+    let seconds = start.elapsed().as_secs_f64();
+    let is_path = matches!(views, Views::Orbit { .. } | Views::PathFile(_));
+
+    let mut written = Vec::new();
+    if let Some(dir) = &args.png {
+        let prefix = if is_path { "frame" } else { "view" };
+        for index in worst(&metrics, args.worst) {
+            let pictures = evaluator.pictures(&pvis, &cameras[index]);
+            let image = RgbImage::side_by_side(&[
+                &pictures.full,
+                &pictures.reconstruction,
+                &pictures.difference,
+            ]);
+            let path = dir.join(format!("{prefix}-{index:04}.png"));
+            write_png(&path, &image)?;
+            written.push(path);
+        }
+        if is_path {
+            let path = dir.join("path.svg");
+            write_atomic(&path, path_plot(&metrics).as_bytes())
+                .with_context(|| format!("{}: cannot write", path.display()))?;
+            written.push(path);
+        }
+    }
+
+    let mode = match &views {
+        Views::Random { .. } => "random".to_string(),
+        Views::Sampling { level } => format!("sampling level {level}"),
+        Views::Orbit { frames } => format!("orbit of {frames} frames"),
+        Views::PathFile(p) => format!("path {}", p.display()),
+    };
+    if args.json {
+        let mut report = summary_json(&summary);
+        let extra = json!({
+            "mesh": args.mesh.display().to_string(),
+            "file": file.display().to_string(),
+            "mode": mode,
+            "seed": args.seed,
+            "distance_scale": args.distance_scale,
+            "resolution": resolution,
+            "patches": pvis.patch_count(),
+            "triangles": mesh.triangle_count(),
+            "level": sampling.level,
+            "sampling_views": sampling.views,
+            "file_bytes": pvis.total_bytes(),
+            "seconds": seconds,
+            "pictures": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+            "per_view": metrics.iter().enumerate().map(|(i, m)| view_json(i, m)).collect::<Vec<_>>(),
+        });
+        merge(&mut report, extra);
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!(
+            "{} with {}: {} patches over {} triangles, level {} ({} views), {} bytes",
+            args.mesh.display(),
+            file.display(),
+            pvis.patch_count(),
+            mesh.triangle_count(),
+            sampling.level,
+            sampling.views,
+            pvis.total_bytes()
+        );
+        println!(
+            "eval: {} views ({mode}{}) at {resolution}x{resolution} px, distance x{} ({seconds:.1} s)",
+            summary.views,
+            match views {
+                Views::Random { seed, .. } => format!(", seed {seed}"),
+                _ => String::new(),
+            },
+            args.distance_scale
+        );
+        print_summary(&summary, is_path);
+        for path in &written {
+            println!("wrote {}", path.display());
+        }
+    }
+    Ok(())
+}
+
+/// The picture directory: created if missing; anything else there is a usage error.
+fn check_output_dir(dir: &Path) -> Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(UsageError(format!(
+            "--png {}: is a file, expected a directory",
+            dir.display()
+        ))
+        .into());
+    }
+    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))
+}
+
+fn path_cameras(path: &Path, center: &[f32; 3], fov: f32, resolution: u32) -> Result<Vec<Camera>> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read", path.display()))?;
+    let cameras =
+        views::parse_camera_path(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    cameras
+        .iter()
+        .enumerate()
+        .map(|(i, &PathCamera { eye, target })| {
+            let target = target.unwrap_or(*center);
+            if eye == target {
+                return Err(anyhow!(
+                    "{}: camera {}: the eye is at the model's centre, expected it elsewhere",
+                    path.display(),
+                    i + 1
+                ));
+            }
+            Ok(Camera::look_at(eye, target, fov, resolution))
+        })
+        .collect()
+}
+
+/// Indices of the `n` views with the most missed pixels (ties: lower index first).
+fn worst(metrics: &[ViewMetrics], n: u32) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..metrics.len()).collect();
+    order.sort_by_key(|&i| (std::cmp::Reverse(metrics[i].missed_pixels), i));
+    order.truncate(n as usize);
+    order
+}
+
+fn write_png(path: &Path, image: &RgbImage) -> Result<()> {
+    let mut bytes = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut bytes, image.width, image.height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header()?;
+        writer.write_image_data(&image.pixels)?;
+        writer.finish()?;
+    }
+    write_atomic(path, &bytes).with_context(|| format!("{}: cannot write", path.display()))
+}
+
+fn summary_fields(out: &mut serde_json::Map<String, Value>, name: &str, s: &Summary) {
+    out.insert(format!("{name}_mean"), json!(s.mean));
+    out.insert(format!("{name}_p95"), json!(s.p95));
+    out.insert(format!("{name}_max"), json!(s.max));
+    out.insert(format!("{name}_min"), json!(s.min));
+}
+
+/// The aggregate as flat JSON fields (`missed_pixels_mean`, …).
+fn summary_json(s: &EvalSummary) -> Value {
+    let mut out = serde_json::Map::new();
+    out.insert("views".into(), json!(s.views));
+    out.insert("identical_views".into(), json!(s.identical_views));
+    out.insert(
+        "identical_views_fraction".into(),
+        json!(s.identical_views_fraction()),
+    );
+    out.insert(
+        "views_missing_a_patch".into(),
+        json!(s.views_missing_a_patch),
+    );
+    summary_fields(&mut out, "missed_pixels", &s.missed_pixels);
+    summary_fields(&mut out, "missed_patches", &s.missed_patches);
+    summary_fields(&mut out, "triangles_drawn", &s.triangles_drawn);
+    summary_fields(&mut out, "culling_rate", &s.culling_rate);
+    summary_fields(&mut out, "ideal_culling_rate", &s.ideal_culling_rate);
+    if let Some(p) = &s.psnr_db_differing {
+        summary_fields(&mut out, "psnr_db_differing", p);
+    }
+    out.insert(
+        "frame_cost".into(),
+        json!({
+            "full_ms_median": s.frame_cost.full_ms_median,
+            "culled_ms_median": s.frame_cost.culled_ms_median,
+            "speedup": s.frame_cost.speedup,
+        }),
+    );
+    Value::Object(out)
+}
+
+fn view_json(index: usize, m: &ViewMetrics) -> Value {
+    json!({
+        "index": index,
+        "eye": m.eye,
+        "inside_sphere": m.inside_sphere,
+        "covered_pixels": m.covered_pixels,
+        "missed_pixels": m.missed_pixels,
+        "visible_patches": m.visible_patches,
+        "answer_patches": m.answer_patches,
+        "missed_patches": m.missed_patches,
+        "triangles_drawn": m.triangles_drawn,
+        "culling_rate": m.culling_rate,
+        "ideal_culling_rate": m.ideal_culling_rate,
+        // Infinite (identical pictures) becomes null.
+        "psnr_db": m.psnr_db,
+        "full_ms": 1e3 * m.full_seconds,
+        "culled_ms": 1e3 * m.culled_seconds,
+    })
+}
+
+fn merge(into: &mut Value, from: Value) {
+    if let (Value::Object(a), Value::Object(b)) = (into, from) {
+        a.extend(b);
+    }
+}
+
+fn print_summary(s: &EvalSummary, is_path: bool) {
+    let unit = if is_path { "frames" } else { "views" };
+    println!("{:<22}{:>12}{:>12}{:>12}", "", "mean", "p95", "max");
+    let row = |name: &str, x: &Summary, percent: bool| {
+        let f = |v: f64| {
+            if percent {
+                format!("{:.1}%", 100.0 * v)
+            } else {
+                format!("{v:.1}")
+            }
+        };
+        println!(
+            "{name:<22}{:>12}{:>12}{:>12}",
+            f(x.mean),
+            f(x.p95),
+            f(x.max)
+        );
+    };
+    row("missed pixels", &s.missed_pixels, false);
+    row("missed patches", &s.missed_patches, false);
+    row("triangles drawn", &s.triangles_drawn, false);
+    row("culling rate", &s.culling_rate, true);
+    row("ideal culling", &s.ideal_culling_rate, true);
+    println!(
+        "pixel-identical {unit}: {}/{} ({:.1}%); {unit} missing a visible patch: {}",
+        s.identical_views,
+        s.views,
+        100.0 * s.identical_views_fraction(),
+        s.views_missing_a_patch
+    );
+    if let Some(p) = &s.psnr_db_differing {
+        println!(
+            "PSNR of the {unit} that differ: mean {:.1} dB, worst {:.1} dB",
+            p.mean, p.min
+        );
+    }
+    println!(
+        "frame cost (CPU rasterizer, median per view): full {:.2} ms, culled {:.2} ms, speed-up {:.2}x",
+        s.frame_cost.full_ms_median, s.frame_cost.culled_ms_median, s.frame_cost.speedup
+    );
+}
+
+/// Missed pixels and PSNR per frame, and where a visible patch is missing.
+fn path_plot(metrics: &[ViewMetrics]) -> String {
+    let frames = |f: &dyn Fn(&ViewMetrics) -> f64| -> Vec<(f64, f64)> {
+        metrics
+            .iter()
+            .enumerate()
+            .map(|(i, m)| (i as f64, f(m)))
+            .collect()
+    };
+    let popping = Chart {
+        title: "Popping along the path".into(),
+        x_label: "frame".into(),
+        x_log: false,
+        left_label: "missed pixels".into(),
+        right_label: "missed patches".into(),
+        series: vec![
+            Series {
+                name: "missed pixels".into(),
+                points: frames(&|m| m.missed_pixels as f64),
+                axis: Axis::Left,
+                colour: 1,
+            },
+            Series {
+                name: "missed visible patches".into(),
+                points: frames(&|m| f64::from(m.missed_patches)),
+                axis: Axis::Right,
+                colour: 0,
+            },
+        ],
+    };
+    let quality = Chart {
+        title: format!(
+            "PSNR, shaded full vs reconstructed (identical frames at {PSNR_PLOT_CAP_DB} dB)"
+        ),
+        x_label: "frame".into(),
+        x_log: false,
+        left_label: "PSNR (dB)".into(),
+        right_label: "culling rate (%)".into(),
+        series: vec![
+            Series {
+                name: "PSNR".into(),
+                points: frames(&|m| m.psnr_db.min(PSNR_PLOT_CAP_DB)),
+                axis: Axis::Left,
+                colour: 2,
+            },
+            Series {
+                name: "culling rate".into(),
+                points: frames(&|m| 100.0 * m.culling_rate),
+                axis: Axis::Right,
+                colour: 0,
+            },
+        ],
+    };
+    plot::svg(&[popping, quality])
+}
+
+fn run_sweep(args: &EvalArgs) -> Result<()> {
+    usage(args.views == 0, || "--views 0: expected at least 1".into())?;
+    usage(args.sweep_patches.contains(&0), || {
+        "--sweep-patches: expected patch counts of at least 1".into()
+    })?;
+    if let Some(&l) = args.sweep_levels.iter().find(|&&l| l > MAX_LEVEL) {
+        return Err(UsageError(format!(
+            "--sweep-levels: level {l}, expected 0 to {MAX_LEVEL}"
+        ))
+        .into());
+    }
+    usage(
+        !(args.fov.is_finite() && args.fov > 0.0 && args.fov < 180.0),
+        || {
+            format!(
+                "--fov {}: expected degrees between 0 and 180, exclusive",
+                args.fov
+            )
+        },
+    )?;
+    let settings = SweepSettings {
+        patches: args.sweep_patches.clone(),
+        levels: args.sweep_levels.clone(),
+        resolution: args.resolution.unwrap_or(DEFAULT_SWEEP_RESOLUTION),
+        fov_deg: args.fov,
+        views: args.views,
+        seed: args.seed,
+        distance_scale: args.distance_scale,
+    };
+    let mesh = Mesh::open(&args.mesh)?;
+    let bars = Bars::new(!args.quiet && !args.json);
+    let start = Instant::now();
+    let verbose = !args.quiet;
+    let points = patchvis::eval::sweep(&mesh, &settings, &bars, &mut |p| {
+        if verbose {
+            eprintln!(
+                "sweep: {} patches, level {}: culling {:.1}% (ideal {:.1}%), missed pixels {:.1} mean / {} p95 / {} max, identical {:.1}%, {} views missing a patch, {} bytes ({:.0} s)",
+                p.patches,
+                p.level,
+                100.0 * p.summary.culling_rate.mean,
+                100.0 * p.summary.ideal_culling_rate.mean,
+                p.summary.missed_pixels.mean,
+                p.summary.missed_pixels.p95,
+                p.summary.missed_pixels.max,
+                100.0 * p.summary.identical_views_fraction(),
+                p.summary.views_missing_a_patch,
+                p.file_bytes,
+                start.elapsed().as_secs_f64()
+            );
+        }
+    })
+    .with_context(|| format!("{}: sweep failed", args.mesh.display()))?;
+
+    let mut written = Vec::new();
+    if let Some(dir) = &args.png {
+        for (name, svg) in sweep_plots(&points) {
+            let path = dir.join(name);
+            write_atomic(&path, svg.as_bytes())
+                .with_context(|| format!("{}: cannot write", path.display()))?;
+            written.push(path);
+        }
+    }
+    if args.json {
+        let rows: Vec<Value> = points
+            .iter()
+            .map(|p| {
+                let mut row = summary_json(&p.summary);
+                merge(
+                    &mut row,
+                    json!({"patches": p.patches, "level": p.level, "sampling_views": p.sampling_views, "file_bytes": p.file_bytes}),
+                );
+                row
+            })
+            .collect();
+        let report = json!({
+            "mesh": args.mesh.display().to_string(),
+            "triangles": mesh.triangle_count(),
+            "resolution": settings.resolution,
+            "fov_deg": settings.fov_deg,
+            "views": settings.views,
+            "seed": settings.seed,
+            "distance_scale": settings.distance_scale,
+            "seconds": start.elapsed().as_secs_f64(),
+            "points": rows,
+            "pictures": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+        });
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!(
+            "{}: {} triangles; {} random views (seed {}) at {} px",
+            args.mesh.display(),
+            mesh.triangle_count(),
+            settings.views,
+            settings.seed,
+            settings.resolution
+        );
+        println!(
+            "| patches | level | views | file bytes | culling | ideal culling | identical views | views with a miss | missed px mean / p95 / max |"
+        );
+        println!("|---|---|---|---|---|---|---|---|---|");
+        for p in &points {
+            let s = &p.summary;
+            println!(
+                "| {} | {} | {} | {} | {:.1}% | {:.1}% | {:.1}% | {}/{} | {:.1} / {} / {} |",
+                p.patches,
+                p.level,
+                p.sampling_views,
+                p.file_bytes,
+                100.0 * s.culling_rate.mean,
+                100.0 * s.ideal_culling_rate.mean,
+                100.0 * s.identical_views_fraction(),
+                s.views - s.identical_views,
+                s.views,
+                s.missed_pixels.mean,
+                s.missed_pixels.p95,
+                s.missed_pixels.max
+            );
+        }
+        for path in &written {
+            println!("wrote {}", path.display());
+        }
+    }
+    Ok(())
+}
+
+/// The seed paper's Figures 4–5 for this mesh: culling rate and missed pixels against the
+/// number of sampling views (one line per patch count) and against the patch count (one line
+/// per level), with the file size on the right axis.
+fn sweep_plots(points: &[SweepPoint]) -> Vec<(&'static str, String)> {
+    let mut patches: Vec<u32> = points.iter().map(|p| p.patches).collect();
+    patches.sort_unstable();
+    patches.dedup();
+    let mut levels: Vec<u32> = points.iter().map(|p| p.level).collect();
+    levels.sort_unstable();
+    levels.dedup();
+    type Metric = fn(&SweepPoint) -> f64;
+    let culling: Metric = |p| 100.0 * p.summary.culling_rate.mean;
+    let missed: Metric = |p| p.summary.missed_pixels.mean;
+    let size: Metric = |p| p.file_bytes as f64 / 1024.0;
+    let chart = |by_level: bool, what: &str, metric: Metric, label: &str| {
+        let groups: Vec<u32> = if by_level {
+            patches.clone()
+        } else {
+            levels.clone()
+        };
+        let mut series = Vec::new();
+        for (axis, f, suffix) in [(Axis::Left, metric, ""), (Axis::Right, size, " size")] {
+            for (c, &g) in groups.iter().enumerate() {
+                let pts = points
+                    .iter()
+                    .filter(|p| {
+                        if by_level {
+                            p.patches == g
+                        } else {
+                            p.level == g
+                        }
+                    })
+                    .map(|p| {
+                        let x = if by_level {
+                            f64::from(p.sampling_views)
+                        } else {
+                            f64::from(p.patches)
+                        };
+                        (x, f(p))
+                    })
+                    .collect();
+                let name = if by_level {
+                    format!("P={g}{suffix}")
+                } else {
+                    format!("level {g}{suffix}")
+                };
+                series.push(Series {
+                    name,
+                    points: pts,
+                    axis,
+                    colour: c,
+                });
+            }
+        }
+        Chart {
+            title: format!(
+                "{what} against {}",
+                if by_level {
+                    "sampling views"
+                } else {
+                    "patch count"
+                }
+            ),
+            x_label: if by_level {
+                "sampling views (sphere levels)".into()
+            } else {
+                "patches".into()
+            },
+            x_log: true,
+            left_label: label.into(),
+            right_label: "file size (KiB), dashed".into(),
+            series,
+        }
+    };
+    vec![
+        (
+            "sweep-levels.svg",
+            plot::svg(&[
+                chart(true, "Culling rate", culling, "culling rate (%)"),
+                chart(
+                    true,
+                    "Missed pixels",
+                    missed,
+                    "missed pixels per view (mean)",
+                ),
+            ]),
+        ),
+        (
+            "sweep-patches.svg",
+            plot::svg(&[
+                chart(false, "Culling rate", culling, "culling rate (%)"),
+                chart(
+                    false,
+                    "Missed pixels",
+                    missed,
+                    "missed pixels per view (mean)",
+                ),
+            ]),
+        ),
+    ]
+}

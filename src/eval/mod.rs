@@ -1,0 +1,31 @@
+//! Evaluation: what users see when they draw only the patches a `.pvis` query returns —
+//! reconstruction quality, culling rate, popping along a path, frame cost and pictures.
+//!
+//! The technique (Meruvia 2002) is not conservative: its worth is how many triangles it culls
+//! while the picture stays the same. For each camera the evaluator renders the whole mesh and
+//! the query's answer with triangle ids and compares them pixel by pixel (`evaluator.rs`);
+//! `summary.rs` aggregates views, `metrics.rs` holds the statistics (mean, nearest-rank p95,
+//! PSNR), `views.rs` the seeded random views and paths, `shade.rs` the pictures, `plot.rs` the
+//! SVG charts and `sweep.rs` the re-baking sweep over patch counts and levels (the seed paper's
+//! Figures 4–5). The last stage: it may use every other module.
+//!
+//! The file stores triangle ranges of the *reordered* mesh; the evaluator takes the original
+//! mesh and re-derives the triangle → patch map by tiling it again, which is deterministic,
+//! and refuses files whose patch records differ from the re-tiling in any bit.
+//!
+//! Cost: two renders per view (the full mesh and the culled set), views in parallel.
+
+mod evaluator;
+pub mod metrics;
+pub mod plot;
+pub mod shade;
+mod summary;
+mod sweep;
+pub mod views;
+
+pub use evaluator::{EvalError, Evaluator, Pictures, ViewMetrics, sampling_params};
+pub use summary::{EvalSummary, FrameCost};
+pub use sweep::{SweepPoint, SweepSettings, sweep};
+
+#[cfg(test)]
+mod tests;
