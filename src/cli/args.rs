@@ -48,12 +48,27 @@ pub struct BakeArgs {
     /// per-face `patch` and `red green blue` properties (binary PLY).
     #[arg(long, value_name = "MESH.ply")]
     pub mesh_out: Option<PathBuf>,
+    /// Tiling algorithm: the seed algorithm in memory, the chunked out-of-core one, or
+    /// whichever the memory budget allows (auto).
+    #[arg(long, value_enum, default_value_t = TilingArg::Auto, value_name = "MODE")]
+    pub tiling: TilingArg,
     /// Write timings, peak heap and counts per stage as JSON.
     #[arg(long, value_name = "STATS.json")]
     pub stats: Option<PathBuf>,
     /// Print nothing but errors; no progress bars.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// `--tiling`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum TilingArg {
+    /// In core when it fits the memory budget, else out of core.
+    Auto,
+    /// The seed algorithm on the whole mesh.
+    InCore,
+    /// Chunked tiling in bounded memory.
+    OutOfCore,
 }
 
 /// `patchvis info`.

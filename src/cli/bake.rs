@@ -1,7 +1,7 @@
 //! `patchvis bake`: checked settings, then tile → sample → encode, with a timing and peak-heap
 //! record per stage, and outputs that appear only once everything succeeded.
 
-use super::args::BakeArgs;
+use super::args::{BakeArgs, TilingArg};
 use super::progress::Bars;
 use super::{UsageError, alloc};
 use anyhow::{Context, Result};
@@ -14,6 +14,10 @@ use serde_json::json;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+/// Heap budget of the tiling until `--memory` is joined in: enough for the in-core tiling of
+/// about 5M triangles; larger meshes are tiled out of core within it.
+const TILING_MEMORY_BUDGET: u64 = 1 << 30;
 
 /// Largest ID-buffer side: one buffer per thread is `resolution² × 8` bytes (512 MiB here).
 const MAX_RESOLUTION: u32 = 8192;
@@ -30,6 +34,7 @@ pub struct Settings {
     mesh_out: Option<PathBuf>,
     stats: Option<PathBuf>,
     quiet: bool,
+    tiling: tiling::TilingOptions,
 }
 
 impl Settings {
@@ -77,6 +82,14 @@ impl Settings {
             mesh_out: args.mesh_out,
             stats: args.stats,
             quiet: args.quiet,
+            tiling: tiling::TilingOptions {
+                mode: match args.tiling {
+                    TilingArg::Auto => tiling::TilingMode::Auto,
+                    TilingArg::InCore => tiling::TilingMode::InCore,
+                    TilingArg::OutOfCore => tiling::TilingMode::OutOfCore,
+                },
+                memory_budget: TILING_MEMORY_BUDGET,
+            },
         })
     }
 }
@@ -130,8 +143,10 @@ pub fn run(args: BakeArgs) -> Result<()> {
     let mut stages = Vec::new();
 
     let mesh = stage(&mut stages, "input", || Mesh::open(&s.input))?;
-    let tiling = stage(&mut stages, "tiling", || tiling::tile(&mesh, s.patches))
-        .with_context(|| format!("{}: tiling failed", s.input.display()))?;
+    let tiling = stage(&mut stages, "tiling", || {
+        tiling::tile_with(&mesh, s.patches, &s.tiling)
+    })
+    .with_context(|| format!("{}: tiling failed", s.input.display()))?;
     let patch_count = tiling.patches.len() as u32;
     let params = SamplingParams::for_mesh(&mesh, s.level, s.resolution, s.fov_deg);
     let visibility = stage(&mut stages, "sampling", || {
@@ -174,8 +189,12 @@ pub fn run(args: BakeArgs) -> Result<()> {
         })
         .sum();
     let visible_fraction = seen as f64 / (f64::from(views) * f64::from(patch_count));
-    let mut sizes: Vec<u32> = tiling.patches.iter().map(|p| p.count).collect();
-    sizes.sort_unstable();
+    let q = tiling.quality;
+    let algorithm = if tiling.stats.out_of_core {
+        "out-of-core"
+    } else {
+        "in-core"
+    };
     let seconds = start.elapsed().as_secs_f64();
 
     if let Some(path) = &s.stats {
@@ -185,7 +204,15 @@ pub fn run(args: BakeArgs) -> Result<()> {
             "triangles": mesh.triangle_count(),
             "vertices": mesh.vertex_count(),
             "patches": patch_count,
-            "patch_triangles": {"min": sizes[0], "median": sizes[sizes.len() / 2], "max": sizes[sizes.len() - 1]},
+            "patch_triangles": {"min": q.triangles_min, "median": q.triangles_median, "max": q.triangles_max},
+            "tiling": {
+                "algorithm": algorithm,
+                "chunks": tiling.stats.chunks,
+                "memory_budget_bytes": s.tiling.memory_budget,
+                "components": tiling.stats.components,
+                "merged_components": tiling.stats.merged_components,
+                "compactness": {"median": q.compactness_median, "p95": q.compactness_p95},
+            },
             "level": s.level,
             "views": views,
             "resolution": s.resolution,
@@ -217,14 +244,27 @@ pub fn run(args: BakeArgs) -> Result<()> {
             mesh.vertex_count(),
             secs("input")
         );
+        let chunks = if tiling.stats.out_of_core {
+            format!(", {} chunks", tiling.stats.chunks)
+        } else {
+            String::new()
+        };
         println!(
-            "tiling:   {} patches, {}/{}/{} triangles min/median/max ({:.2} s)",
+            "tiling:   {} patches, {}/{}/{} triangles min/median/max, compactness {:.2} median {:.2} p95 ({algorithm}{chunks}, {:.2} s)",
             patch_count,
-            sizes[0],
-            sizes[sizes.len() / 2],
-            sizes[sizes.len() - 1],
+            q.triangles_min,
+            q.triangles_median,
+            q.triangles_max,
+            q.compactness_median,
+            q.compactness_p95,
             secs("tiling")
         );
+        if tiling.stats.merged_components > 0 {
+            println!(
+                "          the mesh has {} connected components, more than {} patches: {} nearby components were merged",
+                tiling.stats.components, patch_count, tiling.stats.merged_components
+            );
+        }
         println!(
             "sampling: {} views (level {}) at {}x{} px, fov {}°; a view sees {:.1}% of patches on average ({:.2} s)",
             views,
