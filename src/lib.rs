@@ -18,6 +18,8 @@ pub mod sphere;
 #[cfg(feature = "bake")]
 pub mod format;
 #[cfg(feature = "bake")]
+pub mod generate;
+#[cfg(feature = "bake")]
 pub mod ooc;
 #[cfg(feature = "bake")]
 pub mod progress;

@@ -34,6 +34,7 @@ fn main() -> ExitCode {
         Command::Bake(args) => cli::bake::run(args),
         Command::Info(args) => cli::inspect::info(&args),
         Command::Query(args) => cli::inspect::query(&args),
+        Command::Gen(args) => cli::generate::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

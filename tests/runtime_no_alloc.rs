@@ -1,5 +1,5 @@
 //! **Invariant** check: the reader never allocates. A counting global allocator watches
-//! `Pvis::parse`, `query`, and iterating the answer.
+//! `Pvis::parse`, `query`, `view_row`, streaming and expanded queries, and iterating the answer.
 #![cfg(feature = "bake")]
 
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -31,7 +31,7 @@ unsafe impl GlobalAlloc for Counting {
 static GLOBAL: Counting = Counting;
 
 #[test]
-fn parse_query_and_iteration_allocate_nothing() {
+fn parse_query_streaming_expanded_and_iteration_allocate_nothing() {
     let params = SamplingParams {
         level: 2,
         resolution: 64,
@@ -62,6 +62,10 @@ fn parse_query_and_iteration_allocate_nothing() {
         visibility: &matrix,
     });
     let mut scratch = vec![0u64; 2];
+    let probe = Pvis::parse(&bytes).unwrap();
+    let mut stream_scratch = vec![0u64; probe.scratch_bound()];
+    let mut table = vec![0u64; probe.expanded_bound()];
+    let mut row = vec![0u64; probe.row_words()];
 
     let before = ALLOCATIONS.load(Ordering::SeqCst);
     let pvis = Pvis::parse(&bytes).unwrap();
@@ -72,6 +76,19 @@ fn parse_query_and_iteration_allocate_nothing() {
         seen += vis.patches().count() as u32;
         triangles += pvis.ranges(&vis).map(|(_, count)| count).sum::<u32>();
         assert!(vis.contains(vis.patches().next().unwrap()));
+    }
+    pvis.view_row(40, &mut row);
+    let mut streaming = pvis.streaming(&mut stream_scratch);
+    let mut expanded = pvis.expand(&mut table);
+    for i in 0..200 {
+        let a = i as f32 * 0.05;
+        let eye = [5.0 * a.cos(), 1.0, 5.0 * a.sin()];
+        let s = streaming.query(eye);
+        seen += s.count();
+        let e = expanded.query(eye);
+        seen += e.count();
+        triangles += 2 * e.count();
+        assert!(e.patches().all(|p| !pvis.backfacing(p, eye) || p < 100));
     }
     let after = ALLOCATIONS.load(Ordering::SeqCst);
 

@@ -22,6 +22,9 @@ pub enum Command {
     Info(InfoArgs),
     /// Which patches (and triangle ranges) a camera at a position sees.
     Query(QueryArgs),
+    /// Write a huge, real-looking test mesh (binary PLY), streaming and deterministic.
+    #[command(alias = "generate")]
+    Gen(GenArgs),
 }
 
 /// `patchvis bake`.
@@ -48,6 +51,11 @@ pub struct BakeArgs {
     /// per-face `patch` and `red green blue` properties (binary PLY).
     #[arg(long, value_name = "MESH.ply")]
     pub mesh_out: Option<PathBuf>,
+    /// Heap budget for the bake, e.g. 512MiB, 2GiB, 1G (default: half the available memory,
+    /// at least 256 MiB). The mesh input and the tiling honour it; the page cache is not
+    /// counted.
+    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    pub memory: Option<u64>,
     /// Tiling algorithm: the seed algorithm in memory, the chunked out-of-core one, or
     /// whichever the memory budget allows (auto).
     #[arg(long, value_enum, default_value_t = TilingArg::Auto, value_name = "MODE")]
@@ -71,6 +79,48 @@ pub enum TilingArg {
     OutOfCore,
 }
 
+/// `patchvis gen`.
+#[derive(Debug, clap::Args)]
+pub struct GenArgs {
+    /// Which model to generate.
+    #[arg(long, value_enum)]
+    pub kind: GenKind,
+    /// About how many triangles (the model's own steps decide the exact count).
+    #[arg(long, value_name = "N")]
+    pub triangles: u64,
+    /// Output mesh (binary little-endian PLY).
+    #[arg(short, long, value_name = "OUT.ply")]
+    pub output: PathBuf,
+    /// The mesh that `subdivided-bunny` and `bunny-grid` start from.
+    #[arg(long, value_name = "MESH.ply", default_value = "assets/bunny.ply")]
+    pub source: PathBuf,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// The models `patchvis gen` writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum GenKind {
+    /// The source split k×k per triangle and displaced by smooth noise, like a dense scan.
+    SubdividedBunny,
+    /// Copies of the source on a floor grid.
+    BunnyGrid,
+    /// A closed casing around nested closed machine parts, never visible from outside.
+    Engine,
+}
+
+impl GenKind {
+    /// The flag value, for messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            GenKind::SubdividedBunny => "subdivided-bunny",
+            GenKind::BunnyGrid => "bunny-grid",
+            GenKind::Engine => "engine",
+        }
+    }
+}
+
 /// `patchvis info`.
 #[derive(Debug, clap::Args)]
 pub struct InfoArgs {
@@ -79,6 +129,10 @@ pub struct InfoArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Also print the visibility payload's size next to the raw matrix and the raw matrix
+    /// compressed by `zstd -19` and `xz -9` (when those tools are installed).
+    #[arg(long)]
+    pub compare: bool,
 }
 
 /// `patchvis query`.
@@ -87,8 +141,13 @@ pub struct QueryArgs {
     /// The .pvis file.
     pub file: PathBuf,
     /// Camera position in model space.
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true)]
-    pub from: [f32; 3],
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true,
+          required_unless_present = "bench")]
+    pub from: Option<[f32; 3]>,
+    /// Instead of one query, time N queries per mode (expanded; streaming staying in a leaf;
+    /// streaming along a smooth orbit, counting leaf changes) and print median nanoseconds.
+    #[arg(long, value_name = "N")]
+    pub bench: Option<u32>,
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
@@ -109,4 +168,55 @@ fn parse_point(s: &str) -> Result<[f32; 3], String> {
         }
     };
     Ok([num(x)?, num(y)?, num(z)?])
+}
+
+/// A byte size: a number with an optional unit, `K`/`M`/`G`/`T` and `KiB`/`MiB`/`GiB`/`TiB`
+/// (all binary, as `free` and `top` count), `B`, or none (bytes).
+pub fn parse_size(s: &str) -> Result<u64, String> {
+    let text = s.trim();
+    let split = text
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(text.len());
+    let (number, unit) = text.split_at(split);
+    let shift = match unit.trim().to_ascii_lowercase().as_str() {
+        "" | "b" => 0,
+        "k" | "kb" | "kib" => 10,
+        "m" | "mb" | "mib" => 20,
+        "g" | "gb" | "gib" => 30,
+        "t" | "tb" | "tib" => 40,
+        other => {
+            return Err(format!(
+                "unknown unit '{other}' in '{s}', expected e.g. 512MiB, 2GiB or 1G"
+            ));
+        }
+    };
+    let value: f64 = number
+        .parse()
+        .map_err(|_| format!("expected a size such as 512MiB, found '{s}'"))?;
+    let bytes = value * (1u64 << shift) as f64;
+    if !(bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(format!("'{s}': expected a size of at least 1 byte"));
+    }
+    Ok(bytes as u64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_size;
+
+    #[test]
+    fn sizes_parse_with_binary_units() {
+        assert_eq!(parse_size("512MiB"), Ok(512 << 20));
+        assert_eq!(parse_size("2GiB"), Ok(2 << 30));
+        assert_eq!(parse_size("1G"), Ok(1 << 30));
+        assert_eq!(parse_size("1.5g"), Ok(3 << 29));
+        assert_eq!(parse_size("4096"), Ok(4096));
+        assert!(
+            parse_size("12 parsecs")
+                .unwrap_err()
+                .contains("unknown unit")
+        );
+        assert!(parse_size("MiB").is_err());
+        assert!(parse_size("0").is_err());
+    }
 }

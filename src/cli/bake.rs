@@ -6,7 +6,7 @@ use super::progress::Bars;
 use super::{UsageError, alloc};
 use anyhow::{Context, Result};
 use patchvis::format::{self, BakeContents};
-use patchvis::ooc::Mesh;
+use patchvis::ooc::{Mesh, OpenOptions, default_cache_dir};
 use patchvis::sampler::{self, SamplingParams};
 use patchvis::sphere::{MAX_LEVEL, view_count};
 use patchvis::tiling;
@@ -14,10 +14,6 @@ use serde_json::json;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// Heap budget of the tiling until `--memory` is joined in: enough for the in-core tiling of
-/// about 5M triangles; larger meshes are tiled out of core within it.
-const TILING_MEMORY_BUDGET: u64 = 1 << 30;
 
 /// Largest ID-buffer side: one buffer per thread is `resolution² × 8` bytes (512 MiB here).
 const MAX_RESOLUTION: u32 = 8192;
@@ -35,6 +31,35 @@ pub struct Settings {
     stats: Option<PathBuf>,
     quiet: bool,
     tiling: tiling::TilingOptions,
+    /// Heap budget in bytes (`--memory`, or [`default_memory_budget`]).
+    memory_budget: u64,
+}
+
+/// Smallest default budget: below this the machine is too small to bake anything large
+/// anyway, and a tiny budget would only make conversion slow.
+const MIN_DEFAULT_BUDGET: u64 = 256 << 20;
+
+/// Half of `MemAvailable` from `/proc/meminfo` (the other half left to the page cache that
+/// serves the mapped mesh), at least [`MIN_DEFAULT_BUDGET`]; the library default where the
+/// file is missing (not Linux).
+pub fn default_memory_budget() -> u64 {
+    let available_kib = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|text| {
+            text.lines()
+                .find_map(|l| l.strip_prefix("MemAvailable:"))
+                .and_then(|rest| {
+                    rest.trim()
+                        .trim_end_matches("kB")
+                        .trim()
+                        .parse::<u64>()
+                        .ok()
+                })
+        });
+    match available_kib {
+        Some(kib) => (kib * 1024 / 2).max(MIN_DEFAULT_BUDGET),
+        None => patchvis::ooc::DEFAULT_MEMORY_BUDGET,
+    }
 }
 
 impl Settings {
@@ -72,6 +97,7 @@ impl Settings {
         {
             check_output_path(out)?;
         }
+        let memory_budget = args.memory.unwrap_or_else(default_memory_budget);
         Ok(Settings {
             input: args.input,
             output: args.output,
@@ -82,13 +108,14 @@ impl Settings {
             mesh_out: args.mesh_out,
             stats: args.stats,
             quiet: args.quiet,
+            memory_budget,
             tiling: tiling::TilingOptions {
                 mode: match args.tiling {
                     TilingArg::Auto => tiling::TilingMode::Auto,
                     TilingArg::InCore => tiling::TilingMode::InCore,
                     TilingArg::OutOfCore => tiling::TilingMode::OutOfCore,
                 },
-                memory_budget: TILING_MEMORY_BUDGET,
+                memory_budget,
             },
         })
     }
@@ -142,9 +169,15 @@ pub fn run(args: BakeArgs) -> Result<()> {
     let start = Instant::now();
     let mut stages = Vec::new();
 
-    let mesh = stage(&mut stages, "input", || Mesh::open(&s.input))?;
+    let open = OpenOptions {
+        cache_dir: Some(default_cache_dir()),
+        memory_budget: s.memory_budget,
+    };
+    let mesh = stage(&mut stages, "input", || {
+        bars.spin("reading", || Mesh::open_with(&s.input, &open))
+    })?;
     let tiling = stage(&mut stages, "tiling", || {
-        tiling::tile_with(&mesh, s.patches, &s.tiling)
+        bars.spin("tiling", || tiling::tile_with(&mesh, s.patches, &s.tiling))
     })
     .with_context(|| format!("{}: tiling failed", s.input.display()))?;
     let patch_count = tiling.patches.len() as u32;
@@ -158,7 +191,9 @@ pub fn run(args: BakeArgs) -> Result<()> {
         patches: &tiling.patches,
         visibility: &visibility,
     };
-    let bytes = stage(&mut stages, "encoding", || format::encode(&contents));
+    let bytes = stage(&mut stages, "encoding", || {
+        bars.spin("encoding", || format::encode(&contents))
+    });
     let visibility_bytes = patchvis::runtime::Pvis::parse(&bytes)
         .map(|p| p.visibility_bytes())
         .context("internal error: the written file does not parse")?;
@@ -203,12 +238,13 @@ pub fn run(args: BakeArgs) -> Result<()> {
             "output": s.output.display().to_string(),
             "triangles": mesh.triangle_count(),
             "vertices": mesh.vertex_count(),
+            "mesh_source": format!("{:?}", mesh.source()),
+            "memory_budget_bytes": s.memory_budget,
             "patches": patch_count,
             "patch_triangles": {"min": q.triangles_min, "median": q.triangles_median, "max": q.triangles_max},
             "tiling": {
                 "algorithm": algorithm,
                 "chunks": tiling.stats.chunks,
-                "memory_budget_bytes": s.tiling.memory_budget,
                 "components": tiling.stats.components,
                 "merged_components": tiling.stats.merged_components,
                 "compactness": {"median": q.compactness_median, "p95": q.compactness_p95},

@@ -1,10 +1,14 @@
-//! `patchvis info` and `patchvis query`: read a `.pvis` through the runtime reader.
+//! `patchvis info` and `patchvis query`: read a `.pvis` through the runtime reader, and
+//! (`info --compare`, `query --bench`) measure its payload and its three query modes.
 
 use super::args::{InfoArgs, QueryArgs};
 use anyhow::{Context, Result, anyhow};
 use patchvis::runtime::Pvis;
 use serde_json::json;
+use std::io::Write;
 use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::Instant;
 
 fn read(path: &Path) -> Result<Vec<u8>> {
     std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))
@@ -56,20 +60,90 @@ pub fn info(args: &InfoArgs) -> Result<()> {
             s.center[0], s.center[1], s.center[2], s.radius, s.distance
         );
         println!(
-            "  {} bytes, of which visibility {}",
+            "  {} bytes, of which visibility {} (encoding {})",
             pvis.total_bytes(),
-            pvis.visibility_bytes()
+            pvis.visibility_bytes(),
+            pvis.encoding()
         );
     }
+    if args.compare {
+        compare(&pvis);
+    }
     Ok(())
+}
+
+/// The raw row-major matrix of a file: `ceil(P / 8)` bytes per view, as VISB encoding 0.
+fn raw_matrix(pvis: &Pvis<'_>) -> Vec<u8> {
+    let mut table = vec![0u64; pvis.expanded_bound()];
+    let expanded = pvis.expand(&mut table);
+    let row_bytes = (pvis.patch_count() as usize).div_ceil(8);
+    let mut raw = Vec::with_capacity(row_bytes * pvis.sampling().views as usize);
+    for v in 0..pvis.sampling().views {
+        let start = raw.len();
+        raw.extend(expanded.row(v).iter().flat_map(|w| w.to_le_bytes()));
+        raw.truncate(start + row_bytes);
+    }
+    raw
+}
+
+/// Size of `data` compressed by an external tool, or `None` if it is not installed.
+fn compressed_size(tool: &str, args: &[&str], data: &[u8]) -> Option<usize> {
+    let mut child = Command::new(tool)
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .ok()?;
+    let mut stdin = child.stdin.take()?;
+    let input = data.to_vec();
+    // Feed stdin from a thread so a full stdout pipe cannot deadlock us.
+    let feeder = std::thread::spawn(move || stdin.write_all(&input));
+    let output = child.wait_with_output().ok()?;
+    feeder.join().ok()?.ok()?;
+    output.status.success().then_some(output.stdout.len())
+}
+
+/// `info --compare`: the payload next to generic compressors on the raw matrix.
+fn compare(pvis: &Pvis<'_>) {
+    let raw = raw_matrix(pvis);
+    let zstd = compressed_size("zstd", &["-19", "-c", "-q"], &raw);
+    let xz = compressed_size("xz", &["-9", "-c", "-q"], &raw);
+    let ours = pvis.visibility_bytes() as usize;
+    let show = |name: &str, size: Option<usize>| match size {
+        Some(s) => println!(
+            "  {name:<28}{s:>10} B  {:>6.3} x raw{}",
+            s as f64 / raw.len() as f64,
+            zstd.map_or(String::new(), |z| format!(
+                "  {:>6.3} x zstd",
+                s as f64 / z as f64
+            ))
+        ),
+        None => println!("  {name:<28}       n/a  (tool not installed)"),
+    };
+    println!(
+        "visibility payload, {} views x {} patches:",
+        pvis.sampling().views,
+        pvis.patch_count()
+    );
+    show("raw rows", Some(raw.len()));
+    show("zstd -19 (raw rows)", zstd);
+    show("xz -9 (raw rows)", xz);
+    show("VISB in this file", Some(ours));
 }
 
 /// Runs `patchvis query`.
 pub fn query(args: &QueryArgs) -> Result<()> {
     let bytes = read(&args.file)?;
     let pvis = parse(&args.file, &bytes)?;
+    if let Some(n) = args.bench {
+        return bench(&pvis, n.max(1));
+    }
+    let Some(from) = args.from else {
+        return Err(anyhow!("query: --from X,Y,Z is required without --bench"));
+    };
     let mut scratch = vec![0u64; pvis.scratch_words()];
-    let visible = pvis.query(args.from, &mut scratch);
+    let visible = pvis.query(from, &mut scratch);
     let patches: Vec<u32> = visible.patches().collect();
     // Patches are contiguous triangle ranges in patch order: merge neighbours into one draw.
     let mut ranges: Vec<[u64; 2]> = Vec::new();
@@ -108,5 +182,167 @@ pub fn query(args: &QueryArgs) -> Result<()> {
             println!("the camera is inside the sampling sphere: draw everything");
         }
     }
+    Ok(())
+}
+
+/// A seeded xorshift stream of floats in `[-1, 1)`, so benches query the same eyes every run.
+fn seeded(seed: u64) -> impl FnMut() -> f32 {
+    let mut state = seed | 1;
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+    }
+}
+
+/// Median of `samples` (sorted in place).
+fn median(samples: &mut [f64]) -> f64 {
+    samples.sort_by(f64::total_cmp);
+    samples.get(samples.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// Queries per timed batch for the sub-microsecond modes: long enough to dwarf the clock's
+/// own cost (~25 ns per `Instant::now`), short enough to give many samples.
+const BATCH: usize = 64;
+
+/// `query --bench N`: median time per query of each mode, on seeded eyes at twice the
+/// sampling distance.
+fn bench(pvis: &Pvis<'_>, n: u32) -> Result<()> {
+    let s = pvis.sampling();
+    let radius = 2.0 * s.distance;
+    let eye_at = |d: [f32; 3]| {
+        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-6);
+        [0, 1, 2].map(|i| s.center[i] + d[i] / len * radius)
+    };
+    let mut next = seeded(0x5EED);
+    let eyes: Vec<[f32; 3]> = (0..n.max(BATCH as u32))
+        .map(|_| eye_at([next(), next(), next()]))
+        .collect();
+    let batches = eyes.len() / BATCH;
+    let mut sink = 0u64;
+
+    // Stateless `Pvis::query`: lock-step decode of the leaf's corners (the baseline).
+    let mut scratch = vec![0u64; pvis.scratch_words()];
+    let stateless_n = eyes.len().min(200);
+    let mut stateless: Vec<f64> = eyes[..stateless_n]
+        .iter()
+        .map(|&eye| {
+            let t = Instant::now();
+            sink += u64::from(pvis.query(eye, &mut scratch).count());
+            t.elapsed().as_nanos() as f64
+        })
+        .collect();
+
+    // Expanded: random eyes, each usually in a new leaf.
+    let t = Instant::now();
+    let mut table = vec![0u64; pvis.expanded_bound()];
+    let mut expanded = pvis.expand(&mut table);
+    let expand_ms = t.elapsed().as_secs_f64() * 1e3;
+    let mut exp: Vec<f64> = (0..batches)
+        .map(|b| {
+            let t = Instant::now();
+            for &eye in &eyes[b * BATCH..(b + 1) * BATCH] {
+                sink += expanded.query(eye).bits()[0];
+            }
+            t.elapsed().as_nanos() as f64 / BATCH as f64
+        })
+        .collect();
+
+    // Expanded along the smooth orbit below: mostly the same leaf, sometimes a neighbour.
+    let orbit_eye = |i: u32| {
+        let a = i as f32 * 0.05f32.to_radians();
+        eye_at([a.cos(), 0.35 * a.sin(), a.sin()])
+    };
+    let mut exp_orbit: Vec<f64> = (0..batches as u32)
+        .map(|b| {
+            let t = Instant::now();
+            for i in 0..BATCH as u32 {
+                sink += expanded.query(orbit_eye(b * BATCH as u32 + i)).bits()[0];
+            }
+            t.elapsed().as_nanos() as f64 / BATCH as f64
+        })
+        .collect();
+
+    // Streaming, staying in a leaf: tiny jitter around each of a few seeded eyes.
+    let mut stream_scratch = vec![0u64; pvis.scratch_bound()];
+    let mut streaming = pvis.streaming(&mut stream_scratch);
+    let mut stay: Vec<f64> = Vec::new();
+    for &base in &eyes[..batches] {
+        streaming.query(base);
+        let jitter: Vec<[f32; 3]> = (0..BATCH)
+            .map(|_| eye_at([0, 1, 2].map(|i| (base[i] - s.center[i]) / radius + 1e-5 * next())))
+            .collect();
+        let t = Instant::now();
+        for &eye in &jitter {
+            sink += streaming.query(eye).bits()[0];
+        }
+        stay.push(t.elapsed().as_nanos() as f64 / BATCH as f64);
+    }
+
+    // Streaming along a smooth orbit: N steps of 0.05° on a tilted great circle; time the
+    // queries that change leaf.
+    let mut stream_scratch = vec![0u64; pvis.scratch_bound()];
+    let mut streaming = pvis.streaming(&mut stream_scratch);
+    let orbit = orbit_eye;
+    let mut last_leaf = streaming.query(orbit(0)).leaf;
+    let mut changes: Vec<f64> = Vec::new();
+    let mut orbit_all: Vec<f64> = Vec::new();
+    let decoded_before = streaming.decoded_rows();
+    for i in 1..n {
+        let eye = orbit(i);
+        let t = Instant::now();
+        let visible = streaming.query(eye);
+        let ns = t.elapsed().as_nanos() as f64;
+        sink += visible.bits()[0];
+        orbit_all.push(ns);
+        if visible.leaf != last_leaf {
+            last_leaf = visible.leaf;
+            changes.push(ns);
+        }
+    }
+    let rows_per_change =
+        (streaming.decoded_rows() - decoded_before) as f64 / changes.len().max(1) as f64;
+    std::hint::black_box(sink);
+
+    println!(
+        "{} patches, level {} ({} views), VISB encoding {}; medians over {} queries per mode",
+        pvis.patch_count(),
+        s.level,
+        s.views,
+        pvis.encoding(),
+        n
+    );
+    println!(
+        "  stateless Pvis::query (lock-step decode) {:>10.0} ns   (baseline; {} queries)",
+        median(&mut stateless),
+        stateless_n
+    );
+    println!(
+        "  expanded query, random eyes              {:>10.0} ns   (expand once: {:.1} ms, {} KiB table)",
+        median(&mut exp),
+        expand_ms,
+        pvis.expanded_bound() * 8 / 1024
+    );
+    println!(
+        "  expanded query, smooth orbit             {:>10.0} ns",
+        median(&mut exp_orbit)
+    );
+    println!(
+        "  streaming, camera staying in its leaf    {:>10.0} ns   ({} KiB scratch)",
+        median(&mut stay),
+        pvis.scratch_bound() * 8 / 1024
+    );
+    println!(
+        "  streaming, leaf change on smooth orbit   {:>10.0} ns   ({} changes in {} steps, {:.1} rows decoded per change)",
+        median(&mut changes),
+        changes.len(),
+        n - 1,
+        rows_per_change
+    );
+    println!(
+        "  streaming, every orbit step              {:>10.0} ns",
+        median(&mut orbit_all)
+    );
     Ok(())
 }

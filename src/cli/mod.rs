@@ -3,6 +3,7 @@
 pub mod alloc;
 pub mod args;
 pub mod bake;
+pub mod generate;
 pub mod inspect;
 pub mod progress;
 

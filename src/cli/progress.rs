@@ -21,6 +21,25 @@ impl Bars {
     }
 }
 
+impl Bars {
+    /// Runs `f` under a spinner with elapsed time, for stages that report no progress of their
+    /// own (reading, tiling, encoding): on a huge mesh they take long enough to need one.
+    pub fn spin<T>(&self, what: &str, f: impl FnOnce() -> T) -> T {
+        if !self.visible {
+            return f();
+        }
+        let spinner = ProgressBar::new_spinner();
+        let style = ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner());
+        spinner.set_style(style);
+        spinner.set_message(what.to_string());
+        spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+        let out = f();
+        spinner.finish_and_clear();
+        out
+    }
+}
+
 impl Progress for Bars {
     fn start(&self, what: &str, total: u64) {
         if !self.visible {

@@ -3,14 +3,17 @@
 //!
 //! Every offset, length and limit comes from [`crate::runtime::consts`], so writer and reader
 //! cannot drift apart; `encode` also runs the reader over its own output. Output is
-//! byte-deterministic: the same contents give the same bytes. Cost: one pass over the
-//! visibility matrix plus one CRC and one validation pass over the output.
+//! byte-deterministic: the same contents give the same bytes. VISB is written with encoding 1
+//! (`visb`: rows range-coded given their parent views). Cost: two passes over the visibility
+//! matrix plus one CRC and one validation pass over the output.
 
 mod atomic;
 #[cfg(test)]
 mod tests;
+mod visb;
 
 pub use atomic::write_atomic;
+pub use visb::{encode_hierarchical, probabilities};
 
 use crate::runtime::Pvis;
 use crate::runtime::consts::*;
@@ -57,7 +60,7 @@ pub fn encode(contents: &BakeContents) -> Vec<u8> {
 
     let camr = camr(params, views);
     let ptch = ptch(contents.triangle_count, contents.patches);
-    let visb = visb(contents.visibility);
+    let visb = encode_hierarchical(contents.visibility, params.level.min(MAX_LEVEL));
 
     let table_end = HEADER_LEN + SECTION_ENTRY_LEN * SECTIONS.len() as u64;
     let mut offsets = [0u64; 3];
@@ -137,9 +140,9 @@ fn ptch(triangle_count: u64, patches: &[Patch]) -> Vec<u8> {
     out
 }
 
-/// § VISB, encoding 0: each row's `u64` words cut into `ceil(P / 8)` little-endian bytes,
+/// § VISB, encoding 0 (what version-1 files hold; kept for tests and comparisons): each row's `u64` words cut into `ceil(P / 8)` little-endian bytes,
 /// which is exactly the spec's "bit p is bit p % 8 of byte p / 8".
-fn visb(matrix: &VisibilityMatrix) -> Vec<u8> {
+pub fn encode_raw(matrix: &VisibilityMatrix) -> Vec<u8> {
     let row_len = row_bytes(matrix.patches()) as usize;
     let mut out = Vec::with_capacity(VISB_HEADER_LEN as usize + matrix.views() as usize * row_len);
     out.extend_from_slice(&ENCODING_RAW.to_le_bytes());

@@ -80,7 +80,75 @@ fn round_trip(level: u32, counts: &[u32], matrix: &VisibilityMatrix) -> Vec<u8> 
         pvis.view_row(view, &mut row);
         assert_eq!(row, matrix.row(view), "view {view}");
     }
+    check_queries(&pvis, matrix, level as u64 * 31 + counts.len() as u64);
     bytes
+}
+
+/// The three query modes agree with each other and with the OR of the matrix rows of the
+/// leaf `sphere::locate` finds, for seeded directions, a far eye, the centre and a NaN eye.
+fn check_queries(pvis: &Pvis<'_>, matrix: &VisibilityMatrix, seed: u64) {
+    let mut scratch = vec![0u64; pvis.scratch_words()];
+    let mut stream_scratch = vec![0u64; pvis.scratch_bound()];
+    let mut table = vec![0u64; pvis.expanded_bound()];
+    let mut streaming = pvis.streaming(&mut stream_scratch);
+    let mut expanded = pvis.expand(&mut table);
+    for v in 0..matrix.views() {
+        assert_eq!(expanded.row(v), matrix.row(v), "expanded row {v}");
+    }
+    let s = pvis.sampling();
+    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+    };
+    let mut eyes: Vec<[f32; 3]> = (0..40)
+        .map(|_| {
+            let d = [next(), next(), next()];
+            [0, 1, 2].map(|i| s.center[i] + d[i] * 3.0 * s.distance)
+        })
+        .collect();
+    // A slow orbit: mostly stays in a leaf, sometimes moves to a neighbour.
+    eyes.extend((0..60).map(|i| {
+        let t = i as f32 * 0.01;
+        [
+            s.center[0] + 4.0 * t.cos(),
+            s.center[1] + 0.3,
+            s.center[2] + 4.0 * t.sin(),
+        ]
+    }));
+    eyes.extend([s.center, [f32::NAN, 0.0, 0.0], [1.0, 2.0, 3.0]]);
+    for eye in eyes {
+        let d = [0, 1, 2].map(|i| eye[i] - s.center[i]);
+        let stateless = pvis.query(eye, &mut scratch);
+        let (bits, leaf) = (stateless.bits().to_vec(), stateless.leaf);
+        if d.iter().all(|x| x.is_finite()) {
+            let face = sphere::locate(d, s.level);
+            assert_eq!(leaf, face.views);
+            let expected: Vec<u64> = (0..pvis.row_words())
+                .map(|w| {
+                    face.views
+                        .iter()
+                        .map(|&v| matrix.row(v)[w])
+                        .fold(0, |a, b| a | b)
+                })
+                .collect();
+            assert_eq!(bits, expected, "eye {eye:?}");
+        }
+        let a = streaming.query(eye);
+        assert_eq!(
+            (a.bits(), a.leaf),
+            (&bits[..], leaf),
+            "streaming, eye {eye:?}"
+        );
+        let b = expanded.query(eye);
+        assert_eq!(
+            (b.bits(), b.leaf),
+            (&bits[..], leaf),
+            "expanded, eye {eye:?}"
+        );
+    }
 }
 
 #[test]
@@ -89,16 +157,24 @@ fn layout_of_a_small_file() {
     matrix.set(0, 2);
     matrix.set(5, 0);
     let bytes = round_trip(0, &[2, 1, 4], &matrix);
-    // Header 32 + table 72 = 104; CAMR 104..148; PTCH 152..288; VISB 288..302; CRC 302..306.
-    assert_eq!(bytes.len(), 306);
+    // Header 32 + table 72 = 104; CAMR 104..148; PTCH 152..288; VISB 288..372; CRC 372..376.
+    assert_eq!(bytes.len(), 376);
     assert_eq!(&bytes[..8], b"PVIS\r\n\x1a\n");
     assert_eq!(&bytes[32..36], b"CAMR");
     assert_eq!(bytes[40], 104);
     assert_eq!(&bytes[32 + 24 + 8..32 + 24 + 9], [152]);
     assert_eq!(&bytes[32 + 48 + 8..32 + 48 + 10], 288u16.to_le_bytes());
     assert_eq!(bytes[148..152], [0; 4], "alignment padding");
-    // VISB rows: one byte each; view 0 sees patch 2, view 5 patch 0.
-    assert_eq!(bytes[296..302], [0b100, 0, 0, 0, 0, 0b1]);
+    assert_eq!(bytes[8], 2, "version 2");
+    // VISB: encoding 1, reserved, 32 level-0 probabilities, one checkpoint, then the records.
+    assert_eq!(bytes[288..296], [1, 0, 0, 0, 0, 0, 0, 0]);
+    assert_eq!(bytes[360..364], [0; 4], "checkpoint of view 0");
+    // Views 1–4 see nothing: the all-zero context codes zeros from an empty code. Views 0 and
+    // 5 each need one byte; so records are 6 length bytes and 2 code bytes.
+    let records = &bytes[364..372];
+    assert_eq!(records[0], 1);
+    assert_eq!(records[2..6], [0, 0, 0, 0]);
+    assert_eq!(records[6], 1);
 }
 
 #[test]
@@ -143,10 +219,12 @@ fn write_atomic_replaces_the_file_and_leaves_no_temporary() {
 }
 
 proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
     #[test]
     fn random_contents_round_trip(
-        level in 0u32..=2,
-        counts in proptest::collection::vec(1u32..5, 1..150),
+        level in 0u32..=3,
+        counts in proptest::sample::select(vec![1usize, 2, 63, 64, 65, 130])
+            .prop_flat_map(|n| proptest::collection::vec(1u32..5, n)),
         seed in any::<u64>(),
     ) {
         let views = sphere::view_count(level);
@@ -157,11 +235,105 @@ proptest! {
                 state ^= state << 13;
                 state ^= state >> 7;
                 state ^= state << 17;
-                if state % 3 == 0 {
+                // Correlated with the view's parents, like real visibility, so the coder's
+                // contexts are exercised in every state.
+                let parent_sees = sphere::parents(v).is_some_and(|[a, _]| matrix.get(a, p));
+                if state % 7 < if parent_sees { 6 } else { 2 } {
                     matrix.set(v, p);
                 }
             }
         }
         round_trip(level, &counts, &matrix);
     }
+}
+
+/// A level-1 file with encoding 1 and a correlated matrix.
+fn coded_file() -> Vec<u8> {
+    let mut matrix = VisibilityMatrix::new(18, 70);
+    for v in 0..18 {
+        for p in 0..70 {
+            if (p * 7 + v * 3) % 11 < 5 {
+                matrix.set(v, p);
+            }
+        }
+    }
+    round_trip(1, &[1; 70], &matrix)
+}
+
+#[test]
+fn every_truncated_prefix_trailing_byte_and_bit_flip_of_a_coded_file_is_refused() {
+    let bytes = coded_file();
+    assert_eq!(
+        Pvis::parse(&bytes).unwrap().encoding(),
+        ENCODING_HIERARCHICAL
+    );
+    for len in 0..bytes.len() {
+        assert!(Pvis::parse(&bytes[..len]).is_err(), "prefix of {len} bytes");
+    }
+    let mut longer = bytes.clone();
+    longer.push(0);
+    assert!(Pvis::parse(&longer).is_err());
+    let mut flipped = bytes.clone();
+    for i in 0..bytes.len() * 8 {
+        flipped[i / 8] ^= 1 << (i % 8);
+        assert!(Pvis::parse(&flipped).is_err(), "bit {i} flipped");
+        flipped[i / 8] ^= 1 << (i % 8);
+    }
+}
+
+/// Re-stamps the CRC so a structural mutation reaches the VISB checks.
+fn with_crc(mut bytes: Vec<u8>) -> Vec<u8> {
+    let n = bytes.len() - 4;
+    let crc = crc32c(&bytes[..n]);
+    bytes[n..].copy_from_slice(&crc.to_le_bytes());
+    bytes
+}
+
+#[test]
+fn coded_visb_structure_errors() {
+    let bytes = coded_file();
+    let visb = u64::from_le_bytes(bytes[32 + 48 + 8..32 + 48 + 16].try_into().unwrap()) as usize;
+    // A zero probability would collapse the range.
+    let mut zero_prob = bytes.clone();
+    zero_prob[visb + 8..visb + 10].copy_from_slice(&0u16.to_le_bytes());
+    assert!(matches!(
+        Pvis::parse(&with_crc(zero_prob)),
+        Err(crate::runtime::Error::Invalid { what, .. }) if what.contains("probability")
+    ));
+    // A wrong checkpoint.
+    let checkpoint = visb + 8 + 2 * 64;
+    let mut bad_checkpoint = bytes.clone();
+    bad_checkpoint[checkpoint] = 1;
+    assert!(matches!(
+        Pvis::parse(&with_crc(bad_checkpoint)),
+        Err(crate::runtime::Error::Invalid { what, .. }) if what.contains("checkpoint")
+    ));
+    // Encoding 1 in a version-1 file.
+    let mut v1 = bytes.clone();
+    v1[8] = 1;
+    assert_eq!(
+        Pvis::parse(&with_crc(v1)).unwrap_err(),
+        crate::runtime::Error::UnsupportedEncoding { found: 1 }
+    );
+}
+
+#[test]
+fn version_1_files_with_raw_rows_still_parse() {
+    let mut matrix = VisibilityMatrix::new(6, 3);
+    matrix.set(0, 2);
+    let v2 = round_trip(0, &[2, 1, 4], &matrix);
+    // Swap VISB for encoding 0 by hand: same layout, raw rows, version 1.
+    let raw = encode_raw(&matrix);
+    let visb = u64::from_le_bytes(v2[32 + 48 + 8..32 + 48 + 16].try_into().unwrap()) as usize;
+    let mut v1 = v2[..visb].to_vec();
+    v1[8] = 1;
+    v1[32 + 48 + 16..32 + 48 + 24].copy_from_slice(&(raw.len() as u64).to_le_bytes());
+    v1.extend_from_slice(&raw);
+    let len = v1.len() as u64 + 4;
+    v1[16..24].copy_from_slice(&len.to_le_bytes());
+    v1.extend_from_slice(&[0; 4]);
+    let v1 = with_crc(v1);
+    let pvis = Pvis::parse(&v1).unwrap();
+    assert_eq!((pvis.version(), pvis.encoding()), (1, ENCODING_RAW));
+    check_queries(&pvis, &matrix, 7);
 }

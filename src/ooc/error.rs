@@ -123,6 +123,14 @@ impl Fault {
     pub(crate) fn at_byte(kind: MeshErrorKind, byte: usize, message: impl Into<String>) -> Fault {
         Fault::new(kind, Some(ErrorPosition::Byte(byte as u64)), message)
     }
+    /// Writing the conversion cache failed (disk full, no permission).
+    pub(crate) fn cache(err: std::io::Error) -> Fault {
+        Fault::new(
+            MeshErrorKind::Io,
+            None,
+            format!("cannot write the conversion cache: {err}"),
+        )
+    }
     pub(crate) fn in_file(self, path: &Path) -> MeshError {
         MeshError {
             path: path.to_path_buf(),

@@ -2,25 +2,39 @@
 //!
 //! [`Mesh::open`] maps the file and validates it once; after that [`Mesh::position`] and
 //! [`Mesh::triangle`] cannot fail and read straight from the bytes. A binary little-endian PLY
-//! with fixed-size records is used in place, zero copy (`ply::in_place`); every other PLY is
-//! converted once (`ply::convert`) into an owned copy with the same strided layout, so both
-//! cases share one code path: a byte slice, the offset of vertex 0's `x`, `y`, `z` and of
-//! triangle 0's indices, and two strides.
+//! with fixed-size records is used in place, zero copy (`ply::in_place`). Every other input
+//! (other PLY flavours, OBJ, STL) is converted once, streaming, into a cache file in this
+//! crate's own layout (`cache.rs`: `f32 x, y, z` and `u32 a, b, c` records), which is then
+//! mapped; the next open of the same unchanged file maps the cache directly. Both cases share
+//! one code path: a byte slice, the offset of vertex 0's `x`, `y`, `z` and of triangle 0's
+//! indices, and two strides.
+//!
+//! **Invariant:** the heap holds nothing that grows with the mesh, on any path: the input is
+//! mapped, converters stream through fixed buffers, STL welding partitions its table to fit
+//! [`OpenOptions::memory_budget`]. Only the page cache grows.
 //!
 //! Cost: opening the 1.9 MB bunny in place is one validation pass (about a millisecond in
 //! release); a query is a multiply-add and three little-endian loads.
 //!
 //! Files: `error.rs` (errors with positions), `mmap.rs` (the map, the crate's only `unsafe`),
-//! `ply/` (header, in-place and converting readers), `write_ply.rs` (`--mesh-out`).
+//! `cache.rs` (conversion cache files), `ply/` (header, in-place and converting readers),
+//! `obj.rs`, `stl.rs` (converters), `text.rs` (line scanning and number parsing for the text
+//! formats), `write_ply.rs` (`--mesh-out`).
 
+mod cache;
 mod error;
 mod mmap;
+mod obj;
 mod ply;
+mod stl;
+mod text;
 pub mod write_ply;
 
 use std::fs::File;
 use std::path::{Path, PathBuf};
 
+pub use cache::default_cache_dir;
+use cache::{CacheKey, CacheWriter};
 use error::Fault;
 pub use error::{ErrorPosition, MeshError, MeshErrorKind};
 use mmap::MeshBytes;
@@ -50,7 +64,82 @@ pub(crate) struct Layout {
 
 /// Bytes per vertex and per triangle in the owned (converted) layout: `f32 x, y, z` and
 /// `u32 a, b, c`, densely packed.
-const OWNED_RECORD_BYTES: usize = 12;
+const OWNED_RECORD_BYTES: usize = cache::RECORD_BYTES;
+
+/// Default heap budget for opening a mesh when the caller gives none: 512 MiB.
+pub const DEFAULT_MEMORY_BUDGET: u64 = 512 << 20;
+
+/// How [`Mesh::open_with`] opens a mesh.
+#[derive(Clone, Debug)]
+pub struct OpenOptions {
+    /// Where conversion caches are kept; `None` converts into an unnamed temporary file every
+    /// time (nothing is reused, nothing is left behind).
+    pub cache_dir: Option<PathBuf>,
+    /// Heap bytes the conversion may use (STL welding sizes its tables by it); the mesh
+    /// itself is never on the heap.
+    pub memory_budget: u64,
+}
+
+impl Default for OpenOptions {
+    /// The [`default_cache_dir`] and [`DEFAULT_MEMORY_BUDGET`].
+    fn default() -> OpenOptions {
+        OpenOptions {
+            cache_dir: Some(default_cache_dir()),
+            memory_budget: DEFAULT_MEMORY_BUDGET,
+        }
+    }
+}
+
+/// Where a mesh's bytes come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshSource {
+    /// The input file's own records, mapped (binary little-endian PLY).
+    InPlace,
+    /// A conversion cache from an earlier open of the same unchanged file, mapped.
+    CacheHit,
+    /// Converted by this open, into a cache file (or a temporary file), mapped.
+    Converted,
+    /// Built in memory by [`Mesh::from_memory`].
+    Memory,
+}
+
+/// The input formats, by file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum InputFormat {
+    Ply,
+    Obj,
+    Stl,
+}
+
+impl InputFormat {
+    fn of(path: &Path) -> Result<InputFormat, Fault> {
+        let extension = path.extension().map(|e| e.to_string_lossy().to_lowercase());
+        match extension.as_deref() {
+            Some("ply") => Ok(InputFormat::Ply),
+            Some("obj") => Ok(InputFormat::Obj),
+            Some("stl") => Ok(InputFormat::Stl),
+            other => {
+                let found = match other {
+                    Some(e) => format!("unsupported file type '.{e}'"),
+                    None => "unsupported file type (no extension)".to_string(),
+                };
+                Err(Fault::new(
+                    MeshErrorKind::UnsupportedFormat,
+                    None,
+                    format!("{found}: expected .ply, .obj or .stl"),
+                ))
+            }
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            InputFormat::Ply => "a PLY header",
+            InputFormat::Obj => "OBJ statements",
+            InputFormat::Stl => "an STL header",
+        }
+    }
+}
 
 /// A triangle mesh opened for reading.
 pub struct Mesh {
@@ -60,26 +149,18 @@ pub struct Mesh {
     vertex_count: u32,
     triangle_count: u32,
     bounds: Bounds,
-    /// True when `bytes` is the file's own records (no conversion).
-    in_place: bool,
+    source: MeshSource,
 }
 
 impl Mesh {
-    /// Opens and validates the mesh at `path`.
+    /// Opens and validates the mesh at `path` with [`OpenOptions::default`].
     pub fn open(path: &Path) -> Result<Mesh, MeshError> {
-        let extension = path.extension().map(|e| e.to_string_lossy().to_lowercase());
-        if extension.as_deref() != Some("ply") {
-            let found = match &extension {
-                Some(e) => format!("unsupported file type '.{e}'"),
-                None => "unsupported file type (no extension)".to_string(),
-            };
-            return Err(Fault::new(
-                MeshErrorKind::UnsupportedFormat,
-                None,
-                format!("{found}: expected .ply"),
-            )
-            .in_file(path));
-        }
+        Mesh::open_with(path, &OpenOptions::default())
+    }
+
+    /// Opens and validates the mesh at `path` (`.ply`, `.obj` or `.stl`).
+    pub fn open_with(path: &Path, options: &OpenOptions) -> Result<Mesh, MeshError> {
+        let format = InputFormat::of(path).map_err(|f| f.in_file(path))?;
         let file = File::open(path).map_err(|e| MeshError::io(path, &e))?;
         let metadata = file.metadata().map_err(|e| MeshError::io(path, &e))?;
         if metadata.is_dir() {
@@ -90,42 +171,121 @@ impl Mesh {
             return Err(Fault::at_byte(
                 MeshErrorKind::Empty,
                 0,
-                "the file is empty (0 bytes), expected a PLY header",
+                format!("the file is empty (0 bytes), expected {}", format.name()),
             )
             .in_file(path));
         }
         let bytes = MeshBytes::open(&file, metadata.len()).map_err(|e| MeshError::io(path, &e))?;
-        Mesh::from_bytes(path.to_path_buf(), bytes)
+        // Without a key (e.g. no modification time) the cache cannot be trusted: convert.
+        let key = CacheKey::of(path, &metadata).ok();
+        let cache_dir = options.cache_dir.as_deref().filter(|_| key.is_some());
+        Mesh::from_bytes(
+            path.to_path_buf(),
+            bytes,
+            format,
+            cache_dir,
+            key,
+            options.memory_budget,
+        )
     }
 
-    /// Reads a PLY file's bytes: in place when the layout allows, else converted.
-    fn from_bytes(path: PathBuf, bytes: MeshBytes) -> Result<Mesh, MeshError> {
-        let (schema, body) = ply::read(&bytes).map_err(|f| f.in_file(&path))?;
-        match body {
-            ply::Body::InPlace {
-                layout,
-                triangle_count,
-                bounds,
-            } => Ok(Mesh {
-                path,
-                in_place: bytes.is_file_backed(),
-                bytes,
-                layout,
-                vertex_count: schema.vertex_count,
-                triangle_count,
-                bounds,
-            }),
-            ply::Body::Converted {
-                positions,
-                triangles,
-                bounds,
-            } => {
-                drop(bytes);
-                Mesh::owned(path, &positions, &triangles, bounds)
+    /// Serves `bytes` in place, from a cache, or converted into one.
+    fn from_bytes(
+        path: PathBuf,
+        bytes: MeshBytes,
+        format: InputFormat,
+        cache_dir: Option<&Path>,
+        key: Option<CacheKey>,
+        memory_budget: u64,
+    ) -> Result<Mesh, MeshError> {
+        let parsed = match format {
+            InputFormat::Ply => {
+                let parsed = ply::parse(&bytes).map_err(|f| f.in_file(&path))?;
+                if let Some(body) = ply::in_place(&bytes, &parsed).map_err(|f| f.in_file(&path))? {
+                    let source = if bytes.is_file_backed() {
+                        MeshSource::InPlace
+                    } else {
+                        MeshSource::Converted
+                    };
+                    return Ok(Mesh {
+                        path,
+                        bytes,
+                        layout: body.layout,
+                        vertex_count: parsed.schema.vertex_count,
+                        triangle_count: body.triangle_count,
+                        bounds: body.bounds,
+                        source,
+                    });
+                }
+                Some(parsed)
+            }
+            InputFormat::Obj | InputFormat::Stl => None,
+        };
+        if let (Some(dir), Some(key)) = (cache_dir, &key) {
+            let cached = dir.join(key.file_name());
+            if let Ok(file) = File::open(&cached) {
+                let len = file.metadata().map(|m| m.len()).unwrap_or(0);
+                let hit = MeshBytes::open(&file, len)
+                    .ok()
+                    .and_then(|map| Mesh::from_cache(&path, map, Some(key), MeshSource::CacheHit));
+                if let Some(mesh) = hit {
+                    return Ok(mesh);
+                }
             }
         }
+        let cache_error = |e: std::io::Error| Fault::cache(e).in_file(&path);
+        let mut sink = CacheWriter::create(cache_dir, key).map_err(cache_error)?;
+        let bounds = match (format, &parsed) {
+            (InputFormat::Ply, Some(parsed)) => ply::convert(&bytes, parsed, &mut sink),
+            (InputFormat::Obj, _) => obj::convert(&bytes, &mut sink),
+            (InputFormat::Stl, _) => stl::convert(&bytes, &mut sink, memory_budget),
+            (InputFormat::Ply, None) => unreachable!("PLY input is parsed above"),
+        }
+        .map_err(|f| f.in_file(&path))?;
+        drop(bytes);
+        let file = sink.finish(bounds).map_err(cache_error)?;
+        let len = file.metadata().map_err(cache_error)?.len();
+        let map = MeshBytes::open(&file, len).map_err(cache_error)?;
+        Mesh::from_cache(&path, map, None, MeshSource::Converted).ok_or_else(|| {
+            let err = std::io::Error::other("the cache file just written does not read back");
+            Fault::cache(err).in_file(&path)
+        })
     }
 
+    /// Serves a cache file; `None` when it is stale, damaged or not for `key`.
+    fn from_cache(
+        path: &Path,
+        bytes: MeshBytes,
+        key: Option<&CacheKey>,
+        source: MeshSource,
+    ) -> Option<Mesh> {
+        let head = cache::read_header(&bytes, key)?;
+        let index = head.vertices_at + head.vertex_count as usize * OWNED_RECORD_BYTES;
+        // One sequential pass: a damaged cache must not make `triangle` return indices that
+        // `position` would refuse.
+        let indices_ok = bytes[index..]
+            .chunks_exact(4)
+            .all(|i| u32::from_le_bytes(four(i, 0)) < head.vertex_count);
+        if !indices_ok || head.vertex_count == 0 || head.triangle_count == 0 {
+            return None;
+        }
+        Some(Mesh {
+            path: path.to_path_buf(),
+            bytes,
+            layout: Layout {
+                x: head.vertices_at,
+                y: head.vertices_at + 4,
+                z: head.vertices_at + 8,
+                vertex_stride: OWNED_RECORD_BYTES,
+                index,
+                face_stride: OWNED_RECORD_BYTES,
+            },
+            vertex_count: head.vertex_count,
+            triangle_count: head.triangle_count,
+            bounds: head.bounds,
+            source,
+        })
+    }
     /// A mesh held in memory (tests, generated meshes). Validates like [`Mesh::open`]: every
     /// index below `positions.len()`, every coordinate finite. `name` stands in for the path
     /// in error messages.
@@ -233,7 +393,7 @@ impl Mesh {
             vertex_count: positions.len() as u32,
             triangle_count: triangles.len() as u32,
             bounds,
-            in_place: false,
+            source: MeshSource::Memory,
         })
     }
 
@@ -250,9 +410,13 @@ impl Mesh {
         self.triangle_count
     }
     /// True when the mesh is served from the file's own memory-mapped records, zero copy;
-    /// false when it was converted (or could not be mapped and was read into memory).
+    /// false when it was converted (see [`source`](Self::source) for whether a cache was hit).
     pub fn is_mapped(&self) -> bool {
-        self.in_place
+        self.source == MeshSource::InPlace
+    }
+    /// Where the mesh's bytes come from: in place, a cache hit, a fresh conversion, memory.
+    pub fn source(&self) -> MeshSource {
+        self.source
     }
 
     /// Position of vertex `v`.
@@ -305,7 +469,7 @@ impl std::fmt::Debug for Mesh {
             .field("vertex_count", &self.vertex_count)
             .field("triangle_count", &self.triangle_count)
             .field("bounds", &self.bounds)
-            .field("is_mapped", &self.in_place)
+            .field("source", &self.source)
             .finish()
     }
 }

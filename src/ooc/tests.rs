@@ -166,7 +166,12 @@ fn open_bytes(name: &str, bytes: &[u8]) -> Result<Mesh, MeshError> {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join(name);
     std::fs::write(&path, bytes).unwrap();
-    Mesh::open(&path)
+    // The cache goes with the file, not into the user's cache directory.
+    let options = OpenOptions {
+        cache_dir: Some(dir.path().join("cache")),
+        ..OpenOptions::default()
+    };
+    Mesh::open_with(&path, &options)
 }
 
 fn assert_pyramid(mesh: &Mesh) {
@@ -733,7 +738,7 @@ fn file_system_errors() {
     assert_eq!(err.kind(), MeshErrorKind::UnsupportedFormat);
     assert_eq!(
         err.to_string(),
-        "model.xyz: unsupported file type '.xyz': expected .ply"
+        "model.xyz: unsupported file type '.xyz': expected .ply, .obj or .stl"
     );
     let err = Mesh::open(Path::new("/nonexistent/bunny.ply")).unwrap_err();
     assert_eq!(err.kind(), MeshErrorKind::Io);
@@ -755,7 +760,8 @@ fn file_system_errors() {
 /// Opens `bytes` without touching the file system; on success every query must be in range.
 fn open_in_memory(bytes: &[u8]) {
     let copy = MeshBytes::filled(bytes.len(), |out| out.copy_from_slice(bytes)).unwrap();
-    if let Ok(mesh) = Mesh::from_bytes(PathBuf::from("fuzz.ply"), copy) {
+    let name = PathBuf::from("fuzz.ply");
+    if let Ok(mesh) = Mesh::from_bytes(name, copy, InputFormat::Ply, None, None, 1 << 20) {
         for v in 0..mesh.vertex_count() {
             assert!(mesh.position(v).iter().all(|c| c.is_finite()));
         }

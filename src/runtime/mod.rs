@@ -5,29 +5,40 @@
 //! arithmetic on every offset, validation at [`Pvis::parse`] and infallible accessors after.
 //! Query technique: Meruvia 2002 — the eye's direction from the model centre falls in one face
 //! of the sampling sphere, and the patches visible from the face's three corner views
-//! approximate those visible from the eye. Cost: `parse` is one pass over the file (CRC) plus
-//! one over the patch table; a query is one point location (`sphere::locate`, ≤ 4 plane tests
-//! per level) plus three rows OR-ed, `3·ceil(P/8)` bytes read.
+//! approximate those visible from the eye. Rows are stored raw (VISB encoding 0) or range-coded
+//! along the sphere hierarchy (encoding 1, `visb`, `coder`). Cost: `parse` is one pass over the
+//! file (CRC) plus one over the patch table and the VISB records; three query modes trade
+//! memory for time — [`Pvis::query`] (one row of scratch, decodes the leaf's `3 + 3·level`
+//! ancestor views in lock step), [`Streaming`] (`4 + 3·level` rows, decodes only where the path
+//! to the leaf changed) and [`Expanded`] (every row decoded once; `O(level + P/64)` a query).
 //!
 //! **Invariant:** nothing here allocates or panics on any input; the only panics are `assert!`s
 //! on caller contracts (an out-of-range patch index, a too-small scratch buffer).
 //! Needs only `core` (and the core-only [`crate::sphere`]). Format: `spec/FORMAT.md`.
 #![forbid(unsafe_code)]
 
+mod coder;
 pub mod consts;
 pub mod crc32c;
 mod error;
+mod expanded;
 mod parse;
 mod query;
 mod stream;
+mod streaming;
+mod visb;
 
 #[cfg(test)]
 mod tests;
 
+pub use coder::{RangeDecoder, context};
 pub use error::Error;
+pub use expanded::Expanded;
 pub use query::{Patches, TriangleRanges, Visible, ranges};
+pub use streaming::Streaming;
 
 use stream::Stream;
+use visb::Visb;
 
 /// Sampling parameters stored in the file (spec § CAMR).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,9 +85,8 @@ pub struct Pvis<'a> {
     triangle_count: u64,
     /// The PTCH records, `patch_count × PATCH_RECORD_LEN` bytes.
     records: &'a [u8],
-    /// The VISB rows, `views × row_bytes` bytes.
-    rows: &'a [u8],
-    row_bytes: usize,
+    /// The VISB payload.
+    visb: Visb<'a>,
     visibility_bytes: u64,
 }
 
@@ -152,8 +162,20 @@ impl<'a> Pvis<'a> {
         (self.patch_count as usize).div_ceil(64)
     }
 
+    /// The VISB encoding of the file: [`consts::ENCODING_RAW`] or
+    /// [`consts::ENCODING_HIERARCHICAL`].
+    pub fn encoding(&self) -> u32 {
+        match self.visb {
+            Visb::Raw { .. } => consts::ENCODING_RAW,
+            Visb::Hierarchical { .. } => consts::ENCODING_HIERARCHICAL,
+        }
+    }
+
     /// Decodes the row of `view` into `out[..row_words()]`: bit `p % 64` of word `p / 64` is
     /// patch `p`; bits past the last patch are zero.
+    ///
+    /// For encoding 1 this decodes the view together with its `≤ 3 + 3·level` ancestors in
+    /// lock step (O(level · P) work, no scratch); use [`Pvis::expand`] to decode all views.
     ///
     /// # Panics
     /// If `view >= self.sampling().views` or `out.len() < self.row_words()`.
@@ -165,28 +187,110 @@ impl<'a> Pvis<'a> {
             out.len()
         );
         out[..words].fill(0);
-        self.or_row(view, &mut out[..words]);
+        self.or_rows(&[view], &mut out[..words]);
     }
 
-    /// ORs the row of `view` into `out`.
-    fn or_row(&self, view: u32, out: &mut [u64]) {
-        assert!(
-            view < self.sampling.views,
-            "view {view} out of range (views {})",
-            self.sampling.views
-        );
-        let start = view as usize * self.row_bytes;
-        let row = self.rows.get(start..start + self.row_bytes).unwrap_or(&[]);
-        for (word, chunk) in out.iter_mut().zip(row.chunks(8)) {
-            let mut le = [0u8; 8];
-            le[..chunk.len()].copy_from_slice(chunk);
-            *word |= u64::from_le_bytes(le);
+    /// ORs the rows of `views` (one view, or the corners of a leaf) into `out`.
+    fn or_rows(&self, views: &[u32], out: &mut [u64]) {
+        for &view in views {
+            assert!(
+                view < self.sampling.views,
+                "view {view} out of range (views {})",
+                self.sampling.views
+            );
+        }
+        match self.visb {
+            Visb::Raw { rows, row_bytes } => {
+                for &view in views {
+                    let start = view as usize * row_bytes;
+                    let row = rows.get(start..start + row_bytes).unwrap_or(&[]);
+                    for (word, chunk) in out.iter_mut().zip(row.chunks(8)) {
+                        let mut le = [0u8; 8];
+                        le[..chunk.len()].copy_from_slice(chunk);
+                        *word |= u64::from_le_bytes(le);
+                    }
+                }
+            }
+            Visb::Hierarchical { .. } => {
+                self.visb.or_rows_lockstep(views, out, self.patch_count);
+            }
         }
     }
 
-    /// `u64` words of scratch space [`Pvis::query`] needs.
+    /// Decodes the row of `view` into `out` given its parents' decoded rows (`None` for a
+    /// level-0 view; ignored for encoding 0, which reads the row directly).
+    fn decode_row(&self, view: u32, parent_rows: Option<(&[u64], &[u64])>, out: &mut [u64]) {
+        match self.visb {
+            Visb::Raw { .. } => {
+                out.fill(0);
+                self.or_rows(&[view], out);
+            }
+            Visb::Hierarchical { .. } => {
+                self.visb
+                    .decode_row(view, parent_rows, out, self.patch_count)
+            }
+        }
+    }
+
+    /// `u64` words of scratch space [`Pvis::query`] needs: one row.
     pub fn scratch_words(&self) -> usize {
         self.row_words()
+    }
+
+    /// `u64` words of scratch a [`Streaming`] query state needs: `4 + 3·level` rows (the
+    /// answer, the 3 corners of the root face and 3 edge midpoints per level of the path).
+    pub fn scratch_bound(&self) -> usize {
+        streaming::slots(self.sampling.level) * self.row_words()
+    }
+
+    /// `u64` words of the table [`Pvis::expand`] fills: every view's row, the answer row, and
+    /// 6 words per inner face of the sphere hierarchy (its 3 split planes and 3 midpoints).
+    pub fn expanded_bound(&self) -> usize {
+        expanded::words(self.sampling.level, self.sampling.views, self.row_words())
+    }
+
+    /// A streaming query state over `scratch` (at least [`Pvis::scratch_bound`] words): decodes
+    /// only the rows along the path to the eye's leaf and keeps them, so a camera that stays in
+    /// its leaf costs one point location and a move to a nearby leaf decodes a few rows.
+    ///
+    /// # Panics
+    /// If `scratch.len() < self.scratch_bound()`.
+    pub fn streaming<'s>(&self, scratch: &'s mut [u64]) -> Streaming<'a, 's> {
+        Streaming::new(*self, scratch)
+    }
+
+    /// Decodes every view once into `table` (at least [`Pvis::expanded_bound`] words) and
+    /// precomputes the point-location planes, for queries in `O(level + P/64)`.
+    ///
+    /// # Panics
+    /// If `table.len() < self.expanded_bound()`.
+    pub fn expand<'t>(&self, table: &'t mut [u64]) -> Expanded<'a, 't> {
+        Expanded::new(*self, table)
+    }
+
+    /// Whether patch `p` faces away from `eye` entirely, by its normal cone — meshoptimizer's
+    /// cluster cone test with the bounding sphere (`meshopt_Bounds`): with `c`, `r` the
+    /// patch's bounding sphere, `axis`, `cos` its normal cone and
+    /// `cutoff = sqrt(1 − cos²)`, the patch is back-facing iff
+    /// `cos > 0` and `dot(c − eye, axis) > cutoff · |c − eye| + r`. A renderer may skip such
+    /// patches in addition to the visibility answer; the test is conservative.
+    ///
+    /// # Panics
+    /// If `p >= self.patch_count()`.
+    pub fn backfacing(&self, p: u32, eye: [f32; 3]) -> bool {
+        let info = self.patch(p);
+        if info.cone_cos <= 0.0 {
+            return false;
+        }
+        let cutoff = libm::sqrtf(1.0 - info.cone_cos * info.cone_cos);
+        let v = [
+            info.center[0] - eye[0],
+            info.center[1] - eye[1],
+            info.center[2] - eye[2],
+        ];
+        let len = libm::sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        let d = v[0] * info.cone_axis[0] + v[1] * info.cone_axis[1] + v[2] * info.cone_axis[2];
+        d > cutoff * len + info.radius
     }
 
     /// The patches visible from `eye` (model space), following spec § Query: the OR of the rows

@@ -10,6 +10,7 @@
 use super::consts::*;
 use super::crc32c::crc32c;
 use super::stream::{FromData, Stream};
+use super::visb::{Visb, read_varint};
 use super::{Error, Pvis, Sampling};
 
 /// Where a section lies, as checked against the table rules.
@@ -93,7 +94,7 @@ pub(super) fn parse(data: &[u8]) -> Result<Pvis<'_>, Error> {
     }
     let mut s = Stream::new_at(data, MAGIC.len());
     let version = read::<u32>(&mut s, have)?;
-    if version != VERSION {
+    if !(MIN_VERSION..=VERSION).contains(&version) {
         return Err(Error::UnsupportedVersion { found: version });
     }
     let flags = read::<u32>(&mut s, have)?;
@@ -185,7 +186,7 @@ pub(super) fn parse(data: &[u8]) -> Result<Pvis<'_>, Error> {
 
     let sampling = parse_camr(data, camr)?;
     let (patch_count, triangle_count) = parse_ptch(data, ptch)?;
-    let rows_offset = parse_visb(data, visb, sampling.views, patch_count)?;
+    let payload = parse_visb(data, visb, version, sampling, patch_count)?;
 
     Ok(Pvis {
         bytes: data,
@@ -193,8 +194,7 @@ pub(super) fn parse(data: &[u8]) -> Result<Pvis<'_>, Error> {
         patch_count,
         triangle_count,
         records: &data[at(ptch.offset + PTCH_HEADER_LEN)..at(ptch.offset + ptch.length)],
-        rows: &data[at(rows_offset)..at(visb.offset + visb.length)],
-        row_bytes: at(row_bytes(patch_count)),
+        visb: payload,
         visibility_bytes: visb.length,
     })
 }
@@ -361,18 +361,38 @@ fn parse_ptch(data: &[u8], section: Section) -> Result<(u32, u64), Error> {
     Ok((patch_count, triangle_count))
 }
 
-/// § VISB. Returns the offset of the first row.
-fn parse_visb(data: &[u8], section: Section, views: u32, patch_count: u32) -> Result<u64, Error> {
+/// § VISB: the fixed part, then encoding 0 or 1.
+fn parse_visb<'a>(
+    data: &'a [u8],
+    section: Section,
+    version: u32,
+    sampling: Sampling,
+    patch_count: u32,
+) -> Result<Visb<'a>, Error> {
     if section.length < VISB_HEADER_LEN {
         return Err(Error::BadSection { tag: TAG_VISB });
     }
     let have = data.len();
     let mut s = Stream::new_at(data, at(section.offset));
     let encoding = read::<u32>(&mut s, have)?;
-    if encoding != ENCODING_RAW {
-        return Err(Error::UnsupportedEncoding { found: encoding });
-    }
     reserved(&mut s, have, "VISB reserved field must be 0")?;
+    match encoding {
+        ENCODING_RAW => parse_raw(data, section, sampling.views, patch_count),
+        ENCODING_HIERARCHICAL if version >= 2 => {
+            parse_hierarchical(data, section, sampling, patch_count)
+        }
+        found => Err(Error::UnsupportedEncoding { found }),
+    }
+}
+
+/// § VISB, encoding 0: length and padding bits.
+fn parse_raw(
+    data: &[u8],
+    section: Section,
+    views: u32,
+    patch_count: u32,
+) -> Result<Visb<'_>, Error> {
+    let have = data.len();
     let row_len = row_bytes(patch_count);
     // Cannot overflow: views ≤ 2^18, row_len ≤ 2^17.
     let expected = VISB_HEADER_LEN + views as u64 * row_len;
@@ -398,5 +418,107 @@ fn parse_visb(data: &[u8], section: Section, views: u32, patch_count: u32) -> Re
             }
         }
     }
-    Ok(rows_offset)
+    Ok(Visb::Raw {
+        rows: &data[at(rows_offset)..at(section.offset + section.length)],
+        row_bytes: at(row_len),
+    })
+}
+
+/// § VISB, encoding 1: probability table, checkpoints, and every view record's length prefix
+/// and code bounds. The codes themselves need no check: every byte string decodes (§ Range
+/// coder), so after this no decode can fail.
+fn parse_hierarchical(
+    data: &[u8],
+    section: Section,
+    sampling: Sampling,
+    patch_count: u32,
+) -> Result<Visb<'_>, Error> {
+    let have = data.len() as u64;
+    let end = section.offset + section.length;
+    let probs_start = section.offset + VISB_HEADER_LEN;
+    // Cannot overflow: level ≤ 7, views ≤ 2^17.
+    let probs_end = probs_start + (sampling.level as u64 + 1) * CONTEXTS as u64 * 2;
+    let checkpoints_end = probs_end + 4 * sampling.views.div_ceil(CHECKPOINT_INTERVAL) as u64;
+    if checkpoints_end > end {
+        return Err(Error::SectionLength {
+            tag: TAG_VISB,
+            length: section.length,
+            expected: checkpoints_end - section.offset,
+        });
+    }
+    let probs = &data[at(probs_start)..at(probs_end)];
+    for (i, pair) in probs.chunks_exact(2).enumerate() {
+        let p0 = u16::from_le_bytes([pair[0], pair[1]]);
+        if p0 == 0 || u32::from(p0) >= 1 << PROB_BITS {
+            return Err(Error::Invalid {
+                what: "VISB probability must be in 1..4096",
+                offset: probs_start + 2 * i as u64,
+                value: p0 as u64,
+            });
+        }
+    }
+    let checkpoints = &data[at(probs_end)..at(checkpoints_end)];
+    let records = &data[at(checkpoints_end)..at(end)];
+    let max_len = max_code_len(patch_count);
+    let mut pos = 0usize;
+    for view in 0..sampling.views {
+        let offset = checkpoints_end + pos as u64;
+        if view % CHECKPOINT_INTERVAL == 0 {
+            let k = at(probs_end) + 4 * (view / CHECKPOINT_INTERVAL) as usize;
+            let stored = read::<u32>(&mut Stream::new_at(data, k), data.len())?;
+            if stored as usize != pos {
+                return Err(Error::Invalid {
+                    what: "VISB checkpoint must be the offset of its view's record",
+                    offset: k as u64,
+                    value: stored as u64,
+                });
+            }
+        }
+        let (len, n) = read_varint(records, pos).ok_or(Error::Invalid {
+            what: "VISB record length must be a LEB128 of at most 4 bytes inside the section",
+            offset,
+            value: view as u64,
+        })?;
+        if n > 1 && records[pos + n - 1] == 0 {
+            return Err(Error::Invalid {
+                what: "VISB record length must be a minimal LEB128",
+                offset,
+                value: len as u64,
+            });
+        }
+        if len as u64 > max_len {
+            return Err(Error::LimitExceeded {
+                what: "VISB code length",
+                value: len as u64,
+                limit: max_len,
+            });
+        }
+        let code_end = pos + n + len as usize;
+        if code_end > records.len() {
+            return Err(Error::Truncated {
+                needed: checkpoints_end + code_end as u64,
+                have: end.min(have),
+            });
+        }
+        if len > 0 && records[code_end - 1] == 0 {
+            return Err(Error::Invalid {
+                what: "VISB code must not end in a zero byte",
+                offset: checkpoints_end + code_end as u64 - 1,
+                value: view as u64,
+            });
+        }
+        pos = code_end;
+    }
+    if pos != records.len() {
+        return Err(Error::SectionLength {
+            tag: TAG_VISB,
+            length: section.length,
+            expected: section.length - (records.len() - pos) as u64,
+        });
+    }
+    Ok(Visb::Hierarchical {
+        probs,
+        checkpoints,
+        records,
+    })
 }

@@ -119,6 +119,63 @@ pub fn ranges<'v>(pvis: &'v Pvis<'_>, visible: &'v Visible<'_>) -> TriangleRange
     }
 }
 
+/// Where the eye is relative to the sampling sphere (spec § Query steps 1–3).
+pub(super) enum Eye {
+    /// A finite offset `d = eye − center`; whether `|d| < distance`.
+    Direction([f32; 3], bool),
+    /// A non-finite offset: no direction to look up.
+    Unknown,
+}
+
+/// § Query steps 1–3.
+pub(super) fn classify(pvis: &Pvis<'_>, eye: [f32; 3]) -> Eye {
+    let c = pvis.sampling.center;
+    // Step 1: the offset from the centre, in binary32 like the bake's cameras.
+    let d = [eye[0] - c[0], eye[1] - c[1], eye[2] - c[2]];
+    if !d.iter().all(|x| x.is_finite()) {
+        return Eye::Unknown;
+    }
+    // Step 3: in binary64, where the squares of binary32 values cannot overflow.
+    let d2: f64 = d.iter().map(|&x| x as f64 * x as f64).sum();
+    let r = pvis.sampling.distance as f64;
+    Eye::Direction(d, d2 < r * r)
+}
+
+/// Sets every patch's bit in `out` (one row), leaving the padding bits zero.
+pub(super) fn fill_all(out: &mut [u64], patch_count: u32) {
+    out.fill(!0);
+    let tail = patch_count % 64;
+    if let (Some(last), true) = (out.last_mut(), tail != 0) {
+        *last = (1u64 << tail) - 1;
+    }
+}
+
+/// The conservative answer of § Query step 2.
+pub(super) fn everything<'s>(pvis: &Pvis<'_>, out: &'s mut [u64]) -> Visible<'s> {
+    fill_all(out, pvis.patch_count);
+    visible(
+        pvis,
+        true,
+        sphere::locate([0.0; 3], pvis.sampling.level).views,
+        out,
+    )
+}
+
+/// Wraps a computed answer.
+pub(super) fn visible<'s>(
+    pvis: &Pvis<'_>,
+    inside_sphere: bool,
+    leaf: [u32; 3],
+    bits: &'s [u64],
+) -> Visible<'s> {
+    Visible {
+        inside_sphere,
+        leaf,
+        bits,
+        patch_count: pvis.patch_count,
+    }
+}
+
 pub(super) fn query<'s>(pvis: &Pvis<'_>, eye: [f32; 3], scratch: &'s mut [u64]) -> Visible<'s> {
     let words = pvis.row_words();
     assert!(
@@ -127,38 +184,12 @@ pub(super) fn query<'s>(pvis: &Pvis<'_>, eye: [f32; 3], scratch: &'s mut [u64]) 
         scratch.len()
     );
     let out = &mut scratch[..words];
+    let Eye::Direction(d, inside_sphere) = classify(pvis, eye) else {
+        return everything(pvis, out);
+    };
+    // § Query steps 4–5.
     out.fill(0);
-    let sampling = pvis.sampling;
-    let c = sampling.center;
-    // § Query step 1: the offset from the centre, in binary32 like the bake's cameras.
-    let d = [eye[0] - c[0], eye[1] - c[1], eye[2] - c[2]];
-    if !d.iter().all(|x| x.is_finite()) {
-        // No direction to look up: answer conservatively, every patch.
-        out.fill(!0);
-        let tail = pvis.patch_count % 64;
-        if let (Some(last), true) = (out.last_mut(), tail != 0) {
-            *last = (1u64 << tail) - 1;
-        }
-        return Visible {
-            inside_sphere: true,
-            leaf: sphere::locate([0.0; 3], sampling.level).views,
-            bits: out,
-            patch_count: pvis.patch_count,
-        };
-    }
-    // § Query step 2: in binary64, where the squares of binary32 values cannot overflow.
-    let d2: f64 = d.iter().map(|&x| x as f64 * x as f64).sum();
-    let r = sampling.distance as f64;
-    let inside_sphere = d2 < r * r;
-    // § Query steps 3–4.
-    let leaf = sphere::locate(d, sampling.level).views;
-    for view in leaf {
-        pvis.or_row(view, out);
-    }
-    Visible {
-        inside_sphere,
-        leaf,
-        bits: out,
-        patch_count: pvis.patch_count,
-    }
+    let leaf = sphere::locate(d, pvis.sampling.level).views;
+    pvis.or_rows(&leaf, out);
+    visible(pvis, inside_sphere, leaf, out)
 }

@@ -223,8 +223,12 @@ fn header_errors() {
     assert_eq!(error_after(|f| f[0] = b'X'), Error::BadMagic);
     assert_eq!(Pvis::parse(b"PVIX").unwrap_err(), Error::BadMagic);
     assert_eq!(
-        error_after(|f| f[8] = 2),
-        Error::UnsupportedVersion { found: 2 }
+        error_after(|f| f[8] = 3),
+        Error::UnsupportedVersion { found: 3 }
+    );
+    assert_eq!(
+        error_after(|f| f[8] = 0),
+        Error::UnsupportedVersion { found: 0 }
     );
     assert_eq!(
         error_after(|f| f[13] = 1),

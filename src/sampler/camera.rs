@@ -3,7 +3,8 @@
 //!
 //! Convention (normative; the spec's "Sampling cameras" section mirrors it):
 //! - Sampling view `v` with unit direction `d = sphere::direction(v)`: eye
-//!   `center + d · distance`, `distance = radius / sin(fov / 2)`, looking at `center`, so the
+//!   `center + d · distance`, `distance = radius / sin(fov / 2)` evaluated in binary32
+//!   ([`SamplingParams::distance`], the value the file stores), looking at `center`, so the
 //!   bounding sphere's silhouette touches the image edges.
 //! - Look-at basis: forward `f = normalize(target − eye)`; world up `+Y`, or `+Z` when
 //!   `|f · Y| > 0.999`; right `r = normalize(f × up)`; up `u = r × f`.
@@ -61,15 +62,15 @@ impl Camera {
     /// `params.center + direction · distance` (direction need not be normalised).
     pub fn sampling(params: &SamplingParams, direction: [f32; 3]) -> Camera {
         let d = normalize(widen(direction));
-        let fov = params.fov_deg as f64;
-        let distance = params.radius as f64 / (fov.to_radians() * 0.5).sin();
+        // The binary32 distance, because that is the value the file stores (spec § CAMR).
+        let distance = params.distance() as f64;
         let center = widen(params.center);
         let eye = [
             center[0] + d[0] * distance,
             center[1] + d[1] * distance,
             center[2] + d[2] * distance,
         ];
-        Camera::look_at_f64(eye, center, fov, params.resolution)
+        Camera::look_at_f64(eye, center, params.fov_deg as f64, params.resolution)
     }
 
     /// The camera of sampling view `view`: [`Camera::sampling`] with `sphere::direction(view)`.
@@ -238,7 +239,7 @@ mod tests {
                 "{dir:?}: {x} {y}"
             );
             let eye_distance = dot(sub(camera.eye(), widen(p.center)), camera.forward()).abs();
-            assert!((eye_distance - p.distance() as f64).abs() < 1e-4);
+            assert!((eye_distance - p.distance() as f64).abs() < 1e-9);
         }
     }
 

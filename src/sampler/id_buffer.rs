@@ -49,14 +49,17 @@ impl IdBuffer {
         &self.depth
     }
 
-    /// Depth test and write: the fragment `(id, q)` replaces pixel `index` only if it is
-    /// strictly nearer, so among equal depths the triangle drawn first keeps the pixel.
+    /// Depth test and write: the fragment `(id, q)` replaces pixel `index` only if `covered`
+    /// and strictly nearer, so among equal depths the triangle drawn first keeps the pixel.
+    /// Branch-free: the rasterizer calls it for every pixel of a small triangle's bounding box,
+    /// where a branch on coverage would mispredict about half the time.
     #[inline(always)]
-    pub(crate) fn plot(&mut self, index: usize, q: f32, id: u32) {
-        if q > self.depth[index] {
-            self.depth[index] = q;
-            self.ids[index] = id;
-        }
+    pub(crate) fn plot(&mut self, index: usize, q: f32, id: u32, covered: bool) {
+        let stored = self.depth[index];
+        let wins = covered & (q > stored);
+        self.depth[index] = if wins { q } else { stored };
+        let id_stored = self.ids[index];
+        self.ids[index] = if wins { id } else { id_stored };
     }
 }
 
@@ -68,7 +71,9 @@ mod tests {
     fn new_and_clear_leave_every_pixel_empty() {
         let mut buffer = IdBuffer::new(3);
         assert_eq!(buffer.ids(), &[NO_PATCH; 9]);
-        buffer.plot(4, 0.5, 7);
+        buffer.plot(4, 0.5, 7, true);
+        buffer.plot(3, 0.5, 7, false);
+        assert_eq!(buffer.ids()[3], NO_PATCH);
         assert_eq!(buffer.ids()[4], 7);
         buffer.clear();
         assert_eq!(buffer.ids(), &[NO_PATCH; 9]);
@@ -78,10 +83,10 @@ mod tests {
     #[test]
     fn equal_depth_keeps_the_first_fragment() {
         let mut buffer = IdBuffer::new(1);
-        buffer.plot(0, 0.5, 1);
-        buffer.plot(0, 0.5, 2);
+        buffer.plot(0, 0.5, 1, true);
+        buffer.plot(0, 0.5, 2, true);
         assert_eq!(buffer.ids(), &[1]);
-        buffer.plot(0, 0.6, 3);
+        buffer.plot(0, 0.6, 3, true);
         assert_eq!(buffer.ids(), &[3]);
     }
 }

@@ -144,3 +144,49 @@ pub(crate) fn fibonacci_directions(count: u32) -> Vec<[f32; 3]> {
         })
         .collect()
 }
+
+/// The bundled Stanford bunny (`assets/bunny.ply`: binary little-endian, float x y z, uchar
+/// count + int indices), read here so the sampler's timing does not depend on `ooc`.
+pub(crate) fn bunny() -> Mesh {
+    let bytes = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/bunny.ply")).unwrap();
+    let header_end = bytes
+        .windows(11)
+        .position(|w| w == b"end_header\n")
+        .unwrap()
+        + 11;
+    let header = std::str::from_utf8(&bytes[..header_end]).unwrap();
+    let count = |element: &str| -> usize {
+        let line = header.lines().find(|l| l.starts_with(element)).unwrap();
+        line.rsplit(' ').next().unwrap().parse().unwrap()
+    };
+    let (vertices, faces) = (count("element vertex"), count("element face"));
+    let word = |at: usize| <[u8; 4]>::try_from(&bytes[at..at + 4]).unwrap();
+    let positions = (0..vertices)
+        .map(|v| std::array::from_fn(|k| f32::from_le_bytes(word(header_end + 12 * v + 4 * k))))
+        .collect();
+    let faces_start = header_end + 12 * vertices;
+    let triangles = (0..faces)
+        .map(|f| {
+            let at = faces_start + 13 * f;
+            assert_eq!(bytes[at], 3);
+            std::array::from_fn(|k| u32::from_le_bytes(word(at + 1 + 4 * k)))
+        })
+        .collect();
+    Mesh::from_memory("bunny", positions, triangles).unwrap()
+}
+
+/// A bounding sphere: the centre of the bounds and the largest distance from it.
+pub(crate) fn bounding_sphere(mesh: &Mesh) -> ([f32; 3], f32) {
+    let b = mesh.bounds();
+    let center: [f32; 3] = std::array::from_fn(|k| 0.5 * (b.min[k] + b.max[k]));
+    let radius = (0..mesh.vertex_count())
+        .map(|v| {
+            let p = mesh.position(v);
+            (0..3)
+                .map(|k| (p[k] - center[k]).powi(2))
+                .sum::<f32>()
+                .sqrt()
+        })
+        .fold(0.0, f32::max);
+    (center, radius * 1.0001)
+}

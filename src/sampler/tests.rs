@@ -1,6 +1,6 @@
 //! Tests of the sampling loop: known visibility, determinism, and the timing harness.
 
-use super::test_meshes::{fibonacci_directions, noisy_sphere, push_cube};
+use super::test_meshes::{bounding_sphere, bunny, fibonacci_directions, noisy_sphere, push_cube};
 use super::*;
 use crate::progress::NoProgress;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -61,6 +61,30 @@ fn inner_cube_is_hidden_and_axis_views_see_their_own_face() {
     }
 }
 
+#[test]
+fn sample_renders_every_sphere_view_in_order() {
+    let (mesh, patch_of) = nested_cubes();
+    let p = SamplingParams {
+        level: 1,
+        ..params([0.0; 3], 3f32.sqrt(), 48)
+    };
+    let matrix = sample(&mesh, &patch_of, 7, &p, &NoProgress);
+    assert_eq!(matrix.views(), 18);
+    let directions: Vec<_> = (0..18).map(crate::sphere::direction).collect();
+    assert_eq!(
+        matrix,
+        sample_directions(&mesh, &patch_of, 7, &p, &directions, &NoProgress)
+    );
+    // Level-0 views are the axes +X, −X, +Y, −Y, +Z, −Z, the order of the cube's faces.
+    for face in 0..6 {
+        assert!(
+            matrix.get(face, face) && !matrix.get(face, face ^ 1),
+            "face {face}"
+        );
+    }
+    assert!((0..18).all(|view| !matrix.get(view, 6)));
+}
+
 struct Counter {
     started: AtomicU64,
     done: AtomicU64,
@@ -114,26 +138,22 @@ fn output_is_identical_for_one_and_two_threads() {
     }
 }
 
-/// Median time of `sample` on a ~100K-triangle closed mesh, 1026 views at 512².
-/// Run: `cargo test --release sampler::tests::timing -- --ignored --nocapture`.
-#[test]
-#[ignore]
-fn timing_100k_triangles_1026_views_512() {
-    let mesh = noisy_sphere(159, 317, 0.05, 1);
+fn median_sample_time(name: &str, mesh: &Mesh) {
     let patch_of: Vec<PatchId> = (0..mesh.triangle_count()).map(|t| t / 100).collect();
     let patch_count = patch_of.last().unwrap() + 1;
+    let (center, radius) = bounding_sphere(mesh);
     let p = SamplingParams {
         level: 4,
-        ..params([0.0; 3], 1.1, 512)
+        ..params(center, radius, 512)
     };
-    let directions = fibonacci_directions(crate::sphere::view_count(4));
     let mut times = Vec::new();
-    let mut seen = 0;
+    let (mut seen, mut views) = (0, 0);
     for _ in 0..3 {
         let start = std::time::Instant::now();
-        let matrix = sample_directions(&mesh, &patch_of, patch_count, &p, &directions, &NoProgress);
+        let matrix = sample(mesh, &patch_of, patch_count, &p, &NoProgress);
         times.push(start.elapsed().as_secs_f64());
-        seen = (0..matrix.views())
+        views = matrix.views();
+        seen = (0..views)
             .map(|v| {
                 matrix
                     .row(v)
@@ -145,12 +165,21 @@ fn timing_100k_triangles_1026_views_512() {
     }
     times.sort_by(f64::total_cmp);
     println!(
-        "{} triangles, {} views at 512²: median {:.3} s of {:?} on {} threads; {:.1} patches/view",
+        "{name}: {} triangles, {views} views at 512²: median {:.3} s of {times:.3?} on {} \
+         threads; {:.1} of {patch_count} patches per view",
         mesh.triangle_count(),
-        directions.len(),
         times[1],
-        times,
         rayon::current_num_threads(),
-        seen as f64 / directions.len() as f64
+        seen as f64 / views as f64
     );
+}
+
+/// Median time of `sample` at level 4 (1026 views), 512², on the bundled bunny and on a
+/// generated ~100K-triangle closed mesh. Run:
+/// `RAYON_NUM_THREADS=2 cargo test --release --lib sampler::tests::timing -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn timing_level_4_at_512() {
+    median_sample_time("bunny", &bunny());
+    median_sample_time("noisy sphere", &noisy_sphere(159, 317, 0.05, 1));
 }

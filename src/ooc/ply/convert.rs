@@ -1,15 +1,17 @@
 //! Converting PLY reader: any encoding, any scalar types, any property order, polygons.
 //!
 //! Streams once through the body, element by element, keeping only `x, y, z` (as `f32`) and
-//! the face index lists (fan-triangulated into `u32` triples: `(i0, ik, ik+1)`); everything else
-//! is read and dropped. Reservations are capped by what the rest of the file can hold, so an
-//! untrusted header count cannot allocate before the data is seen. Cost: one pass; ASCII is
-//! dominated by number parsing (tens of MB/s), binary by the per-value byte-order match.
+//! the face index lists (fan-triangulated into `u32` triples: `(i0, ik, ik+1)`), which go
+//! straight into the conversion cache ([`CacheWriter`]); everything else is read and dropped.
+//! Nothing grows with the mesh: the only buffer is one polygon's index list. Cost: one pass;
+//! ASCII is dominated by number parsing, binary by the per-value byte-order match.
 
+use super::super::Bounds;
+use super::super::cache::CacheWriter;
 use super::super::error::{ErrorPosition, Fault, MeshErrorKind};
 use super::binary::BinaryCursor;
 use super::header::{Element, Encoding, Header, PropertyType, ScalarType};
-use super::{Body, BoundsBuilder, Schema, reservation};
+use super::{BoundsBuilder, Schema};
 
 /// One source of body values: ASCII tokens or binary bytes.
 trait Values {
@@ -23,10 +25,6 @@ trait Values {
     fn skip_element(&mut self, element: &Element) -> Result<(), Fault>;
     /// Where the next value starts (ASCII: skips blanks first to find its line).
     fn position(&mut self) -> ErrorPosition;
-    /// Bytes left, for capping reservations.
-    fn remaining(&self) -> usize;
-    /// Fewest bytes one record of `element` can take in this encoding.
-    fn min_record_bytes(&self, element: &Element) -> usize;
     /// Checks up front that a fixed-size element fits, for a clearer truncation message.
     fn check_fits(&self, element: &Element) -> Result<(), Fault>;
 }
@@ -46,19 +44,6 @@ impl Values for BinaryCursor<'_> {
     }
     fn position(&mut self) -> ErrorPosition {
         ErrorPosition::Byte(self.offset as u64)
-    }
-    fn remaining(&self) -> usize {
-        BinaryCursor::remaining(self)
-    }
-    fn min_record_bytes(&self, element: &Element) -> usize {
-        element
-            .properties
-            .iter()
-            .map(|p| match p.ty {
-                PropertyType::Scalar(s) => s.size(),
-                PropertyType::List { count, .. } => count.size(),
-            })
-            .sum()
     }
     fn check_fits(&self, element: &Element) -> Result<(), Fault> {
         match element.fixed_size() {
@@ -178,20 +163,18 @@ impl Values for AsciiTokens<'_> {
         self.skip_blanks();
         ErrorPosition::Line(self.line)
     }
-    fn remaining(&self) -> usize {
-        self.bytes.len().saturating_sub(self.offset)
-    }
-    fn min_record_bytes(&self, element: &Element) -> usize {
-        // A value and its separator.
-        2 * element.properties.len()
-    }
     fn check_fits(&self, _: &Element) -> Result<(), Fault> {
         Ok(())
     }
 }
 
-/// Converts the whole body.
-pub(crate) fn read(bytes: &[u8], header: &Header, schema: &Schema) -> Result<Body, Fault> {
+/// Converts the whole body into `sink`; returns the bounds of the vertices.
+pub(crate) fn read(
+    bytes: &[u8],
+    header: &Header,
+    schema: &Schema,
+    sink: &mut CacheWriter,
+) -> Result<Bounds, Fault> {
     match header.encoding {
         Encoding::Ascii => run(
             &mut AsciiTokens {
@@ -201,55 +184,52 @@ pub(crate) fn read(bytes: &[u8], header: &Header, schema: &Schema) -> Result<Bod
             },
             header,
             schema,
+            sink,
         ),
         Encoding::BinaryLittleEndian => run(
             &mut BinaryCursor::new(bytes, header.body_offset, false),
             header,
             schema,
+            sink,
         ),
         Encoding::BinaryBigEndian => run(
             &mut BinaryCursor::new(bytes, header.body_offset, true),
             header,
             schema,
+            sink,
         ),
     }
 }
 
-fn run(values: &mut impl Values, header: &Header, schema: &Schema) -> Result<Body, Fault> {
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
+fn run(
+    values: &mut impl Values,
+    header: &Header,
+    schema: &Schema,
+    sink: &mut CacheWriter,
+) -> Result<Bounds, Fault> {
     let mut bounds = BoundsBuilder::new();
     let last = schema.vertex.max(schema.face);
     // Elements after both vertices and faces are never read.
     for (i, element) in header.elements.iter().enumerate().take(last + 1) {
         values.check_fits(element)?;
         if i == schema.vertex {
-            read_vertices(values, element, schema, &mut positions, &mut bounds)?;
+            read_vertices(values, element, schema, sink, &mut bounds)?;
         } else if i == schema.face {
-            read_faces(values, element, schema, &mut triangles)?;
+            read_faces(values, element, schema, sink)?;
         } else {
             values.skip_element(element)?;
         }
     }
-    Ok(Body::Converted {
-        positions,
-        triangles,
-        bounds: bounds.finish(),
-    })
+    Ok(bounds.finish())
 }
 
 fn read_vertices(
     values: &mut impl Values,
     element: &Element,
     schema: &Schema,
-    positions: &mut Vec<[f32; 3]>,
+    sink: &mut CacheWriter,
     bounds: &mut BoundsBuilder,
 ) -> Result<(), Fault> {
-    positions.reserve(reservation(
-        element.count,
-        values.remaining(),
-        values.min_record_bytes(element),
-    ));
     for v in 0..element.count {
         let at = values.position();
         let mut p = [0f32; 3];
@@ -278,7 +258,7 @@ fn read_vertices(
             ));
         }
         bounds.add(p);
-        positions.push(p);
+        sink.vertex(p).map_err(Fault::cache)?;
     }
     Ok(())
 }
@@ -287,13 +267,8 @@ fn read_faces(
     values: &mut impl Values,
     element: &Element,
     schema: &Schema,
-    triangles: &mut Vec<[u32; 3]>,
+    sink: &mut CacheWriter,
 ) -> Result<(), Fault> {
-    triangles.reserve(reservation(
-        element.count,
-        values.remaining(),
-        values.min_record_bytes(element),
-    ));
     let mut polygon: Vec<u32> = Vec::new();
     for f in 0..element.count {
         for (i, property) in element.properties.iter().enumerate() {
@@ -333,9 +308,10 @@ fn read_faces(
                 polygon.push(index as u32);
             }
             for pair in polygon[1..].windows(2) {
-                triangles.push([polygon[0], pair[0], pair[1]]);
+                sink.triangle([polygon[0], pair[0], pair[1]])
+                    .map_err(Fault::cache)?;
             }
-            if u32::try_from(triangles.len()).is_err() {
+            if u32::try_from(sink.triangle_count()).is_err() {
                 return Err(Fault::new(
                     MeshErrorKind::TooLarge,
                     Some(values.position()),

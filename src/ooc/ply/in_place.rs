@@ -15,7 +15,7 @@ use super::super::error::{Fault, MeshErrorKind};
 use super::super::{Layout, four};
 use super::binary::BinaryCursor;
 use super::header::{Encoding, Header, PropertyType, ScalarType};
-use super::{Body, BoundsBuilder, Schema};
+use super::{BoundsBuilder, InPlace, Schema};
 
 /// The face list's count byte must say 3 for a record to have the fixed size this path needs.
 const TRIANGLE_COUNT_BYTE: u8 = 3;
@@ -25,7 +25,7 @@ pub(crate) fn try_read(
     bytes: &[u8],
     header: &Header,
     schema: &Schema,
-) -> Result<Option<Body>, Fault> {
+) -> Result<Option<InPlace>, Fault> {
     if header.encoding != Encoding::BinaryLittleEndian {
         return Ok(None);
     }
@@ -149,7 +149,7 @@ pub(crate) fn try_read(
         }
     }
 
-    Ok(Some(Body::InPlace {
+    Ok(Some(InPlace {
         layout: Layout {
             x: vertex_at + xyz[0],
             y: vertex_at + xyz[1],

@@ -5,7 +5,7 @@
 //! count 3, is used in place ([`in_place`]): opening costs one validation pass over the mapped
 //! bytes. Everything else (ASCII, big-endian, `double` or integer coordinates, polygons, any
 //! property order) is converted once, streaming through the file ([`convert`]), into the
-//! owned layout of [`super::Layout`].
+//! conversion cache (`super::cache`).
 
 mod binary;
 mod convert;
@@ -30,30 +30,38 @@ pub(crate) struct Schema {
     pub(crate) indices: usize,
 }
 
-/// What reading a PLY body produced.
-pub(crate) enum Body {
-    /// The file's own bytes serve the mesh.
-    InPlace {
-        layout: super::Layout,
-        triangle_count: u32,
-        bounds: Bounds,
-    },
-    /// The mesh had to be converted; the caller stores it in the owned layout.
-    Converted {
-        positions: Vec<[f32; 3]>,
-        triangles: Vec<[u32; 3]>,
-        bounds: Bounds,
-    },
+/// A PLY body whose own bytes serve the mesh.
+pub(crate) struct InPlace {
+    pub(crate) layout: super::Layout,
+    pub(crate) triangle_count: u32,
+    pub(crate) bounds: Bounds,
 }
 
-/// Parses and validates a whole PLY file.
-pub(crate) fn read(bytes: &[u8]) -> Result<(Schema, Body), Fault> {
+/// A parsed header and the mesh's place in it.
+pub(crate) struct Parsed {
+    header: Header,
+    pub(crate) schema: Schema,
+}
+
+/// Parses the header and locates the mesh.
+pub(crate) fn parse(bytes: &[u8]) -> Result<Parsed, Fault> {
     let header = header::parse(bytes)?;
     let schema = schema(&header)?;
-    if let Some(body) = in_place::try_read(bytes, &header, &schema)? {
-        return Ok((schema, body));
-    }
-    Ok((schema, convert::read(bytes, &header, &schema)?))
+    Ok(Parsed { header, schema })
+}
+
+/// Validates the body in place, when its layout allows (`Ok(None)`: it must be converted).
+pub(crate) fn in_place(bytes: &[u8], parsed: &Parsed) -> Result<Option<InPlace>, Fault> {
+    in_place::try_read(bytes, &parsed.header, &parsed.schema)
+}
+
+/// Converts the body into `sink`; returns the bounds.
+pub(crate) fn convert(
+    bytes: &[u8],
+    parsed: &Parsed,
+    sink: &mut super::cache::CacheWriter,
+) -> Result<Bounds, Fault> {
+    convert::read(bytes, &parsed.header, &parsed.schema, sink)
 }
 
 /// Locates and checks the vertex and face elements.
@@ -174,12 +182,4 @@ impl BoundsBuilder {
     pub(crate) fn finish(self) -> Bounds {
         self.bounds
     }
-}
-
-/// How many records of at least `min_record_bytes` bytes can follow in `remaining` bytes:
-/// the cap on reservations, so a header count of four billion cannot allocate before the
-/// data is seen.
-pub(crate) fn reservation(count: u64, remaining: usize, min_record_bytes: usize) -> usize {
-    let fit = remaining / min_record_bytes.max(1);
-    usize::try_from(count).map_or(fit, |c| c.min(fit))
 }

@@ -3,8 +3,15 @@ use crate::sampler::NO_PATCH;
 use crate::sampler::test_meshes::{Rng, fan, grid};
 use proptest::prelude::*;
 
-const ALWAYS_SPANS: i64 = 0;
-const NEVER_SPANS: i64 = i64::MAX;
+const ALWAYS_SPANS: ScanPaths = ScanPaths {
+    tiny: false,
+    span_min_width: 0,
+};
+const NEVER_SPANS: ScanPaths = ScanPaths {
+    tiny: false,
+    span_min_width: i64::MAX,
+};
+const ALL_PATHS: [ScanPaths; 3] = [DEFAULT_PATHS, ALWAYS_SPANS, NEVER_SPANS];
 
 fn vertex(x: f64, y: f64) -> ScreenVertex {
     ScreenVertex {
@@ -14,10 +21,12 @@ fn vertex(x: f64, y: f64) -> ScreenVertex {
     }
 }
 
-fn screen_counts(tris: &[[ScreenVertex; 3]], resolution: u32, span_min_width: i64) -> Vec<u32> {
+fn screen_counts(tris: &[[ScreenVertex; 3]], resolution: u32, paths: ScanPaths) -> Vec<u32> {
     let mut counts = vec![0; (resolution * resolution) as usize];
     for &tri in tris {
-        scan_triangle(tri, resolution, span_min_width, |i, _| counts[i] += 1);
+        scan_triangle(tri, resolution, paths, |i, _, covered| {
+            counts[i] += u32::from(covered)
+        });
     }
     counts
 }
@@ -32,7 +41,7 @@ fn shared_diagonal_through_pixel_centres_is_owned_once() {
         vertex(2.0, 10.0),
     );
     for tris in [[[a, b, c], [a, c, d]], [[c, a, d], [b, a, c]]] {
-        for span in [ALWAYS_SPANS, NEVER_SPANS] {
+        for span in ALL_PATHS {
             let counts = screen_counts(&tris, 12, span);
             for y in 0..12 {
                 for x in 0..12 {
@@ -55,7 +64,7 @@ fn top_left_rule_keeps_top_and_left_edges_through_centres() {
         vertex(2.5, 10.5),
     );
     for tris in [[[a, b, c], [a, c, d]], [[a, b, d], [b, c, d]]] {
-        for span in [ALWAYS_SPANS, NEVER_SPANS] {
+        for span in ALL_PATHS {
             let counts = screen_counts(&tris, 12, span);
             for y in 0..12 {
                 for x in 0..12 {
@@ -279,7 +288,7 @@ fn random_fans_never_overdraw() {
             })
             .collect();
         let tris: Vec<_> = (0..k).map(|i| [centre, rim[i], rim[(i + 1) % k]]).collect();
-        for span in [ALWAYS_SPANS, NEVER_SPANS] {
+        for span in ALL_PATHS {
             let counts = screen_counts(&tris, 40, span);
             assert!(counts.iter().all(|&c| c <= 1));
             // Pixels around the centre vertex are always inside the star.
@@ -294,17 +303,43 @@ fn screen_vertex() -> impl Strategy<Value = ScreenVertex> {
     (coordinate.clone(), coordinate, 0.01f32..10.0).prop_map(|(x, y, q)| ScreenVertex { x, y, q })
 }
 
+/// Triangles of at most a few pixels, near or across the image border.
+fn small_triangle() -> impl Strategy<Value = [ScreenVertex; 3]> {
+    (
+        -300i32..12_600,
+        -300i32..12_600,
+        proptest::array::uniform3((-700i32..700, -700i32..700, 0.01f32..10.0)),
+    )
+        .prop_map(|(x, y, offsets)| {
+            offsets.map(|(dx, dy, q)| ScreenVertex {
+                x: x + dx,
+                y: y + dy,
+                q,
+            })
+        })
+}
+
 proptest! {
     #[test]
-    fn span_solving_matches_pixel_walking(
-        tri in [screen_vertex(), screen_vertex(), screen_vertex()],
+    fn every_pixel_path_gives_the_same_fragments(
+        tri in prop_oneof![
+            [screen_vertex(), screen_vertex(), screen_vertex()],
+            small_triangle(),
+        ],
         resolution in 1u32..48,
     ) {
-        let mut walked = Vec::new();
-        scan_triangle(tri, resolution, NEVER_SPANS, |i, q| walked.push((i, q.to_bits())));
-        let mut spanned = Vec::new();
-        scan_triangle(tri, resolution, ALWAYS_SPANS, |i, q| spanned.push((i, q.to_bits())));
-        prop_assert_eq!(walked, spanned);
+        let fragments = |paths| {
+            let mut out = Vec::new();
+            scan_triangle(tri, resolution, paths, |i, q, covered| {
+                if covered {
+                    out.push((i, q.to_bits()))
+                }
+            });
+            out
+        };
+        let walked = fragments(NEVER_SPANS);
+        prop_assert_eq!(&walked, &fragments(ALWAYS_SPANS));
+        prop_assert_eq!(&walked, &fragments(DEFAULT_PATHS));
     }
 
     #[test]

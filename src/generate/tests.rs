@@ -1,0 +1,216 @@
+//! Generator tests: counts as announced, watertightness (shared edges share vertices),
+//! closed and nested engine parts, determinism, and a zero-copy read back through `Mesh`.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use super::engine::{Engine, casing_inside};
+use super::grid::BunnyGrid;
+use super::subdivide::SubdividedMesh;
+use super::*;
+use crate::ooc::Mesh;
+
+fn bunny() -> Mesh {
+    Mesh::open(&Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bunny.ply")).unwrap()
+}
+
+fn collect(model: &dyn Model) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+    let (mut v, mut t) = (Vec::new(), Vec::new());
+    model
+        .vertices(&mut |p| {
+            v.push(p);
+            Ok(())
+        })
+        .unwrap();
+    model
+        .triangles(&mut |x| {
+            t.push(x);
+            Ok(())
+        })
+        .unwrap();
+    assert_eq!(v.len() as u64, model.vertex_count());
+    assert_eq!(t.len() as u64, model.triangle_count());
+    (v, t)
+}
+
+/// Directed-edge use counts.
+fn directed_edges(triangles: &[[u32; 3]]) -> HashMap<(u32, u32), u32> {
+    let mut edges = HashMap::new();
+    for t in triangles {
+        for e in 0..3 {
+            *edges.entry((t[e], t[(e + 1) % 3])).or_insert(0) += 1;
+        }
+    }
+    edges
+}
+
+/// Undirected edges used by exactly one triangle: the mesh's boundary.
+fn boundary_edges(triangles: &[[u32; 3]]) -> usize {
+    let mut count: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in triangles {
+        for e in 0..3 {
+            let (a, b) = (t[e], t[(e + 1) % 3]);
+            *count.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    count.values().filter(|&&c| c == 1).count()
+}
+
+#[test]
+fn subdivision_shares_edge_points_and_keeps_the_topology() {
+    let source = bunny();
+    let source_triangles: Vec<[u32; 3]> = (0..source.triangle_count())
+        .map(|t| source.triangle(t))
+        .collect();
+    let source_boundary = boundary_edges(&source_triangles);
+    for k in [1, 2, 3] {
+        let model = SubdividedMesh::new(&source, k);
+        let (vertices, triangles) = collect(&model);
+        assert_eq!(
+            triangles.len() as u64,
+            u64::from(source.triangle_count()) * u64::from(k * k)
+        );
+        assert!(
+            triangles
+                .iter()
+                .flatten()
+                .all(|&i| (i as usize) < vertices.len())
+        );
+        // Duplicated split points would open a boundary along every source edge; shared ones
+        // split each source boundary edge into exactly k boundary edges.
+        assert_eq!(
+            boundary_edges(&triangles),
+            k as usize * source_boundary,
+            "k={k}"
+        );
+        // Every vertex is used: no orphans from a numbering mistake.
+        let mut used = vec![false; vertices.len()];
+        for &i in triangles.iter().flatten() {
+            used[i as usize] = true;
+        }
+        let unused = used.iter().filter(|&&u| !u).count();
+        let source_unused = {
+            let mut u = vec![false; source.vertex_count() as usize];
+            source_triangles
+                .iter()
+                .flatten()
+                .for_each(|&i| u[i as usize] = true);
+            u.iter().filter(|&&x| !x).count()
+        };
+        assert_eq!(unused, source_unused, "k={k}");
+        // The relief is small: source vertices move by at most the amplitude.
+        let b = source.bounds();
+        let diagonal = super::subdivide::length(super::subdivide::sub(b.max, b.min));
+        for v in (0..source.vertex_count()).step_by(97) {
+            let moved = super::subdivide::length(super::subdivide::sub(
+                vertices[v as usize],
+                source.position(v),
+            ));
+            assert!(moved <= 0.0041 * diagonal, "vertex {v} moved {moved}");
+        }
+    }
+    assert_eq!(SubdividedMesh::factor_for(&source, 20_000_000), 14);
+    assert_eq!(SubdividedMesh::factor_for(&source, 10), 1);
+}
+
+#[test]
+fn engine_parts_are_closed_outward_and_nested() {
+    let engine = Engine::new(200_000);
+    let (vertices, triangles) = collect(&engine);
+    assert!(engine.part_count() > 20, "{} parts", engine.part_count());
+    let n = triangles.len() as f64;
+    assert!((0.8..1.25).contains(&(n / 200_000.0)), "{n} triangles");
+    // Closed and consistently oriented: each directed edge once, its reverse once.
+    let edges = directed_edges(&triangles);
+    for (&(a, b), &count) in &edges {
+        assert_eq!(count, 1, "edge {a}-{b} used {count} times in one direction");
+        assert_eq!(edges.get(&(b, a)), Some(&1), "edge {a}-{b} has no twin");
+    }
+    // Outward: the signed volume is positive (the parts do not overlap).
+    let volume: f64 = triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| vertices[i as usize].map(f64::from));
+            (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                + a[2] * (b[0] * c[1] - b[1] * c[0]))
+                / 6.0
+        })
+        .sum();
+    assert!(volume > 0.0, "volume {volume}");
+    // Nested: the casing comes first; everything after it is strictly inside it, and
+    // everything after the housing strictly inside the housing.
+    let casing = engine_part_vertices(&Engine::new(200_000), 1);
+    let housing_end = engine_part_vertices(&Engine::new(200_000), 2);
+    for (v, &p) in vertices.iter().enumerate().skip(casing) {
+        assert!(
+            casing_inside(p, 1.0) < 0.99,
+            "vertex {v} {p:?} outside the casing"
+        );
+        if v >= housing_end {
+            assert!(
+                casing_inside(p, 0.9) < 0.99,
+                "vertex {v} {p:?} outside the housing"
+            );
+        }
+    }
+}
+
+/// Vertices in the first `parts` parts of an engine.
+fn engine_part_vertices(engine: &Engine, parts: usize) -> usize {
+    engine.part_vertex_counts().iter().take(parts).sum::<u64>() as usize
+}
+
+#[test]
+fn bunny_grid_places_separate_copies() {
+    let source = bunny();
+    assert_eq!(BunnyGrid::copies_for(&source, 1_000_000), 10);
+    let grid = BunnyGrid::new(&source, 5);
+    let (vertices, triangles) = collect(&grid);
+    assert_eq!(vertices.len(), 5 * source.vertex_count() as usize);
+    let per_copy = source.vertex_count() as usize;
+    // Copies do not overlap on the floor: their x–z footprints are disjoint.
+    let footprint = |c: usize| {
+        let mut lo = [f32::MAX; 2];
+        let mut hi = [f32::MIN; 2];
+        for p in &vertices[c * per_copy..(c + 1) * per_copy] {
+            lo = [lo[0].min(p[0]), lo[1].min(p[2])];
+            hi = [hi[0].max(p[0]), hi[1].max(p[2])];
+        }
+        (lo, hi)
+    };
+    for a in 0..5 {
+        for b in a + 1..5 {
+            let ((la, ha), (lb, hb)) = (footprint(a), footprint(b));
+            let apart = ha[0] < lb[0] || hb[0] < la[0] || ha[1] < lb[1] || hb[1] < la[1];
+            assert!(apart, "copies {a} and {b} overlap");
+        }
+    }
+    // Copy c's triangles are the source's, shifted by c × vertices.
+    let t0 = source.triangle_count() as usize;
+    assert_eq!(
+        triangles[3 * t0 + 17],
+        source.triangle(17).map(|i| i + 3 * per_copy as u32)
+    );
+}
+
+#[test]
+fn written_ply_is_deterministic_and_opens_zero_copy() {
+    let source = bunny();
+    let write = || {
+        let mut bytes = Vec::new();
+        write_ply(&mut bytes, &SubdividedMesh::new(&source, 2), "test").unwrap();
+        bytes
+    };
+    let bytes = write();
+    assert_eq!(bytes, write());
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("sub.ply");
+    std::fs::write(&path, &bytes).unwrap();
+    let mesh = Mesh::open(&path).unwrap();
+    assert!(mesh.is_mapped());
+    let model = SubdividedMesh::new(&source, 2);
+    let (vertices, triangles) = collect(&model);
+    assert_eq!(mesh.triangle_count() as usize, triangles.len());
+    assert_eq!(mesh.triangle(12345), triangles[12345]);
+    assert_eq!(mesh.position(54321), vertices[54321]);
+}
