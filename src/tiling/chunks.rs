@@ -21,9 +21,11 @@ use super::bounds;
 use super::greedy::Fusion;
 use crate::ooc::Mesh;
 
-/// Peak heap of [`tile_chunk`] per triangle of the chunk, measured with a counting allocator
-/// on chunks of 0.2M–1.6M triangles (`tests/tiling_memory.rs`), rounded up. The adjacency's
-/// sorted edge entries dominate (48 bytes), then the neighbour lists and the fusion nodes.
+/// Peak heap of [`tile_chunk`] per triangle of the chunk, an upper bound with a wide margin:
+/// two chunks of 0.4M–0.5M triangles peak at 107–111 MiB, about 115 bytes per triangle
+/// (`tests/tiling_scale.rs`). The adjacency's sorted edge entries dominate (48 bytes), then
+/// the neighbour lists and the fusion nodes. The margin covers meshes with long neighbour
+/// lists (non-manifold fans, duplicates).
 pub(crate) const CHUNK_BYTES_PER_TRIANGLE: u64 = 200;
 
 /// A patch of one chunk, as the patch graph sees it.
