@@ -28,8 +28,12 @@
 //! keeps the cost in compactness small (BENCHMARKS.md, "Tiling (issue 4)").
 //!
 //! Memory: the sort buffer, then [`CHUNKS_AT_ONCE`] chunks, are sized from the budget; on top
-//! only the patch graph (tens of bytes per chunk patch) and per-patch records. Every
+//! only the patch graph (about 100 bytes per chunk patch) and per-patch records. Every
 //! per-triangle or per-vertex array is a mapped temporary file ([`TriangleMap`]).
+//! **Limit:** the patch graph holds every piece a chunk could not fuse, and pieces that are
+//! whole components are never merged inside a chunk. A mesh of millions of disconnected
+//! triangles (an unwelded triangle soup) therefore gets a patch graph of millions of nodes
+//! and can exceed the budget; welded scans and CAD meshes give a few pieces per chunk.
 //! Cost: O(n log n) time; about 40 bytes of temporary files per triangle at the peak.
 
 use std::io;
