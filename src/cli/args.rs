@@ -56,9 +56,14 @@ pub struct BakeArgs {
     #[arg(long, value_name = "MESH.ply")]
     pub mesh_out: Option<PathBuf>,
     /// Heap budget for the bake, e.g. 512MiB, 2GiB, 1G (default: half the available memory,
-    /// at least 256 MiB). The mesh input honours it; the page cache is not counted.
+    /// at least 256 MiB). The mesh input and the tiling honour it; the page cache is not
+    /// counted.
     #[arg(long, value_name = "SIZE", value_parser = parse_size)]
     pub memory: Option<u64>,
+    /// Tiling algorithm: the seed algorithm in memory, the chunked out-of-core one, or
+    /// whichever the memory budget allows (auto).
+    #[arg(long, value_enum, default_value_t = TilingArg::Auto, value_name = "MODE")]
+    pub tiling: TilingArg,
     /// Write timings, peak heap and counts per stage as JSON.
     #[arg(long, value_name = "STATS.json")]
     pub stats: Option<PathBuf>,
@@ -85,6 +90,17 @@ pub struct BakeArgs {
     /// Print nothing but errors; no progress bars.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// `--tiling`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum TilingArg {
+    /// In core when it fits the memory budget, else out of core.
+    Auto,
+    /// The seed algorithm on the whole mesh.
+    InCore,
+    /// Chunked tiling in bounded memory.
+    OutOfCore,
 }
 
 /// `patchvis gen`.

@@ -1,7 +1,7 @@
 //! `patchvis bake`: checked settings, then tile → sample → encode, with a timing and peak-heap
 //! record per stage, and outputs that appear only once everything succeeded.
 
-use super::args::BakeArgs;
+use super::args::{BakeArgs, TilingArg};
 use super::progress::Bars;
 use super::{UsageError, alloc};
 use anyhow::{Context, Result};
@@ -31,6 +31,7 @@ pub struct Settings {
     stats: Option<PathBuf>,
     options: sampler::SamplingOptions,
     quiet: bool,
+    tiling: tiling::TilingOptions,
     /// Heap budget in bytes (`--memory`, or [`default_memory_budget`]).
     memory_budget: u64,
 }
@@ -111,6 +112,7 @@ impl Settings {
             checkpoint: Some(PathBuf::from(checkpoint)),
             resume: args.resume,
         };
+        let memory_budget = args.memory.unwrap_or_else(default_memory_budget);
         Ok(Settings {
             input: args.input,
             output: args.output,
@@ -122,7 +124,15 @@ impl Settings {
             stats: args.stats,
             options,
             quiet: args.quiet,
-            memory_budget: args.memory.unwrap_or_else(default_memory_budget),
+            memory_budget,
+            tiling: tiling::TilingOptions {
+                mode: match args.tiling {
+                    TilingArg::Auto => tiling::TilingMode::Auto,
+                    TilingArg::InCore => tiling::TilingMode::InCore,
+                    TilingArg::OutOfCore => tiling::TilingMode::OutOfCore,
+                },
+                memory_budget,
+            },
         })
     }
 }
@@ -222,7 +232,7 @@ pub fn run(args: BakeArgs) -> Result<()> {
         bars.spin("reading", || Mesh::open_with(&s.input, &open))
     })?;
     let tiling = stage(&mut stages, "tiling", || {
-        bars.spin("tiling", || tiling::tile(&mesh, s.patches))
+        bars.spin("tiling", || tiling::tile_with(&mesh, s.patches, &s.tiling))
     })
     .with_context(|| format!("{}: tiling failed", s.input.display()))?;
     let patch_count = tiling.patches.len() as u32;
@@ -285,8 +295,12 @@ pub fn run(args: BakeArgs) -> Result<()> {
         })
         .sum();
     let visible_fraction = seen as f64 / (f64::from(views) * f64::from(patch_count));
-    let mut sizes: Vec<u32> = tiling.patches.iter().map(|p| p.count).collect();
-    sizes.sort_unstable();
+    let q = tiling.quality;
+    let algorithm = if tiling.stats.out_of_core {
+        "out-of-core"
+    } else {
+        "in-core"
+    };
     let seconds = start.elapsed().as_secs_f64();
 
     if let Some(path) = &s.stats {
@@ -298,7 +312,14 @@ pub fn run(args: BakeArgs) -> Result<()> {
             "mesh_source": format!("{:?}", mesh.source()),
             "memory_budget_bytes": s.memory_budget,
             "patches": patch_count,
-            "patch_triangles": {"min": sizes[0], "median": sizes[sizes.len() / 2], "max": sizes[sizes.len() - 1]},
+            "patch_triangles": {"min": q.triangles_min, "median": q.triangles_median, "max": q.triangles_max},
+            "tiling": {
+                "algorithm": algorithm,
+                "chunks": tiling.stats.chunks,
+                "components": tiling.stats.components,
+                "merged_components": tiling.stats.merged_components,
+                "compactness": {"median": q.compactness_median, "p95": q.compactness_p95},
+            },
             "level": s.level,
             "views": views,
             "resolution": s.resolution,
@@ -334,14 +355,27 @@ pub fn run(args: BakeArgs) -> Result<()> {
             mesh.vertex_count(),
             secs("input")
         );
+        let chunks = if tiling.stats.out_of_core {
+            format!(", {} chunks", tiling.stats.chunks)
+        } else {
+            String::new()
+        };
         println!(
-            "tiling:   {} patches, {}/{}/{} triangles min/median/max ({:.2} s)",
+            "tiling:   {} patches, {}/{}/{} triangles min/median/max, compactness {:.2} median {:.2} p95 ({algorithm}{chunks}, {:.2} s)",
             patch_count,
-            sizes[0],
-            sizes[sizes.len() / 2],
-            sizes[sizes.len() - 1],
+            q.triangles_min,
+            q.triangles_median,
+            q.triangles_max,
+            q.compactness_median,
+            q.compactness_p95,
             secs("tiling")
         );
+        if tiling.stats.merged_components > 0 {
+            println!(
+                "          the mesh has {} connected components, more than {} patches: {} nearby components were merged",
+                tiling.stats.components, patch_count, tiling.stats.merged_components
+            );
+        }
         println!(
             "sampling: {} views (level {}) at {}x{} px, fov {}°; a view sees {:.1}% of patches on average ({:.2} s)",
             views,

@@ -129,7 +129,7 @@ impl<'m> Evaluator<'m> {
     pub fn from_tiling(mesh: &'m Mesh, tiling: &Tiling) -> Evaluator<'m> {
         Evaluator {
             mesh,
-            patch_of: tiling.patch_of.clone(),
+            patch_of: tiling.patch_of.to_vec(),
             patch_triangles: tiling.patches.iter().map(|p| p.count).collect(),
             identity: (0..mesh.triangle_count()).collect(),
             normals: face_normals(mesh),

@@ -7,7 +7,7 @@ use super::raster::{DEFAULT_PATHS, draw_triangle, project, scan_triangle, view_p
 use super::test_meshes::{Rng, bunny, noisy_sphere, push_cube};
 use super::*;
 use crate::progress::NoProgress;
-use crate::tiling::{Patch, Tiling, TilingStats};
+use crate::tiling::{Patch, Tiling, TilingQuality, TilingStats, TriangleMap};
 
 /// A tiling with the given patch of each triangle: bounding spheres around the patch's
 /// vertices, and a normal cone from the triangle normals (axis = mean, cosine = the smallest
@@ -80,10 +80,11 @@ fn tiling_of(mesh: &Mesh, patch_of: Vec<PatchId>) -> Tiling {
         first += tris.len() as u32;
     }
     Tiling {
-        patch_of,
-        order,
+        patch_of: TriangleMap::from_vec(patch_of),
+        order: TriangleMap::from_vec(order),
         patches,
         stats: TilingStats::default(),
+        quality: TilingQuality::default(),
     }
 }
 

@@ -31,18 +31,40 @@ const NO_EDGE: u64 = u64::MAX;
 
 /// Neighbour lists, one per triangle: sorted, without duplicates, without the triangle itself.
 pub(crate) fn triangle_neighbours(mesh: &Mesh) -> Vec<Vec<u32>> {
-    let n = mesh.triangle_count() as usize;
+    triangle_neighbours_in(mesh, mesh.triangle_count(), |t| t, |_, _| {})
+}
+
+/// The key of the edge between vertices `a != b`: the unordered pair packed into a `u64`.
+pub(crate) fn edge_key(a: u32, b: u32) -> u64 {
+    (u64::from(a.min(b)) << 32) | u64::from(a.max(b))
+}
+
+/// The two vertices of an edge key.
+pub(crate) fn edge_vertices(key: u64) -> [u32; 2] {
+    [(key >> 32) as u32, key as u32]
+}
+
+/// Neighbour lists of a subset of the mesh: `count` triangles, local triangle `i` being mesh
+/// triangle `global(i)`; lists hold local indices and only links inside the subset. Calls
+/// `on_edge(key, i)` once per distinct edge of the subset, in key order, with the smallest
+/// local triangle `i` on it (the out-of-core tiling matches edges across chunks with these).
+pub(crate) fn triangle_neighbours_in(
+    mesh: &Mesh,
+    count: u32,
+    global: impl Fn(u32) -> u32 + Sync,
+    mut on_edge: impl FnMut(u64, u32),
+) -> Vec<Vec<u32>> {
+    let n = count as usize;
     let mut entries = vec![(NO_EDGE, u32::MAX); 3 * n];
     entries
         .par_chunks_mut(3)
         .enumerate()
         .for_each(|(t, slots)| {
-            let v = mesh.triangle(t as u32);
+            let v = mesh.triangle(global(t as u32));
             for (k, slot) in slots.iter_mut().enumerate() {
                 let (a, b) = (v[k], v[(k + 1) % 3]);
                 if a != b {
-                    let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
-                    *slot = (key, t as u32);
+                    *slot = (edge_key(a, b), t as u32);
                 }
             }
         });
@@ -53,6 +75,9 @@ pub(crate) fn triangle_neighbours(mesh: &Mesh) -> Vec<Vec<u32>> {
     entries.truncate(used);
     // A triangle like [a, b, a] lists the edge {a, b} twice; it counts once.
     entries.dedup();
+    for run in entries.chunk_by(|x, y| x.0 == y.0) {
+        on_edge(run[0].0, run[0].1);
+    }
 
     // Two passes over the same links: count, then fill a compressed (CSR) layout.
     let mut degree = vec![0usize; n];

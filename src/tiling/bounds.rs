@@ -53,8 +53,9 @@ pub(crate) fn triangle_area(p: [[f32; 3]; 3]) -> f64 {
     0.5 * length(cross_normal(p))
 }
 
-/// The bounds of the patch made of `triangles` (input indices), with `first`/`count` given.
-pub(crate) fn patch_bounds(mesh: &Mesh, triangles: &[u32], first: u32) -> Patch {
+/// The bounds of the patch made of `triangles` (input indices), with `first`/`count` given,
+/// and the squared diagonal of its bounding box (for the compactness measure).
+pub(crate) fn patch_bounds(mesh: &Mesh, triangles: &[u32], first: u32) -> (Patch, f64) {
     let mut area = 0.0;
     let mut bbox: Option<Aabb> = None;
     let mut normal_sum = [0.0f64; 3];
@@ -88,7 +89,7 @@ pub(crate) fn patch_bounds(mesh: &Mesh, triangles: &[u32], first: u32) -> Patch 
     let scale = c64.iter().fold(0.0f64, |m, c| m.max(c.abs()));
     let radius = max_d2.sqrt() + (max_d2.sqrt() + scale) * RADIUS_PAD;
     let (cone_axis, cone_cos) = normal_cone(mesh, triangles, normal_sum);
-    Patch {
+    let patch = Patch {
         first,
         count: triangles.len() as u32,
         area,
@@ -96,7 +97,8 @@ pub(crate) fn patch_bounds(mesh: &Mesh, triangles: &[u32], first: u32) -> Patch 
         radius: round_up(radius),
         cone_axis,
         cone_cos,
-    }
+    };
+    (patch, bbox.diagonal_squared())
 }
 
 /// The cone around the normalised `normal_sum` that holds every non-degenerate normal.

@@ -85,6 +85,17 @@ impl Fusion {
         self.nodes[p as usize].bbox
     }
 
+    /// The area of alive patch `p`.
+    pub fn area(&self, p: u32) -> f64 {
+        self.nodes[p as usize].area
+    }
+
+    /// The neighbours of alive patch `p`: alive ids, ascending, without duplicates.
+    pub fn neighbour_patches(&mut self, p: u32) -> &[u32] {
+        self.compact(p);
+        &self.neighbours[p as usize]
+    }
+
     /// Replaces the neighbour list of alive patch `p`.
     pub fn set_neighbours(&mut self, p: u32, list: Vec<u32>) {
         self.nodes[p as usize].compacted_len = list.len() as u32;

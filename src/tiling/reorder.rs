@@ -34,54 +34,83 @@ pub(crate) fn number_patches(root_of: &[u32], bbox: impl Fn(u32) -> Aabb) -> Num
             roots.push(r);
         }
     }
-    let mut bounds: Option<Aabb> = None;
-    for &r in &roots {
-        let b = bbox(r);
-        bounds = Some(bounds.map_or(b, |m| m.union(&b)));
-    }
-    let Some(bounds) = bounds else {
+    if roots.is_empty() {
         return Numbering {
             patch_of: Vec::new(),
             order: Vec::new(),
             starts: vec![0],
         };
-    };
-    let mut keyed: Vec<(u64, u32, u32)> = roots
+    }
+    let keyed: Vec<(u32, u32)> = roots
         .iter()
-        .map(|&r| {
-            (
-                morton_code(bbox(r).center(), &bounds),
-                first_triangle[r as usize],
-                r,
-            )
-        })
+        .map(|&r| (r, first_triangle[r as usize]))
         .collect();
-    // Smallest triangles are distinct, so the key is total and the sort deterministic.
-    keyed.sort_unstable();
+    let ids = final_ids(&keyed, bbox);
 
     // Reuse `first_triangle` as the map from root to final id.
     let final_id = &mut first_triangle;
-    for (id, &(_, _, r)) in keyed.iter().enumerate() {
-        final_id[r as usize] = id as u32;
+    for (&(r, _), &id) in keyed.iter().zip(&ids) {
+        final_id[r as usize] = id;
     }
     let patch_of: Vec<u32> = root_of.iter().map(|&r| final_id[r as usize]).collect();
 
-    let mut starts = vec![0u32; keyed.len() + 1];
+    let mut counts = vec![0u32; keyed.len()];
     for &p in &patch_of {
-        starts[p as usize + 1] += 1;
+        counts[p as usize] += 1;
     }
-    for i in 0..keyed.len() {
-        starts[i + 1] += starts[i];
-    }
-    let mut next = starts.clone();
+    let starts = starts_of(&counts);
     let mut order = vec![0u32; n];
-    for (t, &p) in patch_of.iter().enumerate() {
-        order[next[p as usize] as usize] = t as u32;
-        next[p as usize] += 1;
-    }
+    fill_order(&patch_of, &starts, &mut order);
     Numbering {
         patch_of,
         order,
         starts,
+    }
+}
+
+/// Final ids of the patches `(root, smallest triangle)`: ranks in the order of the Morton
+/// code of their box centres over the union of all boxes, ties by smallest triangle.
+/// Smallest triangles must be distinct.
+pub(crate) fn final_ids(patches: &[(u32, u32)], bbox: impl Fn(u32) -> Aabb) -> Vec<u32> {
+    let Some(bounds) = patches
+        .iter()
+        .map(|&(r, _)| bbox(r))
+        .reduce(|m, b| m.union(&b))
+    else {
+        return Vec::new();
+    };
+    let mut keyed: Vec<(u64, u32, usize)> = patches
+        .iter()
+        .enumerate()
+        .map(|(i, &(r, first))| (morton_code(bbox(r).center(), &bounds), first, i))
+        .collect();
+    // Smallest triangles are distinct, so the key is total and the sort deterministic.
+    keyed.sort_unstable();
+    let mut ids = vec![0u32; patches.len()];
+    for (id, &(_, _, i)) in keyed.iter().enumerate() {
+        ids[i] = id as u32;
+    }
+    ids
+}
+
+/// Prefix sums of `counts` with a leading zero: where each patch's range starts, plus the end.
+pub(crate) fn starts_of(counts: &[u32]) -> Vec<u32> {
+    let mut starts = Vec::with_capacity(counts.len() + 1);
+    let mut total = 0u32;
+    starts.push(0);
+    for &c in counts {
+        total += c;
+        starts.push(total);
+    }
+    starts
+}
+
+/// The stable counting sort: writes every triangle `t` into `order` at the next free place of
+/// its patch's range, so ranges come out ascending by input index.
+pub(crate) fn fill_order(patch_of: &[u32], starts: &[u32], order: &mut [u32]) {
+    let mut next = starts.to_vec();
+    for (t, &p) in patch_of.iter().enumerate() {
+        order[next[p as usize] as usize] = t as u32;
+        next[p as usize] += 1;
     }
 }

@@ -1,0 +1,312 @@
+//! Memory and scale of the tiling (issue 4), measured with a counting global allocator.
+//!
+//! The one test that runs by default checks the out-of-core promise: tiling a 0.4M-triangle
+//! mesh under a 16 MiB budget never holds more heap than the budget, and the in-core peak per
+//! triangle stays below `IN_CORE_BYTES_PER_TRIANGLE` (the figure `TilingMode::Auto` relies
+//! on). The ignored tests are the benchmarks of BENCHMARKS.md, "Tiling (issue 4)"; run them
+//! one at a time in release:
+//!
+//! ```text
+//! cargo test --release --test tiling_scale bunny_1_6m -- --ignored --nocapture
+//! cargo test --release --test tiling_scale grid_1m -- --ignored --nocapture
+//! cargo test --release --test tiling_scale grid_20m -- --ignored --nocapture
+//! ```
+//!
+//! Meshes are generated here and written as binary little-endian PLY, which `Mesh::open`
+//! maps in place (no heap): the bundled bunny subdivided by edge midpoints (×4 triangles per
+//! level), and a wavy grid (height field of two sine waves) for the largest sizes.
+//! Only one test runs by default, so the allocator counts nothing but that test.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::collections::HashMap;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use patchvis::ooc::Mesh;
+use patchvis::tiling::{IN_CORE_BYTES_PER_TRIANGLE, Tiling, TilingMode, TilingOptions, tile_with};
+
+struct CountingAlloc;
+
+static CURRENT: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: every method forwards to `System` unchanged; the counters only observe sizes.
+unsafe impl GlobalAlloc for CountingAlloc {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        // SAFETY: same contract as the caller's.
+        let p = unsafe { System.alloc(layout) };
+        if !p.is_null() {
+            grow(layout.size());
+        }
+        p
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) };
+        CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        // SAFETY: same contract as the caller's.
+        let p = unsafe { System.realloc(ptr, layout, new_size) };
+        if !p.is_null() {
+            CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
+            grow(new_size);
+        }
+        p
+    }
+}
+
+#[global_allocator]
+static ALLOC: CountingAlloc = CountingAlloc;
+
+fn grow(bytes: usize) {
+    let now = CURRENT.fetch_add(bytes, Ordering::Relaxed) + bytes;
+    PEAK.fetch_max(now, Ordering::Relaxed);
+}
+
+/// Runs `f` and returns its result with the heap it added at the peak (bytes above what was
+/// live before) and its wall time.
+fn measured<T>(f: impl FnOnce() -> T) -> (T, usize, f64) {
+    let base = CURRENT.load(Ordering::Relaxed);
+    PEAK.store(base, Ordering::Relaxed);
+    let start = Instant::now();
+    let out = f();
+    let secs = start.elapsed().as_secs_f64();
+    (out, PEAK.load(Ordering::Relaxed) - base, secs)
+}
+
+/// Writes a binary little-endian PLY with `int` indices, streaming.
+fn write_ply(
+    path: &Path,
+    vertex_count: usize,
+    positions: impl Iterator<Item = [f32; 3]>,
+    triangle_count: usize,
+    triangles: impl Iterator<Item = [u32; 3]>,
+) {
+    let mut out = BufWriter::new(std::fs::File::create(path).expect("create PLY"));
+    write!(
+        out,
+        "ply\nformat binary_little_endian 1.0\nelement vertex {vertex_count}\n\
+         property float x\nproperty float y\nproperty float z\nelement face {triangle_count}\n\
+         property list uchar int vertex_indices\nend_header\n"
+    )
+    .expect("write PLY");
+    for p in positions {
+        for c in p {
+            out.write_all(&c.to_le_bytes()).expect("write PLY");
+        }
+    }
+    for t in triangles {
+        out.write_all(&[3]).expect("write PLY");
+        for i in t {
+            out.write_all(&i.to_le_bytes()).expect("write PLY");
+        }
+    }
+    out.flush().expect("write PLY");
+}
+
+/// The bundled bunny (99,785 triangles) with every triangle split in four `levels` times.
+fn subdivided_bunny(dir: &Path, levels: u32) -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let bunny = Mesh::open(&root.join("assets/bunny.ply")).expect("bundled bunny");
+    let mut positions: Vec<[f32; 3]> = (0..bunny.vertex_count())
+        .map(|v| bunny.position(v))
+        .collect();
+    let mut triangles: Vec<[u32; 3]> = (0..bunny.triangle_count())
+        .map(|t| bunny.triangle(t))
+        .collect();
+    for _ in 0..levels {
+        let mut midpoint: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut mid = |a: u32, b: u32, positions: &mut Vec<[f32; 3]>| {
+            *midpoint.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                let (p, q) = (positions[a as usize], positions[b as usize]);
+                positions.push([0, 1, 2].map(|k| 0.5 * (p[k] + q[k])));
+                positions.len() as u32 - 1
+            })
+        };
+        let mut next = Vec::with_capacity(triangles.len() * 4);
+        for [a, b, c] in triangles {
+            let (ab, bc, ca) = (
+                mid(a, b, &mut positions),
+                mid(b, c, &mut positions),
+                mid(c, a, &mut positions),
+            );
+            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        triangles = next;
+    }
+    let path = dir.join(format!("bunny-{levels}.ply"));
+    write_ply(
+        &path,
+        positions.len(),
+        positions.into_iter(),
+        triangles.len(),
+        triangles.into_iter(),
+    );
+    path
+}
+
+/// A `side` × `side` grid of quads (two triangles each) over a height field of two sine
+/// waves, streamed to disk without holding it.
+fn wavy_grid(dir: &Path, side: u32) -> PathBuf {
+    let path = dir.join(format!("grid-{side}.ply"));
+    let row = side + 1;
+    let positions = (0..row).flat_map(move |y| {
+        (0..row).map(move |x| {
+            let (u, v) = (x as f32 / side as f32, y as f32 / side as f32);
+            let h = 0.05 * (u * 37.0).sin() * (v * 23.0).cos();
+            [u, v, h]
+        })
+    });
+    let triangles = (0..side).flat_map(move |y| {
+        (0..side).flat_map(move |x| {
+            let v = |x: u32, y: u32| y * row + x;
+            [
+                [v(x, y), v(x + 1, y), v(x + 1, y + 1)],
+                [v(x, y), v(x + 1, y + 1), v(x, y + 1)],
+            ]
+        })
+    });
+    write_ply(
+        &path,
+        (row * row) as usize,
+        positions,
+        (2 * side * side) as usize,
+        triangles,
+    );
+    path
+}
+
+/// Every triangle in exactly one patch, patches contiguous in `order`, `target` of them.
+fn check_partition(mesh: &Mesh, tiling: &Tiling, target: u32) {
+    let n = mesh.triangle_count() as usize;
+    assert_eq!(tiling.patches.len() as u32, target);
+    assert_eq!((tiling.patch_of.len(), tiling.order.len()), (n, n));
+    let mut next = 0;
+    for (p, patch) in tiling.patches.iter().enumerate() {
+        assert_eq!(patch.first, next);
+        next += patch.count;
+        for &t in &tiling.order[patch.first as usize..next as usize] {
+            assert_eq!(tiling.patch_of[t as usize], p as u32);
+        }
+    }
+    assert_eq!(next as usize, n);
+}
+
+fn options(mode: TilingMode, memory_budget: u64) -> TilingOptions {
+    TilingOptions {
+        mode,
+        memory_budget,
+    }
+}
+
+const MIB: u64 = 1 << 20;
+
+#[test]
+fn out_of_core_heap_stays_within_the_budget() {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let path = subdivided_bunny(dir.path(), 1);
+    let mesh = Mesh::open(&path).expect("generated mesh");
+    assert!(mesh.is_mapped());
+    let n = mesh.triangle_count();
+    assert_eq!(n, 99_785 * 4);
+
+    let budget = 8 * MIB;
+    let ooc = options(TilingMode::OutOfCore, budget);
+    let (tiling, peak, _) = measured(|| tile_with(&mesh, 1000, &ooc).expect("tiling"));
+    assert!(tiling.stats.out_of_core && tiling.stats.chunks > 4);
+    assert!(tiling.patch_of.is_mapped() && tiling.order.is_mapped());
+    assert!(
+        peak as u64 <= budget,
+        "peak heap {peak} over the {budget}-byte budget"
+    );
+    check_partition(&mesh, &tiling, 1000);
+    drop(tiling);
+
+    let in_core = options(TilingMode::InCore, 0);
+    let (tiling, peak, _) = measured(|| tile_with(&mesh, 1000, &in_core).expect("tiling"));
+    assert!(!tiling.stats.out_of_core);
+    let per_triangle = peak as u64 / u64::from(n);
+    assert!(
+        per_triangle <= IN_CORE_BYTES_PER_TRIANGLE,
+        "in-core peak {per_triangle} bytes per triangle"
+    );
+}
+
+/// Prints a result line for BENCHMARKS.md.
+fn report(name: &str, mesh: &Mesh, opts: &TilingOptions, target: u32) -> Tiling {
+    let (tiling, peak, secs) = measured(|| tile_with(mesh, target, opts).expect("tiling"));
+    let q = tiling.quality;
+    println!(
+        "{name}: {} triangles -> {} patches, {:?} budget {} MiB: {secs:.2} s, peak heap {:.1} MiB, \
+         {} chunks; triangles/patch {}/{}/{}; compactness median {:.3} p95 {:.3}",
+        mesh.triangle_count(),
+        q.patches,
+        opts.mode,
+        opts.memory_budget / MIB,
+        peak as f64 / MIB as f64,
+        tiling.stats.chunks,
+        q.triangles_min,
+        q.triangles_median,
+        q.triangles_max,
+        q.compactness_median,
+        q.compactness_p95,
+    );
+    check_partition(mesh, &tiling, target);
+    tiling
+}
+
+/// Compactness target: out of core within 15% of in core on the 1.6M-triangle bunny.
+#[test]
+#[ignore]
+fn bunny_1_6m_in_core_against_out_of_core() {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let mesh = Mesh::open(&subdivided_bunny(dir.path(), 2)).expect("generated mesh");
+    let a = report("bunny", &mesh, &options(TilingMode::InCore, 0), 1000);
+    for budget in [256 * MIB, 64 * MIB] {
+        let b = report(
+            "bunny",
+            &mesh,
+            &options(TilingMode::OutOfCore, budget),
+            1000,
+        );
+        let ratio = b.quality.compactness_median / a.quality.compactness_median;
+        println!("  out-of-core / in-core median compactness: {ratio:.3}");
+        assert!(ratio <= 1.15);
+    }
+}
+
+/// Speed target: 1M triangles into 1000 patches in core in at most 5 s.
+#[test]
+#[ignore]
+fn grid_1m_in_core() {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let mesh = Mesh::open(&wavy_grid(dir.path(), 708)).expect("generated mesh");
+    report("grid", &mesh, &options(TilingMode::InCore, 0), 1000);
+    report(
+        "grid",
+        &mesh,
+        &options(TilingMode::OutOfCore, 256 * MIB),
+        1000,
+    );
+}
+
+/// Scale target: 20M triangles into 2000 patches under 256 MiB in at most 120 s.
+#[test]
+#[ignore]
+fn grid_20m_out_of_core() {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let start = Instant::now();
+    let mesh = Mesh::open(&wavy_grid(dir.path(), 3163)).expect("generated mesh");
+    println!(
+        "generated and opened in {:.1} s",
+        start.elapsed().as_secs_f64()
+    );
+    let budget = 256 * MIB;
+    let opts = options(TilingMode::Auto, budget);
+    let (tiling, peak, _) = measured(|| report("grid", &mesh, &opts, 2000));
+    assert!(tiling.stats.out_of_core);
+    assert!(peak as u64 <= budget, "peak heap {peak}");
+}
