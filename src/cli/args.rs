@@ -83,6 +83,12 @@ pub struct BakeArgs {
     /// only as sub-pixel slivers are kept.
     #[arg(long)]
     pub conservative: bool,
+    /// View supersampling: sample K sphere levels finer (about 4^K times the views) and fold
+    /// every fine view's patches into the corners of its level-L face, so that queries from
+    /// inside a face see what its fine samples saw; the file keeps level L's size (0: off;
+    /// 1 or 2). Its checkpoint is OUT.pvis.vsK.ckpt.
+    #[arg(long, default_value_t = 0, value_name = "K")]
+    pub view_supersample: u32,
     /// Continue an interrupted bake from its checkpoint (OUT.pvis.ckpt, written after every
     /// sphere level); a checkpoint of other inputs or settings is refused.
     #[arg(long)]

@@ -30,6 +30,8 @@ pub struct Settings {
     mesh_out: Option<PathBuf>,
     stats: Option<PathBuf>,
     options: sampler::SamplingOptions,
+    /// Extra sphere levels sampled and folded into `level` (`--view-supersample`).
+    view_supersample: u32,
     quiet: bool,
     tiling: tiling::TilingOptions,
     /// Heap budget in bytes (`--memory`, or [`default_memory_budget`]).
@@ -98,11 +100,26 @@ impl Settings {
         {
             check_output_path(out)?;
         }
+        if args.view_supersample > sampler::MAX_VIEW_SUPERSAMPLE
+            || args.level + args.view_supersample > MAX_LEVEL
+        {
+            return Err(UsageError(format!(
+                "--view-supersample {}: expected 0 to {} with --level + K at most {MAX_LEVEL} (--level is {})",
+                args.view_supersample,
+                sampler::MAX_VIEW_SUPERSAMPLE,
+                args.level
+            )));
+        }
         let always_visible = match &args.always_visible {
             Some(spec) => parse_patch_ids(spec)?,
             None => Vec::new(),
         };
         let mut checkpoint = args.output.clone().into_os_string();
+        // The supersampled bake samples other rows than a plain one: its own checkpoint, so
+        // that `--resume` finds the right one and a plain bake's checkpoint stays usable.
+        if args.view_supersample > 0 {
+            checkpoint.push(format!(".vs{}", args.view_supersample));
+        }
         checkpoint.push(".ckpt");
         let options = sampler::SamplingOptions {
             min_pixels: args.min_pixels,
@@ -123,6 +140,7 @@ impl Settings {
             mesh_out: args.mesh_out,
             stats: args.stats,
             options,
+            view_supersample: args.view_supersample,
             quiet: args.quiet,
             memory_budget,
             tiling: tiling::TilingOptions {
@@ -245,7 +263,18 @@ pub fn run(args: BakeArgs) -> Result<()> {
         .into());
     }
     let visibility = stage(&mut stages, "sampling", || {
-        sampler::sample_tiled(&mesh, &tiling, &params, &s.options, &bars)
+        // The fine pass differs from the stored level in `level` only (same centre, radius,
+        // camera distance), so its views are the stored ones plus the finer ones.
+        let fine = SamplingParams {
+            level: s.level + s.view_supersample,
+            ..params
+        };
+        sampler::sample_tiled(&mesh, &tiling, &fine, &s.options, &bars).map(|rows| {
+            match s.view_supersample {
+                0 => rows,
+                _ => sampler::supersample_rows(&rows, fine.level, s.level),
+            }
+        })
     })?;
     let contents = BakeContents {
         sampling: &params,
@@ -327,6 +356,8 @@ pub fn run(args: BakeArgs) -> Result<()> {
             "min_pixels": s.options.min_pixels,
             "dilate": s.options.dilate,
             "conservative": s.options.conservative,
+            "view_supersample": s.view_supersample,
+            "sampled_views": view_count(s.level + s.view_supersample),
             "always_visible": s.options.always_visible.len(),
             "visible_fraction_mean": visible_fraction,
             "bytes": {"total": bytes.len(), "visibility": visibility_bytes},
@@ -386,6 +417,14 @@ pub fn run(args: BakeArgs) -> Result<()> {
             100.0 * visible_fraction,
             secs("sampling")
         );
+        if s.view_supersample > 0 {
+            println!(
+                "          view supersampling: sampled {} views (level {}), folded into level {}",
+                view_count(s.level + s.view_supersample),
+                s.level + s.view_supersample,
+                s.level
+            );
+        }
         println!(
             "wrote {}: {} bytes, visibility {} bytes ({:.2} s total)",
             s.output.display(),

@@ -16,6 +16,7 @@ mod key_buffer;
 mod patch_graph;
 mod patch_mesh;
 mod raster;
+mod supersample;
 #[cfg(test)]
 mod test_meshes;
 #[cfg(test)]
@@ -27,6 +28,7 @@ mod tiled_tests;
 pub use camera::{Camera, MAX_RESOLUTION, NEAR_FRACTION};
 pub use id_buffer::{IdBuffer, NO_PATCH};
 pub use raster::{Rasterizer, SUBPIXEL_BITS, render_ids, render_ids_filtered};
+pub use supersample::{MAX_VIEW_SUPERSAMPLE, supersample_rows};
 pub use tiled::{SamplingError, SamplingOptions, sample_tiled, tiled_mesh_bytes};
 
 mod bounding;
