@@ -88,7 +88,7 @@ mod tests {
                 s ^= s << 13;
                 s ^= s >> 7;
                 s ^= s << 17;
-                if s % 8 == 0 {
+                if s.is_multiple_of(8) {
                     m.set(v, p);
                 }
             }
