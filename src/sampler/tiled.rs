@@ -26,7 +26,7 @@
 use super::camera::{Camera, SphereBounds};
 use super::checkpoint;
 use super::conservative::scan_triangle_conservative;
-use super::key_buffer::{KeyBuffer, triangle_of};
+use super::key_buffer::KeyBuffer;
 use super::patch_graph::{PatchGraph, may_face};
 use super::patch_mesh::PatchMesh;
 use super::raster::{
@@ -132,6 +132,9 @@ pub fn sample_tiled(
         params,
         options,
         always,
+        patch_of_key: std::iter::once(patch_count)
+            .chain(tiling.patch_of.iter().copied())
+            .collect(),
         graph: options
             .dilate
             .then(|| PatchGraph::new(mesh, &tiling.patch_of, patch_count)),
@@ -180,6 +183,9 @@ struct ViewContext<'a> {
     options: &'a SamplingOptions,
     always: Vec<u64>,
     graph: Option<PatchGraph>,
+    /// The patch of the key whose low half is `low`, at index `low.wrapping_neg()` (input
+    /// triangle + 1); index 0 (empty pixel) holds the spare patch number `patch_count`.
+    patch_of_key: Vec<u32>,
 }
 
 /// One worker's buffers.
@@ -187,7 +193,10 @@ struct ViewScratch {
     keys: KeyBuffer,
     projected: Vec<ProjectedVertex>,
     drawn: Vec<u64>,
+    /// Pixels per patch (plus one spare entry for empty pixels), for `min_pixels`.
     pixels: Vec<u32>,
+    /// Whether a patch holds a pixel (plus the spare entry).
+    hit: Vec<u8>,
     seen: Vec<u64>,
 }
 
@@ -198,7 +207,8 @@ impl ViewScratch {
             keys: KeyBuffer::new(resolution),
             projected: Vec::new(),
             drawn: vec![0; words],
-            pixels: vec![0; patch_count as usize],
+            pixels: vec![0; patch_count as usize + 1],
+            hit: vec![0; patch_count as usize + 1],
             seen: vec![0; words],
         }
     }
@@ -303,43 +313,31 @@ impl ViewContext<'_> {
     /// Turns the key buffer into the view's row: pixel counts, `min_pixels`, dilation and the
     /// always-visible patches.
     fn resolve(&self, camera: &Camera, scratch: &mut ViewScratch, row: &mut [u64]) {
-        let patch_of = &self.tiling.patch_of;
         let min_pixels = self.options.min_pixels;
+        let patch_count = self.mesh.patch_count();
+        let lookup = &self.patch_of_key;
+        // Neighbouring pixels mostly hold different triangles (1–2 px each), so a "same as the
+        // previous pixel" test mispredicts constantly: every pixel does a branch-free table
+        // look-up and store instead, empty pixels landing on the spare entry `patch_count`.
+        let slot = |key: u64| (key as u32).wrapping_neg() as usize;
         row.fill(0);
         let seen = &mut scratch.seen;
         seen.fill(0);
         if min_pixels <= 1 {
-            let mut previous = 0u32;
+            let hit = &mut scratch.hit;
             for &key in scratch.keys.keys() {
-                let low = key as u32;
-                if low != previous {
-                    previous = low;
-                    if key != 0 {
-                        let p = patch_of[triangle_of(key) as usize];
-                        seen[p as usize / 64] |= 1 << (p % 64);
-                    }
-                }
+                hit[lookup[slot(key)] as usize] = 1;
+            }
+            for (p, h) in hit[..patch_count].iter_mut().enumerate() {
+                seen[p / 64] |= u64::from(*h) << (p % 64);
+                *h = 0;
             }
         } else {
             let pixels = &mut scratch.pixels;
-            let mut previous = (0u32, u32::MAX);
             for &key in scratch.keys.keys() {
-                let low = key as u32;
-                if low != previous.0 {
-                    previous = (
-                        low,
-                        if key == 0 {
-                            u32::MAX
-                        } else {
-                            patch_of[triangle_of(key) as usize]
-                        },
-                    );
-                }
-                if previous.1 != u32::MAX {
-                    pixels[previous.1 as usize] += 1;
-                }
+                pixels[lookup[slot(key)] as usize] += 1;
             }
-            for (p, count) in pixels.iter_mut().enumerate() {
+            for (p, count) in pixels[..patch_count].iter_mut().enumerate() {
                 if *count >= min_pixels {
                     seen[p / 64] |= 1 << (p % 64);
                 }
