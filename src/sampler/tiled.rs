@@ -30,7 +30,8 @@ use super::key_buffer::KeyBuffer;
 use super::patch_graph::{PatchGraph, may_face};
 use super::patch_mesh::PatchMesh;
 use super::raster::{
-    DEFAULT_PATHS, ProjectedVertex, draw_triangle, project, scan_triangle, view_planes,
+    DEFAULT_PATHS, ProjectedVertex, draw_triangle, project, project_unclipped, scan_triangle,
+    sphere_needs_no_clip, view_planes,
 };
 use super::{SamplingParams, VisibilityMatrix};
 use crate::ooc::Mesh;
@@ -286,7 +287,12 @@ impl ViewContext<'_> {
             keys, projected, ..
         } = scratch;
         projected.clear();
-        projected.extend(vertices.iter().map(|&v| project(camera, &planes, v)));
+        let patch = &self.tiling.patches[p];
+        if sphere_needs_no_clip(camera, patch.center, patch.radius) {
+            projected.extend(vertices.iter().map(|&v| project_unclipped(camera, v)));
+        } else {
+            projected.extend(vertices.iter().map(|&v| project(camera, &planes, v)));
+        }
         let (start, triangles) = self.mesh.triangles(p);
         let order = &self.tiling.order[start..start + triangles.len()];
         let resolution = camera.resolution();
