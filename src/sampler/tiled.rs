@@ -30,8 +30,8 @@ use super::key_buffer::KeyBuffer;
 use super::patch_graph::{PatchGraph, may_face};
 use super::patch_mesh::PatchMesh;
 use super::raster::{
-    DEFAULT_PATHS, ProjectedVertex, draw_triangle, project, project_unclipped, scan_triangle,
-    sphere_needs_no_clip, view_planes,
+    DEFAULT_PATHS, ProjectedVertex, ScreenVertex, draw_triangle, project, project_unclipped,
+    scan_triangle, sphere_needs_no_clip, view_planes,
 };
 use super::{SamplingParams, VisibilityMatrix};
 use crate::ooc::Mesh;
@@ -133,6 +133,7 @@ pub fn sample_tiled(
         params,
         options,
         always,
+        back_winding: back_winding(mesh),
         patch_of_key: std::iter::once(patch_count)
             .chain(tiling.patch_of.iter().copied())
             .collect(),
@@ -187,6 +188,8 @@ struct ViewContext<'a> {
     /// The patch of the key whose low half is `low`, at index `low.wrapping_neg()` (input
     /// triangle + 1); index 0 (empty pixel) holds the spare patch number `patch_count`.
     patch_of_key: Vec<u32>,
+    /// [`back_winding`] of the mesh.
+    back_winding: i64,
 }
 
 /// One worker's buffers.
@@ -194,6 +197,8 @@ struct ViewScratch {
     keys: KeyBuffer,
     projected: Vec<ProjectedVertex>,
     drawn: Vec<u64>,
+    /// First-pass triangles put off as facing away: screen corners and key low half.
+    deferred: Vec<([ScreenVertex; 3], u32)>,
     /// Pixels per patch (plus one spare entry for empty pixels), for `min_pixels`.
     pixels: Vec<u32>,
     /// Whether a patch holds a pixel (plus the spare entry).
@@ -208,11 +213,54 @@ impl ViewScratch {
             keys: KeyBuffer::new(resolution),
             projected: Vec::new(),
             drawn: vec![0; words],
+            deferred: Vec::new(),
             pixels: vec![0; patch_count as usize + 1],
             hit: vec![0; patch_count as usize + 1],
             seen: vec![0; words],
         }
     }
+}
+
+/// The two drawing passes of a view (see `ViewContext::render_view`).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Pass {
+    /// Before the occlusion tiles exist: draw, but put off triangles facing away.
+    First,
+    /// After: draw only what the tiles do not hide.
+    Tested,
+}
+
+/// The sign (−1, 0, 1) of a screen triangle's signed area `(b − a) × (c − a)`, in the
+/// rasterizer's y-down pixel frame.
+#[inline(always)]
+fn winding(tri: [ScreenVertex; 3]) -> i64 {
+    let [a, b, c] = tri.map(|v| (v.x as i64, v.y as i64));
+    ((b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)).signum()
+}
+
+/// The screen winding of the triangles that face away from the eye on a consistently wound
+/// closed mesh: with outward normals `(b − a) × (c − a)` (positive signed volume) a front
+/// face winds counter-clockwise seen from the eye, which the y-down pixel frame turns into a
+/// negative signed area, so back faces are positive. Only steers which triangles are drawn
+/// first; any answer is correct, a wrong one only slower.
+fn back_winding(mesh: &Mesh) -> i64 {
+    let volume: f64 = (0..mesh.triangle_count())
+        .into_par_iter()
+        .map(|t| {
+            let [a, b, c] = mesh.triangle(t).map(|v| mesh.position(v).map(f64::from));
+            let (u, v) = (
+                [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+                [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+            );
+            let n = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
+            n[0] * a[0] + n[1] * a[1] + n[2] * a[2]
+        })
+        .sum();
+    if volume < 0.0 { -1 } else { 1 }
 }
 
 /// Calls `f` with every set bit of `words`.
@@ -226,7 +274,11 @@ fn for_each_bit(words: impl Iterator<Item = u64>, mut f: impl FnMut(usize)) {
 }
 
 impl ViewContext<'_> {
-    /// Renders `view` into `row`, drawing the patches `hints` (the parents' rows) show first.
+    /// Renders `view` into `row`. The patches `hints` show (the parents' rows; every patch in
+    /// the first level) are drawn first, except their triangles that face away from the eye,
+    /// which are put off; then the occlusion tiles are built, and the put-off triangles and
+    /// the other patches are drawn unless the tiles prove them hidden (patches by their
+    /// bounding sphere, then each triangle by its bounding box).
     fn render_view(
         &self,
         view: u32,
@@ -236,55 +288,64 @@ impl ViewContext<'_> {
     ) {
         let camera = Camera::sampling_view(self.params, view);
         scratch.keys.clear();
+        scratch.deferred.clear();
         let patch_count = self.mesh.patch_count();
-        match hints {
-            None => (0..patch_count).for_each(|p| self.draw_patch(p, &camera, scratch)),
-            Some([a, b]) => {
-                let valid = |w: usize| {
-                    if (w + 1) * 64 <= patch_count {
-                        u64::MAX
-                    } else {
-                        (1u64 << (patch_count % 64)) - 1
-                    }
-                };
-                for (w, d) in scratch.drawn.iter_mut().enumerate() {
-                    *d = (a[w] | b[w] | self.always[w]) & valid(w);
-                }
-                let first = std::mem::take(&mut scratch.drawn);
-                for_each_bit(first.iter().copied(), |p| {
-                    self.draw_patch(p, &camera, scratch)
-                });
-                scratch.keys.build_tiles();
-                let rest = first.iter().enumerate().map(|(w, &d)| !d & valid(w));
-                for_each_bit(rest, |p| {
-                    let patch = &self.tiling.patches[p];
-                    let visible = match camera.sphere_bounds(patch.center, patch.radius) {
-                        SphereBounds::Outside => false,
-                        SphereBounds::Unbounded => true,
-                        SphereBounds::Rect { rect, nearest } => {
-                            let mut q = nearest as f32;
-                            if (q as f64) < nearest {
-                                q = q.next_up();
-                            }
-                            !q.is_finite() || !scratch.keys.occludes(rect, q.to_bits())
-                        }
-                    };
-                    if visible {
-                        self.draw_patch(p, &camera, scratch);
-                    }
-                });
-                scratch.drawn = first;
+        let valid = |w: usize| {
+            if (w + 1) * 64 <= patch_count {
+                u64::MAX
+            } else {
+                (1u64 << (patch_count % 64)) - 1
+            }
+        };
+        for (w, d) in scratch.drawn.iter_mut().enumerate() {
+            *d = hints.map_or(u64::MAX, |[a, b]| a[w] | b[w] | self.always[w]) & valid(w);
+        }
+        let first = std::mem::take(&mut scratch.drawn);
+        for_each_bit(first.iter().copied(), |p| {
+            self.draw_patch(p, &camera, scratch, Pass::First)
+        });
+        scratch.keys.build_tiles();
+        let conservative = self.options.conservative;
+        let resolution = camera.resolution();
+        let ViewScratch { keys, deferred, .. } = &mut *scratch;
+        for &(screen, low) in deferred.iter() {
+            if !keys.triangle_hidden(screen, conservative) {
+                self.scan(screen, low, resolution, keys);
             }
         }
+        let rest = first.iter().enumerate().map(|(w, &d)| !d & valid(w));
+        for_each_bit(rest, |p| {
+            let patch = &self.tiling.patches[p];
+            let visible = match camera.sphere_bounds(patch.center, patch.radius) {
+                SphereBounds::Outside => false,
+                SphereBounds::Unbounded => true,
+                SphereBounds::Rect { rect, nearest } => {
+                    let mut q = nearest as f32;
+                    if (q as f64) < nearest {
+                        q = q.next_up();
+                    }
+                    !q.is_finite() || !scratch.keys.occludes(rect, q.to_bits())
+                }
+            };
+            if visible {
+                self.draw_patch(p, &camera, scratch, Pass::Tested);
+            }
+        });
+        scratch.drawn = first;
         self.resolve(&camera, scratch, row);
     }
 
-    /// Draws every triangle of patch `p` into the scratch key buffer.
-    fn draw_patch(&self, p: usize, camera: &Camera, scratch: &mut ViewScratch) {
+    /// Draws the triangles of patch `p` into the scratch key buffer: in the first pass all
+    /// but those facing away (which go to `scratch.deferred`), in the tested pass those the
+    /// occlusion tiles do not hide.
+    fn draw_patch(&self, p: usize, camera: &Camera, scratch: &mut ViewScratch, pass: Pass) {
         let planes = view_planes(camera);
         let vertices = self.mesh.vertices(p);
         let ViewScratch {
-            keys, projected, ..
+            keys,
+            projected,
+            deferred,
+            ..
         } = scratch;
         projected.clear();
         let patch = &self.tiling.patches[p];
@@ -305,14 +366,33 @@ impl ViewContext<'_> {
                 camera,
                 &planes,
                 |screen| {
-                    let plot = |index, q, covered| keys.plot(index, q, low, covered);
-                    if conservative {
-                        scan_triangle_conservative(screen, resolution, plot);
-                    } else {
-                        scan_triangle(screen, resolution, DEFAULT_PATHS, plot);
+                    match pass {
+                        Pass::First => {
+                            if winding(screen) == self.back_winding {
+                                deferred.push((screen, low));
+                                return;
+                            }
+                        }
+                        Pass::Tested => {
+                            if keys.triangle_hidden(screen, conservative) {
+                                return;
+                            }
+                        }
                     }
+                    self.scan(screen, low, resolution, keys);
                 },
             );
+        }
+    }
+
+    /// Rasterizes one screen triangle of input triangle `!low` into `keys`.
+    #[inline(always)]
+    fn scan(&self, screen: [ScreenVertex; 3], low: u32, resolution: u32, keys: &mut KeyBuffer) {
+        let plot = |index, q, covered| keys.plot(index, q, low, covered);
+        if self.options.conservative {
+            scan_triangle_conservative(screen, resolution, plot);
+        } else {
+            scan_triangle(screen, resolution, DEFAULT_PATHS, plot);
         }
     }
 
