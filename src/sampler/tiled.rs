@@ -5,21 +5,24 @@
 //! view of level `l + 1` splits an edge between two views of coarser levels
 //! (`sphere::parents`), which are finished and lie next to it, so the patches they see are
 //! nearly the patches it sees. Each view draws those patches first (plus the always-visible
-//! ones), builds the farthest depth of every 8×8-pixel tile from them (one level of a
-//! hierarchical Z-buffer; Greene, Kass & Miller 1993), and then draws each remaining patch
-//! only if its bounding sphere's screen rectangle reaches a tile where the sphere's nearest
-//! depth is not strictly behind everything drawn. A patch that fails cannot change any pixel,
-//! and the packed depth/triangle keys (`key_buffer.rs`) make the buffer independent of drawing
-//! order, so the result equals the reference render ([`super::sample`]) bit for bit. The mesh
-//! is regrouped by patch (`patch_mesh.rs`), so a view transforms only the vertices of the
-//! patches it draws.
+//! ones; every patch in level 0), except their triangles that wind away from the eye (back
+//! faces, which on a closed mesh are hidden and make poor occluders), builds the farthest
+//! depth of every 8×8-pixel tile from them (one level of a hierarchical Z-buffer; Greene,
+//! Kass & Miller 1993), and then draws each put-off back face and each remaining patch only
+//! if the tiles cannot prove it hidden: a patch by its bounding sphere's screen rectangle and
+//! nearest depth, then each of its triangles by its pixel box and largest corner depth. What
+//! fails cannot change any pixel, and the packed depth/triangle keys (`key_buffer.rs`) make
+//! the buffer independent of drawing order, so the result equals the reference render
+//! ([`super::sample`]) bit for bit. The mesh is regrouped by patch (`patch_mesh.rs`), so a
+//! view transforms only the vertices of the patches it draws, and patches far from the near
+//! plane and guard band (all of them, in sampling views) skip the clip-plane tests.
 //!
 //! Options: `min_pixels` (a patch counts only if it covers that many pixels), `dilate` (also
 //! mark edge neighbours of visible patches that may face the eye), `always_visible` (patches
 //! set in every row), `conservative` (conservative rasterization, `conservative.rs`), and a
 //! checkpoint written after each level (`checkpoint.rs`).
-//! Cost per view: a sphere test per patch, the triangles of the drawn patches, one pass over
-//! the pixels. Memory: one `resolution² × 8`-byte buffer per thread plus the regrouped mesh.
+//! Cost per view: a sphere test per patch, the triangles of the drawn patches (a tile test
+//! for those drawn after the tiles), one pass over the pixels. Memory: one `resolution² × 8`-byte buffer per thread plus the regrouped mesh.
 //! **Invariant**: the result is the same for any number of threads, and with or without a
 //! resumed checkpoint.
 
