@@ -240,6 +240,43 @@ impl Camera {
     }
 }
 
+impl Camera {
+    /// Whether every point of the ball of `radius` around `center` has view depth `w >=
+    /// min_w` and projects into the pixel square `[lo, hi]²` (bounds as in
+    /// [`Camera::sphere_bounds`]; callers leave a wide margin for rounding).
+    pub(crate) fn sphere_within(
+        &self,
+        center: [f32; 3],
+        radius: f32,
+        min_w: f64,
+        lo: f64,
+        hi: f64,
+    ) -> bool {
+        let d = sub(widen(center), self.eye);
+        let r = radius as f64;
+        let (x, y, w) = (dot(d, self.right), dot(d, self.up), dot(d, self.forward));
+        let (w_near, w_far) = (w - r, w + r);
+        if !(w_near >= min_w && min_w > 0.0) {
+            return false;
+        }
+        // Pixel coordinates are `half ± scale · c / w`, extremal at the box corners.
+        let within = |c: f64| {
+            [
+                (c - r) / w_near,
+                (c - r) / w_far,
+                (c + r) / w_near,
+                (c + r) / w_far,
+            ]
+            .iter()
+            .all(|t| {
+                let (a, b) = (self.half + self.scale * t, self.half - self.scale * t);
+                a >= lo && a <= hi && b >= lo && b <= hi
+            })
+        };
+        within(x) && within(y)
+    }
+}
+
 fn widen(p: [f32; 3]) -> [f64; 3] {
     [p[0] as f64, p[1] as f64, p[2] as f64]
 }

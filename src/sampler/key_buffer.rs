@@ -11,6 +11,13 @@
 //! fragment with depth `<= 0` (never nearer than "empty" in the reference) is dropped.
 //! Cost: 8 bytes per pixel, one load, `max` and store per fragment.
 
+use super::raster::{SUBPIXEL_BITS, ScreenVertex};
+
+/// Relative widening of a triangle's largest corner depth in [`KeyBuffer::triangle_hidden`]:
+/// interpolated `f32` depths exceed it by a few ulps at most (~1e-7 relative), and
+/// conservative fragments by 1e-9 relative; 1e-4 is a wide margin.
+const TRIANGLE_DEPTH_SLACK: f32 = 1e-4;
+
 /// Side of the square tiles of the occlusion map, in pixels.
 pub(crate) const TILE: usize = 8;
 
@@ -71,6 +78,40 @@ impl KeyBuffer {
         }
     }
 
+    /// Whether screen triangle `tri` provably changes no pixel, by the tiles of the last
+    /// [`KeyBuffer::build_tiles`]: every tile under the pixels it may touch (centres inside
+    /// its bounding box; with `conservative`, every pixel square the box meets) holds only
+    /// depths strictly nearer than its largest corner depth widened by
+    /// [`TRIANGLE_DEPTH_SLACK`]. A triangle touching no pixel is hidden too.
+    #[inline]
+    pub(crate) fn triangle_hidden(&self, tri: [ScreenVertex; 3], conservative: bool) -> bool {
+        const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
+        let [a, b, c] = tri;
+        let last = self.resolution as i64 - 1;
+        let (min_x, max_x) = (a.x.min(b.x).min(c.x) as i64, a.x.max(b.x).max(c.x) as i64);
+        let (min_y, max_y) = (a.y.min(b.y).min(c.y) as i64, a.y.max(b.y).max(c.y) as i64);
+        // As in `scan_triangle` (centres `p · 256 + 128`) or, conservatively, a superset of
+        // the squares `scan_triangle_conservative` touches.
+        let (lo_bias, hi_bias) = if conservative {
+            (-SUBPIXEL, 0)
+        } else {
+            (SUBPIXEL / 2 - 1, -SUBPIXEL / 2)
+        };
+        let x0 = ((min_x + lo_bias) >> SUBPIXEL_BITS).max(0);
+        let x1 = ((max_x + hi_bias) >> SUBPIXEL_BITS).min(last);
+        let y0 = ((min_y + lo_bias) >> SUBPIXEL_BITS).max(0);
+        let y1 = ((max_y + hi_bias) >> SUBPIXEL_BITS).min(last);
+        if x0 > x1 || y0 > y1 {
+            return true;
+        }
+        let q = a.q.max(b.q).max(c.q) * (1.0 + TRIANGLE_DEPTH_SLACK);
+        if !(q.is_finite() && q > 0.0) {
+            return false;
+        }
+        let rect = [x0 as usize, y0 as usize, x1 as usize, y1 as usize];
+        self.occludes(rect, q.to_bits())
+    }
+
     /// Whether every pixel of the inclusive pixel rectangle `[x0, x1] × [y0, y1]` already
     /// holds a depth strictly nearer than `q_bits` (so that no fragment at depth `<= q` can
     /// change it), according to the tiles of the last [`KeyBuffer::build_tiles`].
@@ -86,7 +127,8 @@ impl KeyBuffer {
     }
 }
 
-/// The input triangle of a non-empty key.
+/// The input triangle of a non-empty key (the sampler resolves keys through a table).
+#[cfg(test)]
 #[inline]
 pub(crate) fn triangle_of(key: u64) -> u32 {
     !(key as u32)
@@ -128,5 +170,38 @@ mod tests {
         // Pixel 200 = (8, 12) is empty, so tile (1, 1) occludes nothing.
         assert!(!b.occludes([9, 9, 9, 9], 1));
         assert!(!b.occludes([0, 0, 15, 15], half - 1));
+    }
+
+    #[test]
+    fn triangles_are_hidden_only_behind_full_tiles_of_nearer_depth() {
+        let mut b = KeyBuffer::new(16);
+        for y in 0..8 {
+            for x in 0..8 {
+                b.plot(y * 16 + x, 0.5, !0, true);
+            }
+        }
+        b.build_tiles();
+        // Pixel (x, y) has its centre at sub-pixel (256 x + 128, 256 y + 128).
+        let tri = |x: [i32; 3], y: [i32; 3], q: f32| {
+            [0, 1, 2].map(|i| ScreenVertex {
+                x: x[i],
+                y: y[i],
+                q,
+            })
+        };
+        let inside = ([300, 1500, 300], [300, 300, 1500]);
+        for conservative in [false, true] {
+            assert!(b.triangle_hidden(tri(inside.0, inside.1, 0.4), conservative));
+            // Equal depth may still win on the triangle index.
+            assert!(!b.triangle_hidden(tri(inside.0, inside.1, 0.5), conservative));
+            // Reaching into the empty tile (1, 0).
+            let wide = tri([300, 2200, 300], [300, 300, 1500], 0.4);
+            assert!(!b.triangle_hidden(wide, conservative));
+        }
+        // Between the centres of pixels 8 and 9 in x, inside empty tile (1, 0): covers no
+        // centre, but its pixel squares are touched.
+        let sliver = tri([2200, 2250, 2200], [300, 300, 350], 0.4);
+        assert!(b.triangle_hidden(sliver, false));
+        assert!(!b.triangle_hidden(sliver, true));
     }
 }

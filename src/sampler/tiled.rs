@@ -5,32 +5,36 @@
 //! view of level `l + 1` splits an edge between two views of coarser levels
 //! (`sphere::parents`), which are finished and lie next to it, so the patches they see are
 //! nearly the patches it sees. Each view draws those patches first (plus the always-visible
-//! ones), builds the farthest depth of every 8×8-pixel tile from them (one level of a
-//! hierarchical Z-buffer; Greene, Kass & Miller 1993), and then draws each remaining patch
-//! only if its bounding sphere's screen rectangle reaches a tile where the sphere's nearest
-//! depth is not strictly behind everything drawn. A patch that fails cannot change any pixel,
-//! and the packed depth/triangle keys (`key_buffer.rs`) make the buffer independent of drawing
-//! order, so the result equals the reference render ([`super::sample`]) bit for bit. The mesh
-//! is regrouped by patch (`patch_mesh.rs`), so a view transforms only the vertices of the
-//! patches it draws.
+//! ones; every patch in level 0), except their triangles that wind away from the eye (back
+//! faces, which on a closed mesh are hidden and make poor occluders), builds the farthest
+//! depth of every 8×8-pixel tile from them (one level of a hierarchical Z-buffer; Greene,
+//! Kass & Miller 1993), and then draws each put-off back face and each remaining patch only
+//! if the tiles cannot prove it hidden: a patch by its bounding sphere's screen rectangle and
+//! nearest depth, then each of its triangles by its pixel box and largest corner depth. What
+//! fails cannot change any pixel, and the packed depth/triangle keys (`key_buffer.rs`) make
+//! the buffer independent of drawing order, so the result equals the reference render
+//! ([`super::sample`]) bit for bit. The mesh is regrouped by patch (`patch_mesh.rs`), so a
+//! view transforms only the vertices of the patches it draws, and patches far from the near
+//! plane and guard band (all of them, in sampling views) skip the clip-plane tests.
 //!
 //! Options: `min_pixels` (a patch counts only if it covers that many pixels), `dilate` (also
 //! mark edge neighbours of visible patches that may face the eye), `always_visible` (patches
 //! set in every row), `conservative` (conservative rasterization, `conservative.rs`), and a
 //! checkpoint written after each level (`checkpoint.rs`).
-//! Cost per view: a sphere test per patch, the triangles of the drawn patches, one pass over
-//! the pixels. Memory: one `resolution² × 8`-byte buffer per thread plus the regrouped mesh.
+//! Cost per view: a sphere test per patch, the triangles of the drawn patches (a tile test
+//! for those drawn after the tiles), one pass over the pixels. Memory: one `resolution² × 8`-byte buffer per thread plus the regrouped mesh.
 //! **Invariant**: the result is the same for any number of threads, and with or without a
 //! resumed checkpoint.
 
 use super::camera::{Camera, SphereBounds};
 use super::checkpoint;
 use super::conservative::scan_triangle_conservative;
-use super::key_buffer::{KeyBuffer, triangle_of};
+use super::key_buffer::KeyBuffer;
 use super::patch_graph::{PatchGraph, may_face};
 use super::patch_mesh::PatchMesh;
 use super::raster::{
-    DEFAULT_PATHS, ProjectedVertex, draw_triangle, project, scan_triangle, view_planes,
+    DEFAULT_PATHS, ProjectedVertex, ScreenVertex, draw_triangle, project, project_unclipped,
+    scan_triangle, sphere_needs_no_clip, view_planes,
 };
 use super::{SamplingParams, VisibilityMatrix};
 use crate::ooc::Mesh;
@@ -132,6 +136,10 @@ pub fn sample_tiled(
         params,
         options,
         always,
+        back_winding: back_winding(mesh),
+        patch_of_key: std::iter::once(patch_count)
+            .chain(tiling.patch_of.iter().copied())
+            .collect(),
         graph: options
             .dilate
             .then(|| PatchGraph::new(mesh, &tiling.patch_of, patch_count)),
@@ -180,6 +188,11 @@ struct ViewContext<'a> {
     options: &'a SamplingOptions,
     always: Vec<u64>,
     graph: Option<PatchGraph>,
+    /// The patch of the key whose low half is `low`, at index `low.wrapping_neg()` (input
+    /// triangle + 1); index 0 (empty pixel) holds the spare patch number `patch_count`.
+    patch_of_key: Vec<u32>,
+    /// [`back_winding`] of the mesh.
+    back_winding: i64,
 }
 
 /// One worker's buffers.
@@ -187,7 +200,12 @@ struct ViewScratch {
     keys: KeyBuffer,
     projected: Vec<ProjectedVertex>,
     drawn: Vec<u64>,
+    /// First-pass triangles put off as facing away: screen corners and key low half.
+    deferred: Vec<([ScreenVertex; 3], u32)>,
+    /// Pixels per patch (plus one spare entry for empty pixels), for `min_pixels`.
     pixels: Vec<u32>,
+    /// Whether a patch holds a pixel (plus the spare entry).
+    hit: Vec<u8>,
     seen: Vec<u64>,
 }
 
@@ -198,10 +216,54 @@ impl ViewScratch {
             keys: KeyBuffer::new(resolution),
             projected: Vec::new(),
             drawn: vec![0; words],
-            pixels: vec![0; patch_count as usize],
+            deferred: Vec::new(),
+            pixels: vec![0; patch_count as usize + 1],
+            hit: vec![0; patch_count as usize + 1],
             seen: vec![0; words],
         }
     }
+}
+
+/// The two drawing passes of a view (see `ViewContext::render_view`).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Pass {
+    /// Before the occlusion tiles exist: draw, but put off triangles facing away.
+    First,
+    /// After: draw only what the tiles do not hide.
+    Tested,
+}
+
+/// The sign (−1, 0, 1) of a screen triangle's signed area `(b − a) × (c − a)`, in the
+/// rasterizer's y-down pixel frame.
+#[inline(always)]
+fn winding(tri: [ScreenVertex; 3]) -> i64 {
+    let [a, b, c] = tri.map(|v| (v.x as i64, v.y as i64));
+    ((b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)).signum()
+}
+
+/// The screen winding of the triangles that face away from the eye on a consistently wound
+/// closed mesh: with outward normals `(b − a) × (c − a)` (positive signed volume) a front
+/// face winds counter-clockwise seen from the eye, which the y-down pixel frame turns into a
+/// negative signed area, so back faces are positive. Only steers which triangles are drawn
+/// first; any answer is correct, a wrong one only slower.
+fn back_winding(mesh: &Mesh) -> i64 {
+    let volume: f64 = (0..mesh.triangle_count())
+        .into_par_iter()
+        .map(|t| {
+            let [a, b, c] = mesh.triangle(t).map(|v| mesh.position(v).map(f64::from));
+            let (u, v) = (
+                [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+                [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+            );
+            let n = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
+            n[0] * a[0] + n[1] * a[1] + n[2] * a[2]
+        })
+        .sum();
+    if volume < 0.0 { -1 } else { 1 }
 }
 
 /// Calls `f` with every set bit of `words`.
@@ -215,7 +277,11 @@ fn for_each_bit(words: impl Iterator<Item = u64>, mut f: impl FnMut(usize)) {
 }
 
 impl ViewContext<'_> {
-    /// Renders `view` into `row`, drawing the patches `hints` (the parents' rows) show first.
+    /// Renders `view` into `row`. The patches `hints` show (the parents' rows; every patch in
+    /// the first level) are drawn first, except their triangles that face away from the eye,
+    /// which are put off; then the occlusion tiles are built, and the put-off triangles and
+    /// the other patches are drawn unless the tiles prove them hidden (patches by their
+    /// bounding sphere, then each triangle by its bounding box).
     fn render_view(
         &self,
         view: u32,
@@ -225,58 +291,72 @@ impl ViewContext<'_> {
     ) {
         let camera = Camera::sampling_view(self.params, view);
         scratch.keys.clear();
+        scratch.deferred.clear();
         let patch_count = self.mesh.patch_count();
-        match hints {
-            None => (0..patch_count).for_each(|p| self.draw_patch(p, &camera, scratch)),
-            Some([a, b]) => {
-                let valid = |w: usize| {
-                    if (w + 1) * 64 <= patch_count {
-                        u64::MAX
-                    } else {
-                        (1u64 << (patch_count % 64)) - 1
-                    }
-                };
-                for (w, d) in scratch.drawn.iter_mut().enumerate() {
-                    *d = (a[w] | b[w] | self.always[w]) & valid(w);
-                }
-                let first = std::mem::take(&mut scratch.drawn);
-                for_each_bit(first.iter().copied(), |p| {
-                    self.draw_patch(p, &camera, scratch)
-                });
-                scratch.keys.build_tiles();
-                let rest = first.iter().enumerate().map(|(w, &d)| !d & valid(w));
-                for_each_bit(rest, |p| {
-                    let patch = &self.tiling.patches[p];
-                    let visible = match camera.sphere_bounds(patch.center, patch.radius) {
-                        SphereBounds::Outside => false,
-                        SphereBounds::Unbounded => true,
-                        SphereBounds::Rect { rect, nearest } => {
-                            let mut q = nearest as f32;
-                            if (q as f64) < nearest {
-                                q = q.next_up();
-                            }
-                            !q.is_finite() || !scratch.keys.occludes(rect, q.to_bits())
-                        }
-                    };
-                    if visible {
-                        self.draw_patch(p, &camera, scratch);
-                    }
-                });
-                scratch.drawn = first;
+        let valid = |w: usize| {
+            if (w + 1) * 64 <= patch_count {
+                u64::MAX
+            } else {
+                (1u64 << (patch_count % 64)) - 1
+            }
+        };
+        for (w, d) in scratch.drawn.iter_mut().enumerate() {
+            *d = hints.map_or(u64::MAX, |[a, b]| a[w] | b[w] | self.always[w]) & valid(w);
+        }
+        let first = std::mem::take(&mut scratch.drawn);
+        for_each_bit(first.iter().copied(), |p| {
+            self.draw_patch(p, &camera, scratch, Pass::First)
+        });
+        scratch.keys.build_tiles();
+        let conservative = self.options.conservative;
+        let resolution = camera.resolution();
+        let ViewScratch { keys, deferred, .. } = &mut *scratch;
+        for &(screen, low) in deferred.iter() {
+            if !keys.triangle_hidden(screen, conservative) {
+                self.scan(screen, low, resolution, keys);
             }
         }
+        let rest = first.iter().enumerate().map(|(w, &d)| !d & valid(w));
+        for_each_bit(rest, |p| {
+            let patch = &self.tiling.patches[p];
+            let visible = match camera.sphere_bounds(patch.center, patch.radius) {
+                SphereBounds::Outside => false,
+                SphereBounds::Unbounded => true,
+                SphereBounds::Rect { rect, nearest } => {
+                    let mut q = nearest as f32;
+                    if (q as f64) < nearest {
+                        q = q.next_up();
+                    }
+                    !q.is_finite() || !scratch.keys.occludes(rect, q.to_bits())
+                }
+            };
+            if visible {
+                self.draw_patch(p, &camera, scratch, Pass::Tested);
+            }
+        });
+        scratch.drawn = first;
         self.resolve(&camera, scratch, row);
     }
 
-    /// Draws every triangle of patch `p` into the scratch key buffer.
-    fn draw_patch(&self, p: usize, camera: &Camera, scratch: &mut ViewScratch) {
+    /// Draws the triangles of patch `p` into the scratch key buffer: in the first pass all
+    /// but those facing away (which go to `scratch.deferred`), in the tested pass those the
+    /// occlusion tiles do not hide.
+    fn draw_patch(&self, p: usize, camera: &Camera, scratch: &mut ViewScratch, pass: Pass) {
         let planes = view_planes(camera);
         let vertices = self.mesh.vertices(p);
         let ViewScratch {
-            keys, projected, ..
+            keys,
+            projected,
+            deferred,
+            ..
         } = scratch;
         projected.clear();
-        projected.extend(vertices.iter().map(|&v| project(camera, &planes, v)));
+        let patch = &self.tiling.patches[p];
+        if sphere_needs_no_clip(camera, patch.center, patch.radius) {
+            projected.extend(vertices.iter().map(|&v| project_unclipped(camera, v)));
+        } else {
+            projected.extend(vertices.iter().map(|&v| project(camera, &planes, v)));
+        }
         let (start, triangles) = self.mesh.triangles(p);
         let order = &self.tiling.order[start..start + triangles.len()];
         let resolution = camera.resolution();
@@ -289,57 +369,64 @@ impl ViewContext<'_> {
                 camera,
                 &planes,
                 |screen| {
-                    let plot = |index, q, covered| keys.plot(index, q, low, covered);
-                    if conservative {
-                        scan_triangle_conservative(screen, resolution, plot);
-                    } else {
-                        scan_triangle(screen, resolution, DEFAULT_PATHS, plot);
+                    match pass {
+                        Pass::First => {
+                            if winding(screen) == self.back_winding {
+                                deferred.push((screen, low));
+                                return;
+                            }
+                        }
+                        Pass::Tested => {
+                            if keys.triangle_hidden(screen, conservative) {
+                                return;
+                            }
+                        }
                     }
+                    self.scan(screen, low, resolution, keys);
                 },
             );
+        }
+    }
+
+    /// Rasterizes one screen triangle of input triangle `!low` into `keys`.
+    #[inline(always)]
+    fn scan(&self, screen: [ScreenVertex; 3], low: u32, resolution: u32, keys: &mut KeyBuffer) {
+        let plot = |index, q, covered| keys.plot(index, q, low, covered);
+        if self.options.conservative {
+            scan_triangle_conservative(screen, resolution, plot);
+        } else {
+            scan_triangle(screen, resolution, DEFAULT_PATHS, plot);
         }
     }
 
     /// Turns the key buffer into the view's row: pixel counts, `min_pixels`, dilation and the
     /// always-visible patches.
     fn resolve(&self, camera: &Camera, scratch: &mut ViewScratch, row: &mut [u64]) {
-        let patch_of = &self.tiling.patch_of;
         let min_pixels = self.options.min_pixels;
+        let patch_count = self.mesh.patch_count();
+        let lookup = &self.patch_of_key;
+        // Neighbouring pixels mostly hold different triangles (1–2 px each), so a "same as the
+        // previous pixel" test mispredicts constantly: every pixel does a branch-free table
+        // look-up and store instead, empty pixels landing on the spare entry `patch_count`.
+        let slot = |key: u64| (key as u32).wrapping_neg() as usize;
         row.fill(0);
         let seen = &mut scratch.seen;
         seen.fill(0);
         if min_pixels <= 1 {
-            let mut previous = 0u32;
+            let hit = &mut scratch.hit;
             for &key in scratch.keys.keys() {
-                let low = key as u32;
-                if low != previous {
-                    previous = low;
-                    if key != 0 {
-                        let p = patch_of[triangle_of(key) as usize];
-                        seen[p as usize / 64] |= 1 << (p % 64);
-                    }
-                }
+                hit[lookup[slot(key)] as usize] = 1;
+            }
+            for (p, h) in hit[..patch_count].iter_mut().enumerate() {
+                seen[p / 64] |= u64::from(*h) << (p % 64);
+                *h = 0;
             }
         } else {
             let pixels = &mut scratch.pixels;
-            let mut previous = (0u32, u32::MAX);
             for &key in scratch.keys.keys() {
-                let low = key as u32;
-                if low != previous.0 {
-                    previous = (
-                        low,
-                        if key == 0 {
-                            u32::MAX
-                        } else {
-                            patch_of[triangle_of(key) as usize]
-                        },
-                    );
-                }
-                if previous.1 != u32::MAX {
-                    pixels[previous.1 as usize] += 1;
-                }
+                pixels[lookup[slot(key)] as usize] += 1;
             }
-            for (p, count) in pixels.iter_mut().enumerate() {
+            for (p, count) in pixels[..patch_count].iter_mut().enumerate() {
                 if *count >= min_pixels {
                     seen[p / 64] |= 1 << (p % 64);
                 }

@@ -298,6 +298,30 @@ fn random_fans_never_overdraw() {
     }
 }
 
+#[test]
+fn unclipped_projection_is_used_only_where_it_equals_the_full_one() {
+    let camera = Camera::look_at([0.0, 0.0, 5.0], [0.0, 0.0, 0.0], 60.0, 64);
+    let planes = view_planes(&camera);
+    let mut rng = Rng(7);
+    // A ball well inside the view: every point projects the same either way.
+    assert!(sphere_needs_no_clip(&camera, [0.3, -0.2, 0.5], 1.0));
+    for _ in 0..1000 {
+        let p = [
+            rng.signed() * 0.5 + 0.3,
+            rng.signed() * 0.5 - 0.2,
+            rng.signed() * 0.5 + 0.5,
+        ];
+        let (full, fast) = (project(&camera, &planes, p), project_unclipped(&camera, p));
+        assert_eq!(full.outcode & NEEDS_CLIP, 0);
+        assert_eq!((full.screen, full.outcode), (fast.screen, fast.outcode));
+    }
+    // Balls reaching the near plane, behind the eye, or far beyond the guard band are refused.
+    assert!(!sphere_needs_no_clip(&camera, [0.0, 0.0, 4.0], 1.0));
+    assert!(!sphere_needs_no_clip(&camera, [0.0, 0.0, 9.0], 1.0));
+    assert!(!sphere_needs_no_clip(&camera, [1e6, 0.0, 0.0], 1.0));
+    assert!(!sphere_needs_no_clip(&camera, [0.0, 0.0, 0.0], f32::NAN));
+}
+
 fn screen_vertex() -> impl Strategy<Value = ScreenVertex> {
     let coordinate = prop_oneof![-4_000i32..16_000, -(1i32 << 28)..(1i32 << 28),];
     (coordinate.clone(), coordinate, 0.01f32..10.0).prop_map(|(x, y, q)| ScreenVertex { x, y, q })
