@@ -738,7 +738,7 @@ fn file_system_errors() {
     assert_eq!(err.kind(), MeshErrorKind::UnsupportedFormat);
     assert_eq!(
         err.to_string(),
-        "model.xyz: unsupported file type '.xyz': expected .ply, .obj or .stl"
+        "model.xyz: unsupported file type '.xyz': expected .ply, .obj, .stl, .gltf or .glb"
     );
     let err = Mesh::open(Path::new("/nonexistent/bunny.ply")).unwrap_err();
     assert_eq!(err.kind(), MeshErrorKind::Io);
