@@ -424,6 +424,15 @@ fn malformed_gltf_files_name_the_path_and_accessor() {
         )
         .replace(r#""count":4,"type":"VEC3""#, r#""count":5,"type":"VEC3""#);
     expect(&json, Truncated, "accessor 0 has 5 elements");
+    // An empty index accessor whose offset lies past its view: nothing to read, no triangles.
+    let empty = b.accessor(0, 52, 5123, 0, "SCALAR");
+    let json = b.json(
+        &with(&format!(
+            r#"{{"attributes":{{"POSITION":{p}}},"indices":{empty}}}"#
+        )),
+        None,
+    );
+    expect(&json, NoFaces, "no triangles: the scene has 4 vertices");
     // A non-finite position (a NaN in the data).
     let mut nan = Builder::default();
     let p = nan.positions(&[[0.0, 0.0, 0.0], [1.0, f32::NAN, 0.0], [0.0, 1.0, 0.0]]);

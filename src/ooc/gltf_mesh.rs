@@ -457,9 +457,14 @@ fn strided<'b>(
             ),
         );
     }
-    let start = view.offset() + accessor.offset();
+    // With elements, the check above puts the start inside the view; without, the offset
+    // may point anywhere and is not used.
+    let bytes = match count {
+        0 => &[][..],
+        _ => &data[view.offset() + accessor.offset()..view.offset() + view.length()],
+    };
     Ok(Strided {
-        bytes: &data[start.min(data.len())..view.offset() + view.length()],
+        bytes,
         stride,
         count,
         component: accessor.data_type(),
