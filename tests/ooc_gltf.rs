@@ -366,6 +366,13 @@ fn malformed_gltf_files_name_the_path_and_accessor() {
         None,
     );
     expect(&json, BadIndex, "meshes[0].primitives[0].indices");
+    // A missing POSITION accessor (gltf-json 1.4.1 panicked on this; found by fuzzing).
+    let json = b.json(&with(r#"{"attributes":{"POSITION":5}}"#), None);
+    expect(
+        &json,
+        BadIndex,
+        "attributes.POSITION: accessor 5 does not exist, expected < 2",
+    );
     // No POSITION.
     let json = b.json(&with(r#"{"attributes":{}}"#), None);
     expect(

@@ -94,6 +94,27 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<Parsed, Fault> {
             ),
         ));
     }
+    // gltf-json 1.4.1 indexes the POSITION accessor without a bounds check while validating
+    // (a panic, found by fuzzing): check that index first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(Semantic::Positions);
+            if let Some(index) = primitive.attributes.get(&position)
+                && index.value() >= root.accessors.len()
+            {
+                return Err(Fault::new(
+                    MeshErrorKind::BadIndex,
+                    None,
+                    format!(
+                        "meshes[{m}].primitives[{p}].attributes.POSITION: accessor {} does not \
+                         exist, expected < {} accessors",
+                        index.value(),
+                        root.accessors.len()
+                    ),
+                ));
+            }
+        }
+    }
     // The crate's validation, run here so that one omission can be let through: glTF asks
     // for POSITION `min`/`max`, exporters often leave them out, and nothing here reads them.
     // Everything else it reports is fatal (the accessors below rely on it).
