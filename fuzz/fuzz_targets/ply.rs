@@ -1,5 +1,5 @@
-//! Fuzz target: the mesh parsers (PLY, OBJ, STL). The first byte picks the format, the rest is
-//! the file. Opening must return a mesh or an error, never panic; a mesh that opens must
+//! Fuzz target: the mesh parsers (PLY, OBJ, STL; glTF has its own target, `gltf`). The first
+//! byte picks the format, the rest is the file. Opening must return a mesh or an error, never panic; a mesh that opens must
 //! answer every `position` and `triangle` query in range with finite coordinates.
 //!
 //! Run: `cargo fuzz run ply` (nightly). Files go through a temporary directory because the

@@ -3,7 +3,7 @@
 //! [`Mesh::open`] maps the file and validates it once; after that [`Mesh::position`] and
 //! [`Mesh::triangle`] cannot fail and read straight from the bytes. A binary little-endian PLY
 //! with fixed-size records is used in place, zero copy (`ply::in_place`). Every other input
-//! (other PLY flavours, OBJ, STL) is converted once, streaming, into a cache file in this
+//! (other PLY flavours, OBJ, STL, glTF 2.0) is converted once, streaming, into a cache file in this
 //! crate's own layout (`cache.rs`: `f32 x, y, z` and `u32 a, b, c` records), which is then
 //! mapped; the next open of the same unchanged file maps the cache directly. Both cases share
 //! one code path: a byte slice, the offset of vertex 0's `x`, `y`, `z` and of triangle 0's
@@ -18,11 +18,12 @@
 //!
 //! Files: `error.rs` (errors with positions), `mmap.rs` (the map, the crate's only `unsafe`),
 //! `cache.rs` (conversion cache files), `ply/` (header, in-place and converting readers),
-//! `obj.rs`, `stl.rs` (converters), `text.rs` (line scanning and number parsing for the text
+//! `obj.rs`, `stl.rs`, `gltf_mesh.rs` (converters), `text.rs` (line scanning and number parsing for the text
 //! formats), `write_ply.rs` (`--mesh-out`).
 
 mod cache;
 mod error;
+mod gltf_mesh;
 mod mmap;
 mod obj;
 mod ply;
@@ -109,6 +110,8 @@ pub(crate) enum InputFormat {
     Ply,
     Obj,
     Stl,
+    /// `.gltf` or `.glb`; the content (GLB magic or JSON) decides which.
+    Gltf,
 }
 
 impl InputFormat {
@@ -118,6 +121,7 @@ impl InputFormat {
             Some("ply") => Ok(InputFormat::Ply),
             Some("obj") => Ok(InputFormat::Obj),
             Some("stl") => Ok(InputFormat::Stl),
+            Some("gltf" | "glb") => Ok(InputFormat::Gltf),
             other => {
                 let found = match other {
                     Some(e) => format!("unsupported file type '.{e}'"),
@@ -126,7 +130,7 @@ impl InputFormat {
                 Err(Fault::new(
                     MeshErrorKind::UnsupportedFormat,
                     None,
-                    format!("{found}: expected .ply, .obj or .stl"),
+                    format!("{found}: expected .ply, .obj, .stl, .gltf or .glb"),
                 ))
             }
         }
@@ -137,6 +141,7 @@ impl InputFormat {
             InputFormat::Ply => "a PLY header",
             InputFormat::Obj => "OBJ statements",
             InputFormat::Stl => "an STL header",
+            InputFormat::Gltf => "glTF JSON or a GLB header",
         }
     }
 }
@@ -158,7 +163,7 @@ impl Mesh {
         Mesh::open_with(path, &OpenOptions::default())
     }
 
-    /// Opens and validates the mesh at `path` (`.ply`, `.obj` or `.stl`).
+    /// Opens and validates the mesh at `path` (`.ply`, `.obj`, `.stl`, `.gltf` or `.glb`).
     pub fn open_with(path: &Path, options: &OpenOptions) -> Result<Mesh, MeshError> {
         let format = InputFormat::of(path).map_err(|f| f.in_file(path))?;
         let file = File::open(path).map_err(|e| MeshError::io(path, &e))?;
@@ -219,8 +224,15 @@ impl Mesh {
                 }
                 Some(parsed)
             }
-            InputFormat::Obj | InputFormat::Stl => None,
+            InputFormat::Obj | InputFormat::Stl | InputFormat::Gltf => None,
         };
+        let gltf = match format {
+            InputFormat::Gltf => Some(gltf_mesh::parse(&bytes).map_err(|f| f.in_file(&path))?),
+            _ => None,
+        };
+        // A cache keyed by this file alone would go stale when an external buffer changes.
+        let cache_dir =
+            cache_dir.filter(|_| !gltf.as_ref().is_some_and(|g| g.has_external_buffers()));
         if let (Some(dir), Some(key)) = (cache_dir, &key) {
             let cached = dir.join(key.file_name());
             if let Ok(file) = File::open(&cached) {
@@ -239,6 +251,11 @@ impl Mesh {
             (InputFormat::Ply, Some(parsed)) => ply::convert(&bytes, parsed, &mut sink),
             (InputFormat::Obj, _) => obj::convert(&bytes, &mut sink),
             (InputFormat::Stl, _) => stl::convert(&bytes, &mut sink, memory_budget),
+            (InputFormat::Gltf, _) => {
+                let parsed = gltf.as_ref().expect("glTF input is parsed above");
+                let dir = path.parent().unwrap_or(Path::new("."));
+                gltf_mesh::convert(&bytes, parsed, dir, &mut sink)
+            }
             (InputFormat::Ply, None) => unreachable!("PLY input is parsed above"),
         }
         .map_err(|f| f.in_file(&path))?;

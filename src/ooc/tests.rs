@@ -256,6 +256,44 @@ fn corpus_point_cloud_and_empty_file_are_refused() {
     );
 }
 
+/// Every file in `tests/data/ply` is one the two tests above expect, and where the shared
+/// model folder sits beside the checkout (developer machines, CI) the copies are byte-identical
+/// to its corpus, file for file, so the tests check what its README describes.
+#[test]
+fn corpus_copies_match_the_shared_folder() {
+    let expected = [
+        "README.md",
+        "Wuson.ply",
+        "cube.ply",
+        "cube_binary.ply",
+        "cube_uv.ply",
+        "empty.ply",
+        "points.ply",
+    ];
+    let names = |dir: &Path| {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    };
+    let here = corpus("");
+    assert_eq!(names(&here), expected);
+    let shared = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models/corpus");
+    if !shared.is_dir() {
+        return; // a clone without the shared folder: the copies are all there is
+    }
+    let shared_names = names(&shared);
+    assert_eq!(shared_names, expected[1..]);
+    for name in shared_names {
+        assert!(
+            std::fs::read(shared.join(&name)).unwrap() == std::fs::read(here.join(&name)).unwrap(),
+            "tests/data/ply/{name} differs from the shared corpus"
+        );
+    }
+}
+
 #[test]
 fn bunny_opens_zero_copy() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bunny.ply");
@@ -738,7 +776,7 @@ fn file_system_errors() {
     assert_eq!(err.kind(), MeshErrorKind::UnsupportedFormat);
     assert_eq!(
         err.to_string(),
-        "model.xyz: unsupported file type '.xyz': expected .ply, .obj or .stl"
+        "model.xyz: unsupported file type '.xyz': expected .ply, .obj, .stl, .gltf or .glb"
     );
     let err = Mesh::open(Path::new("/nonexistent/bunny.ply")).unwrap_err();
     assert_eq!(err.kind(), MeshErrorKind::Io);

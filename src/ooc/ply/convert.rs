@@ -4,11 +4,13 @@
 //! the face index lists (fan-triangulated into `u32` triples: `(i0, ik, ik+1)`), which go
 //! straight into the conversion cache ([`CacheWriter`]); everything else is read and dropped.
 //! Nothing grows with the mesh: the only buffer is one polygon's index list. Cost: one pass;
-//! ASCII is dominated by number parsing, binary by the per-value byte-order match.
+//! ASCII is dominated by number parsing (`super::super::text`), binary by the per-value
+//! byte-order match.
 
 use super::super::Bounds;
 use super::super::cache::CacheWriter;
 use super::super::error::{ErrorPosition, Fault, MeshErrorKind};
+use super::super::text::{integer, is_blank, parse_f32, parse_f64};
 use super::binary::BinaryCursor;
 use super::header::{Element, Encoding, Header, PropertyType, ScalarType};
 use super::{BoundsBuilder, Schema};
@@ -63,9 +65,10 @@ struct AsciiTokens<'a> {
 }
 
 impl<'a> AsciiTokens<'a> {
+    #[inline]
     fn skip_blanks(&mut self) {
         while let Some(&b) = self.bytes.get(self.offset) {
-            if !b.is_ascii_whitespace() {
+            if !is_blank(b) {
                 break;
             }
             if b == b'\n' {
@@ -75,42 +78,38 @@ impl<'a> AsciiTokens<'a> {
         }
     }
 
+    #[inline]
     fn next_token(&mut self, ty: ScalarType) -> Result<&'a [u8], Fault> {
         self.skip_blanks();
         let start = self.offset;
-        while self
-            .bytes
-            .get(self.offset)
-            .is_some_and(|b| !b.is_ascii_whitespace())
-        {
-            self.offset += 1;
-        }
-        if start == self.offset {
+        let rest = &self.bytes[start..];
+        let len = rest.iter().position(|&b| is_blank(b)).unwrap_or(rest.len());
+        if len == 0 {
             return Err(Fault::at_line(
                 MeshErrorKind::Truncated,
                 self.line,
                 format!("the file ends here, expected a {} value", ty.name()),
             ));
         }
-        Ok(&self.bytes[start..self.offset])
+        self.offset += len;
+        Ok(&rest[..len])
     }
 }
 
 impl Values for AsciiTokens<'_> {
+    #[inline]
     fn scalar(&mut self, ty: ScalarType) -> Result<f64, Fault> {
         let token = self.next_token(ty)?;
-        let text = std::str::from_utf8(token).unwrap_or("");
         let value = if ty.is_integer() {
             let (lo, hi) = ty.integer_range();
-            text.parse::<i64>()
-                .ok()
+            integer(token)
                 .filter(|v| (lo..=hi).contains(v))
                 .map(|v| v as f64)
         } else if ty == ScalarType::F32 {
             // Parsed as f32 directly: going through f64 could round twice.
-            text.parse::<f32>().ok().map(f64::from)
+            parse_f32(token).map(f64::from)
         } else {
-            text.parse::<f64>().ok()
+            parse_f64(token)
         };
         value.ok_or_else(|| {
             Fault::at_line(
