@@ -145,20 +145,12 @@ pub fn query(args: &QueryArgs) -> Result<()> {
     let mut scratch = vec![0u64; pvis.scratch_words()];
     let visible = pvis.query(from, &mut scratch);
     let patches: Vec<u32> = visible.patches().collect();
-    // Patches are contiguous triangle ranges in patch order: merge neighbours into one draw.
-    let mut ranges: Vec<[u64; 2]> = Vec::new();
-    for &p in &patches {
-        let info = pvis.patch(p);
-        let (first, count) = (
-            u64::from(info.first_triangle),
-            u64::from(info.triangle_count),
-        );
-        match ranges.last_mut() {
-            Some(last) if last[0] + last[1] == first => last[1] += count,
-            _ => ranges.push([first, count]),
-        }
-    }
-    let triangles: u64 = ranges.iter().map(|r| r[1]).sum();
+    // The reader merges neighbouring patches' ranges into one draw each.
+    let ranges: Vec<[u32; 2]> = pvis
+        .ranges(&visible)
+        .map(|(first, count)| [first, count])
+        .collect();
+    let triangles: u64 = ranges.iter().map(|r| u64::from(r[1])).sum();
     if args.json {
         let report = json!({
             "patches": patches,
