@@ -121,6 +121,7 @@ impl Settings {
             checkpoint.push(format!(".vs{}", args.view_supersample));
         }
         checkpoint.push(".ckpt");
+        let memory_budget = args.memory.unwrap_or_else(default_memory_budget);
         let options = sampler::SamplingOptions {
             min_pixels: args.min_pixels,
             dilate: args.dilate,
@@ -128,8 +129,8 @@ impl Settings {
             conservative: args.conservative,
             checkpoint: Some(PathBuf::from(checkpoint)),
             resume: args.resume,
+            memory_budget: Some(memory_budget),
         };
-        let memory_budget = args.memory.unwrap_or_else(default_memory_budget);
         Ok(Settings {
             input: args.input,
             output: args.output,

@@ -29,7 +29,7 @@ pub use camera::{Camera, MAX_RESOLUTION, NEAR_FRACTION};
 pub use id_buffer::{IdBuffer, NO_PATCH};
 pub use raster::{Rasterizer, SUBPIXEL_BITS, render_ids, render_ids_filtered};
 pub use supersample::{MAX_VIEW_SUPERSAMPLE, supersample_rows};
-pub use tiled::{SamplingError, SamplingOptions, sample_tiled, tiled_mesh_bytes};
+pub use tiled::{SamplingError, SamplingOptions, sample_tiled};
 
 mod bounding;
 

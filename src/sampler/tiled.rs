@@ -22,7 +22,11 @@
 //! set in every row), `conservative` (conservative rasterization, `conservative.rs`), and a
 //! checkpoint written after each level (`checkpoint.rs`).
 //! Cost per view: a sphere test per patch, the triangles of the drawn patches (a tile test
-//! for those drawn after the tiles), one pass over the pixels. Memory: one `resolution² × 8`-byte buffer per thread plus the regrouped mesh.
+//! for those drawn after the tiles), one pass over the pixels. Memory: one `resolution² × 8`-byte buffer per thread, the
+//! result (one bit per view and patch), and the regrouped mesh (about 22 bytes per triangle
+//! with the key→patch table) — on the heap, or in mapped temporary files when it would take
+//! more than a quarter of [`SamplingOptions::memory_budget`], so that the heap stays
+//! independent of the mesh size.
 //! **Invariant**: the result is the same for any number of threads, and with or without a
 //! resumed checkpoint.
 
@@ -31,7 +35,7 @@ use super::checkpoint;
 use super::conservative::scan_triangle_conservative;
 use super::key_buffer::KeyBuffer;
 use super::patch_graph::{PatchGraph, may_face};
-use super::patch_mesh::PatchMesh;
+use super::patch_mesh::{PatchMesh, Storage};
 use super::raster::{
     DEFAULT_PATHS, ProjectedVertex, ScreenVertex, draw_triangle, project, project_unclipped,
     scan_triangle, sphere_needs_no_clip, view_planes,
@@ -40,7 +44,7 @@ use super::{SamplingParams, VisibilityMatrix};
 use crate::ooc::Mesh;
 use crate::progress::Progress;
 use crate::sphere::{parents, view_count};
-use crate::tiling::{PatchId, Tiling};
+use crate::tiling::{PatchId, Tiling, TriangleMap};
 use rayon::prelude::*;
 use std::path::PathBuf;
 
@@ -62,6 +66,10 @@ pub struct SamplingOptions {
     pub checkpoint: Option<PathBuf>,
     /// Continue from the checkpoint if one exists (it must match these inputs).
     pub resume: bool,
+    /// Heap budget in bytes: when the mesh regrouped by patch would take more than a quarter
+    /// of it, the copy lives in a memory-mapped temporary file instead (`patch_mesh.rs`).
+    /// `None`: on the heap. Never changes the result.
+    pub memory_budget: Option<u64>,
 }
 
 /// Why tiled sampling failed: only its checkpoint file can.
@@ -78,6 +86,9 @@ pub enum SamplingError {
         #[source]
         source: std::io::Error,
     },
+    /// The temporary file holding the regrouped mesh could not be created, written or mapped.
+    #[error("cannot write the sampler's temporary mesh file (in $TMPDIR or /tmp): {0}")]
+    TempFile(#[source] std::io::Error),
     /// The checkpoint exists but belongs to other inputs or is damaged.
     #[error("{}: {reason}", path.display())]
     Checkpoint {
@@ -130,16 +141,16 @@ pub fn sample_tiled(
     if first_level > 0 {
         progress.inc(u64::from(view_count(first_level - 1)));
     }
+    let storage = Storage::for_budget(u64::from(mesh.triangle_count()), options.memory_budget);
     let context = ViewContext {
-        mesh: PatchMesh::new(mesh, tiling),
+        mesh: PatchMesh::new(mesh, tiling, storage).map_err(SamplingError::TempFile)?,
         tiling,
         params,
         options,
         always,
         back_winding: back_winding(mesh),
-        patch_of_key: std::iter::once(patch_count)
-            .chain(tiling.patch_of.iter().copied())
-            .collect(),
+        patch_of_key: patch_of_key(tiling, patch_count, storage)
+            .map_err(SamplingError::TempFile)?,
         graph: options
             .dilate
             .then(|| PatchGraph::new(mesh, &tiling.patch_of, patch_count)),
@@ -174,11 +185,28 @@ pub fn sample_tiled(
     Ok(matrix)
 }
 
-/// Heap bytes [`sample_tiled`] holds besides the result and the per-thread buffers: the
-/// regrouped mesh. For memory reports.
-pub fn tiled_mesh_bytes(mesh: &Mesh, tiling: &Tiling) -> usize {
-    PatchMesh::new(mesh, tiling).heap_bytes()
+/// The patch of every key's low half (see `ViewContext::patch_of_key`): 4 bytes per
+/// triangle, mapped like the regrouped mesh when that is.
+fn patch_of_key(
+    tiling: &Tiling,
+    patch_count: u32,
+    storage: Storage,
+) -> std::io::Result<TriangleMap> {
+    let entries = tiling.patch_of.len() + 1;
+    let mut table = match storage {
+        Storage::Heap => TriangleMap::from_vec(vec![0; entries]),
+        Storage::Mapped => TriangleMap::mapped_zeroed(entries)?,
+    };
+    table[0] = patch_count;
+    table[1..].copy_from_slice(&tiling.patch_of);
+    Ok(table)
 }
+
+/// Most back faces a view puts off until its occlusion tiles exist (about 40 bytes each,
+/// so 10 MiB per thread): on a 20M-triangle mesh the hinted patches hold millions of back
+/// faces, which would otherwise make the heap grow with the mesh. Tests use a small cap, so
+/// that both ways (put off, drawn at once) run in every test view.
+const MAX_DEFERRED: usize = if cfg!(test) { 64 } else { 1 << 18 };
 
 /// Everything every view shares.
 struct ViewContext<'a> {
@@ -190,7 +218,7 @@ struct ViewContext<'a> {
     graph: Option<PatchGraph>,
     /// The patch of the key whose low half is `low`, at index `low.wrapping_neg()` (input
     /// triangle + 1); index 0 (empty pixel) holds the spare patch number `patch_count`.
-    patch_of_key: Vec<u32>,
+    patch_of_key: TriangleMap,
     /// [`back_winding`] of the mesh.
     back_winding: i64,
 }
@@ -371,7 +399,10 @@ impl ViewContext<'_> {
                 |screen| {
                     match pass {
                         Pass::First => {
-                            if winding(screen) == self.back_winding {
+                            // Past the cap a back face is drawn at once: slower (no tile
+                            // test), same result, and the heap stays bounded.
+                            if winding(screen) == self.back_winding && deferred.len() < MAX_DEFERRED
+                            {
                                 deferred.push((screen, low));
                                 return;
                             }

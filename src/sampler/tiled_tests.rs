@@ -139,6 +139,22 @@ fn tiled_equals_brute_force_on_the_bunny() {
 }
 
 #[test]
+fn a_tiny_memory_budget_maps_the_mesh_and_changes_nothing() {
+    // A 1-byte budget puts the regrouped mesh and the key table in mapped files.
+    let mesh = bunny();
+    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
+    let p = params_for(&mesh, 2, 64);
+    let mapped = SamplingOptions {
+        memory_budget: Some(1),
+        ..SamplingOptions::default()
+    };
+    assert_same(
+        &tiled(&mesh, &tiling, &p, &mapped),
+        &tiled(&mesh, &tiling, &p, &SamplingOptions::default()),
+    );
+}
+
+#[test]
 fn tiled_equals_brute_force_on_generated_meshes() {
     let boxes = boxes_in_a_box();
     // Boxes: one patch per face pair, so a patch is a slab of a box; and a greedy tiling.
