@@ -1,10 +1,12 @@
 //! `patchvis bake --view-supersample` end to end on the bundled bunny at small settings: the
 //! file keeps the stored level's views, each row contains the plain bake's row of that view,
-//! the rows are exactly the fold of a plain bake at the finer level, the stats record it, and
-//! out-of-range values are usage errors.
+//! the rows are exactly the fold of a plain bake at the finer level (with `--fold-min-pixels`:
+//! of a thresholded one into the plain stored rows), the defaults and `--conservative` are the
+//! flag combinations they are documented as, the stats record it, and out-of-range values are
+//! usage errors.
 
 use patchvis::runtime::Pvis;
-use patchvis::sampler::{VisibilityMatrix, supersample_rows};
+use patchvis::sampler::{VisibilityMatrix, fold_into, supersample_rows};
 use patchvis::sphere::view_count;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -19,7 +21,8 @@ fn patchvis(args: &[&str]) -> Output {
         .expect("run patchvis")
 }
 
-/// Bakes the bunny in 100 patches at 64 px with `extra` flags; returns the output path.
+/// Bakes the bunny in 100 patches at 64 px (unless `extra` sets `--resolution`) with `extra`
+/// flags; returns the output path.
 fn bake(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
     let pvis = dir.join(name);
     let mut args = vec![
@@ -29,10 +32,11 @@ fn bake(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
         pvis.to_str().unwrap(),
         "--patches",
         "100",
-        "--resolution",
-        "64",
         "-q",
     ];
+    if !extra.contains(&"--resolution") {
+        args.extend_from_slice(&["--resolution", "64"]);
+    }
     args.extend_from_slice(extra);
     let out = patchvis(&args);
     assert!(
@@ -69,12 +73,22 @@ fn supersampled_rows_contain_the_plain_rows_and_fold_the_finer_bake() {
             "1",
             "--view-supersample",
             "1",
+            "--fold-min-pixels",
+            "0",
             "--stats",
             stats.to_str().unwrap(),
         ],
     );
-    let plain = bake(dir.path(), "plain.pvis", &["--level", "1"]);
-    let fine = bake(dir.path(), "fine.pvis", &["--level", "2"]);
+    let plain = bake(
+        dir.path(),
+        "plain.pvis",
+        &["--level", "1", "--view-supersample", "0"],
+    );
+    let fine = bake(
+        dir.path(),
+        "fine.pvis",
+        &["--level", "2", "--view-supersample", "0"],
+    );
 
     let (ss_level, ss_rows) = rows(&ss);
     let (_, plain_rows) = rows(&plain);
@@ -103,6 +117,121 @@ fn supersampled_rows_contain_the_plain_rows_and_fold_the_finer_bake() {
     assert_eq!(report["views"], view_count(1));
     // The fine pass's checkpoint is removed once the output is complete.
     assert!(!dir.path().join("ss.pvis.vs1.ckpt").exists());
+}
+
+#[test]
+fn a_fold_threshold_folds_the_thresholded_finer_rows_into_the_plain_stored_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let stats = dir.path().join("stats.json");
+    let ss = bake(
+        dir.path(),
+        "ss.pvis",
+        &[
+            "--level",
+            "1",
+            "--view-supersample",
+            "1",
+            "--fold-min-pixels",
+            "6",
+            "--stats",
+            stats.to_str().unwrap(),
+        ],
+    );
+    let plain = bake(
+        dir.path(),
+        "plain.pvis",
+        &["--level", "1", "--view-supersample", "0"],
+    );
+    let fine = bake(
+        dir.path(),
+        "fine.pvis",
+        &[
+            "--level",
+            "2",
+            "--view-supersample",
+            "0",
+            "--min-pixels",
+            "6",
+        ],
+    );
+    let untouched = bake(
+        dir.path(),
+        "all.pvis",
+        &[
+            "--level",
+            "1",
+            "--view-supersample",
+            "1",
+            "--fold-min-pixels",
+            "0",
+        ],
+    );
+    let (_, ss_rows) = rows(&ss);
+    let (_, plain_rows) = rows(&plain);
+    let (fine_level, fine_rows) = rows(&fine);
+    assert_eq!(fold_into(plain_rows, &fine_rows, fine_level, 1), ss_rows);
+    // The threshold drops patches the unthresholded fold keeps, and never adds one.
+    let (_, all_rows) = rows(&untouched);
+    let (mut dropped, mut total) = (0u32, 0u32);
+    for v in 0..view_count(1) {
+        for (&t, &a) in ss_rows.row(v).iter().zip(all_rows.row(v)) {
+            assert_eq!(t & !a, 0, "view {v}: the threshold added a patch");
+            dropped += (a & !t).count_ones();
+            total += a.count_ones();
+        }
+    }
+    assert!(dropped > 0 && dropped < total, "{dropped} of {total}");
+    let report: Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    assert_eq!(report["fold_min_pixels"], 6);
+    assert_eq!(report["sampled_views"], view_count(2) + view_count(1));
+    // Both passes' checkpoints are removed once the output is complete.
+    assert!(!dir.path().join("ss.pvis.vs1.m6.ckpt").exists());
+    assert!(!dir.path().join("ss.pvis.ckpt").exists());
+}
+
+#[test]
+fn defaults_and_conservative_are_the_documented_flag_combinations() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = |p: PathBuf| std::fs::read(p).unwrap();
+    // Default: one level of view supersampling with an 8-pixel fold threshold.
+    let default = bake(dir.path(), "default.pvis", &["--level", "1"]);
+    let spelled = bake(
+        dir.path(),
+        "spelled.pvis",
+        &[
+            "--level",
+            "1",
+            "--view-supersample",
+            "1",
+            "--fold-min-pixels",
+            "8",
+        ],
+    );
+    assert_eq!(bytes(default), bytes(spelled));
+    // --conservative at 32 px: ID buffers of 64 px, every finer patch folded.
+    let conservative = bake(
+        dir.path(),
+        "conservative.pvis",
+        &["--level", "1", "--conservative", "--resolution", "32"],
+    );
+    let spelled = bake(
+        dir.path(),
+        "spelled-conservative.pvis",
+        &[
+            "--level",
+            "1",
+            "--view-supersample",
+            "1",
+            "--fold-min-pixels",
+            "0",
+        ],
+    );
+    let conservative = bytes(conservative);
+    assert_eq!(conservative, bytes(spelled));
+    assert_eq!(
+        Pvis::parse(&conservative).unwrap().sampling().resolution,
+        64
+    );
 }
 
 #[test]

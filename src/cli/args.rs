@@ -79,16 +79,29 @@ pub struct BakeArgs {
     /// whitespace or commas (`#` starts a comment).
     #[arg(long, value_name = "IDS|FILE")]
     pub always_visible: Option<String>,
-    /// Conservative rasterization: a triangle marks every pixel it touches, so patches seen
-    /// only as sub-pixel slivers are kept.
+    /// Conservative mode: ID buffers at twice --resolution (the file records that ID-buffer
+    /// side) and every finer view's patches folded, however small (--fold-min-pixels 0); on
+    /// the bunny ≥ 99% of random views are pixel-identical at --resolution and at twice it
+    /// (BENCHMARKS.md, "Quality (issue 6)"), for ~3.5 points of culling and ~1.6× the
+    /// sampling time of the default.
     #[arg(long)]
     pub conservative: bool,
+    /// Conservative rasterization: a triangle marks every pixel square it touches, at its
+    /// nearest depth there (one winner per pixel). Measured no better than point sampling.
+    #[arg(long)]
+    pub conservative_raster: bool,
     /// View supersampling: sample K sphere levels finer (about 4^K times the views) and fold
-    /// every fine view's patches into the corners of its level-L face, so that queries from
-    /// inside a face see what its fine samples saw; the file keeps level L's size (0: off;
-    /// 1 or 2). Its checkpoint is OUT.pvis.vsK.ckpt.
-    #[arg(long, default_value_t = 0, value_name = "K")]
-    pub view_supersample: u32,
+    /// every finer view's patches into the stored views around it, so that queries from inside
+    /// a sphere face see what its finer samples saw; the file keeps level L's size (0: off; 1
+    /// or 2). Its checkpoint is OUT.pvis.vsK.ckpt. [default: 1; 0 at --level 7]
+    #[arg(long, value_name = "K")]
+    pub view_supersample: Option<u32>,
+    /// With view supersampling: a finer view's patch is folded into the stored views only if
+    /// it covers at least T pixels there (the stored views themselves keep every pixel, at the
+    /// cost of sampling the stored level once more); trades a few small misses for culling
+    /// (0 or 1: every pixel). [default: 8; 0 with --conservative]
+    #[arg(long, value_name = "T")]
+    pub fold_min_pixels: Option<u32>,
     /// Continue an interrupted bake from its checkpoint (OUT.pvis.ckpt, written after every
     /// sphere level); a checkpoint of other inputs or settings is refused.
     #[arg(long)]

@@ -18,6 +18,18 @@ use std::time::Instant;
 /// Largest ID-buffer side: one buffer per thread is `resolution² × 8` bytes (512 MiB here).
 const MAX_RESOLUTION: u32 = 8192;
 
+/// `--view-supersample` unless given: one level finer, which removes most misses between the
+/// stored views for ~4× the sampling time (BENCHMARKS.md, "Quality (issue 6)", "Defaults").
+pub const DEFAULT_VIEW_SUPERSAMPLE: u32 = 1;
+/// `--fold-min-pixels` unless given (and without `--conservative`): finer views fold only
+/// patches of at least this many pixels, which buys back culling for misses of a few pixels;
+/// chosen on the bunny sweep of BENCHMARKS.md, "Quality (issue 6)".
+pub const DEFAULT_FOLD_MIN_PIXELS: u32 = 8;
+/// `--conservative` samples ID buffers this many times finer than `--resolution`, so that a
+/// renderer at up to this multiple of `--resolution` finds no sub-pixel sliver the sampler
+/// skipped (measured, not proven: BENCHMARKS.md, "Quality (issue 6)").
+pub const CONSERVATIVE_RESOLUTION_SCALE: u32 = 2;
+
 /// Bake settings after checking: every value here is usable as is.
 #[derive(Debug)]
 pub struct Settings {
@@ -32,6 +44,15 @@ pub struct Settings {
     options: sampler::SamplingOptions,
     /// Extra sphere levels sampled and folded into `level` (`--view-supersample`).
     view_supersample: u32,
+    /// `--conservative` (already applied to `resolution`, `view_supersample` and
+    /// `fold_min_pixels`; recorded in the stats).
+    conservative: bool,
+    /// Pixel threshold of the folded fine views (`--fold-min-pixels`); above 1 (and above
+    /// `--min-pixels`) the stored level is sampled separately with every pixel.
+    fold_min_pixels: u32,
+    /// The plain pass's checkpoint when the fold has a threshold (the supersampled pass's is
+    /// `options.checkpoint`).
+    coarse_checkpoint: Option<PathBuf>,
     quiet: bool,
     tiling: tiling::TilingOptions,
     /// Heap budget in bytes (`--memory`, or [`default_memory_budget`]).
@@ -84,6 +105,19 @@ impl Settings {
                 args.resolution
             )));
         }
+        let resolution = if args.conservative {
+            let scaled = args.resolution * CONSERVATIVE_RESOLUTION_SCALE;
+            if scaled > MAX_RESOLUTION {
+                return Err(UsageError(format!(
+                    "--resolution {} with --conservative: expected 1 to {} pixels (--conservative samples at {CONSERVATIVE_RESOLUTION_SCALE}× the resolution, at most {MAX_RESOLUTION})",
+                    args.resolution,
+                    MAX_RESOLUTION / CONSERVATIVE_RESOLUTION_SCALE
+                )));
+            }
+            scaled
+        } else {
+            args.resolution
+        };
         if !(args.fov.is_finite() && args.fov > 0.0 && args.fov < 180.0) {
             return Err(UsageError(format!(
                 "--fov {}: expected degrees between 0 and 180, exclusive",
@@ -100,16 +134,25 @@ impl Settings {
         {
             check_output_path(out)?;
         }
-        if args.view_supersample > sampler::MAX_VIEW_SUPERSAMPLE
-            || args.level + args.view_supersample > MAX_LEVEL
+        // The level was checked above, so the subtraction cannot underflow.
+        let view_supersample = args
+            .view_supersample
+            .unwrap_or(DEFAULT_VIEW_SUPERSAMPLE.min(MAX_LEVEL - args.level));
+        if view_supersample > sampler::MAX_VIEW_SUPERSAMPLE
+            || args.level + view_supersample > MAX_LEVEL
         {
             return Err(UsageError(format!(
                 "--view-supersample {}: expected 0 to {} with --level + K at most {MAX_LEVEL} (--level is {})",
-                args.view_supersample,
+                view_supersample,
                 sampler::MAX_VIEW_SUPERSAMPLE,
                 args.level
             )));
         }
+        let fold_min_pixels = args.fold_min_pixels.unwrap_or(if args.conservative {
+            0
+        } else {
+            DEFAULT_FOLD_MIN_PIXELS
+        });
         let always_visible = match &args.always_visible {
             Some(spec) => parse_patch_ids(spec)?,
             None => Vec::new(),
@@ -117,16 +160,27 @@ impl Settings {
         let mut checkpoint = args.output.clone().into_os_string();
         // The supersampled bake samples other rows than a plain one: its own checkpoint, so
         // that `--resume` finds the right one and a plain bake's checkpoint stays usable.
-        if args.view_supersample > 0 {
-            checkpoint.push(format!(".vs{}", args.view_supersample));
+        let thresholded = view_supersample > 0 && fold_min_pixels > args.min_pixels.max(1);
+        if view_supersample > 0 {
+            checkpoint.push(format!(".vs{view_supersample}"));
+        }
+        if thresholded {
+            checkpoint.push(format!(".m{fold_min_pixels}"));
         }
         checkpoint.push(".ckpt");
         let memory_budget = args.memory.unwrap_or_else(default_memory_budget);
+        // The plain pass of a thresholded fold samples exactly what a plain bake does: it
+        // shares a plain bake's checkpoint.
+        let coarse_checkpoint = thresholded.then(|| {
+            let mut path = args.output.clone().into_os_string();
+            path.push(".ckpt");
+            PathBuf::from(path)
+        });
         let options = sampler::SamplingOptions {
             min_pixels: args.min_pixels,
             dilate: args.dilate,
             always_visible,
-            conservative: args.conservative,
+            conservative: args.conservative_raster,
             checkpoint: Some(PathBuf::from(checkpoint)),
             resume: args.resume,
             memory_budget: Some(memory_budget),
@@ -136,12 +190,15 @@ impl Settings {
             output: args.output,
             patches: args.patches,
             level: args.level,
-            resolution: args.resolution,
+            resolution,
             fov_deg: args.fov,
             mesh_out: args.mesh_out,
             stats: args.stats,
             options,
-            view_supersample: args.view_supersample,
+            view_supersample,
+            conservative: args.conservative,
+            fold_min_pixels: if thresholded { fold_min_pixels } else { 0 },
+            coarse_checkpoint,
             quiet: args.quiet,
             memory_budget,
             tiling: tiling::TilingOptions {
@@ -270,6 +327,21 @@ pub fn run(args: BakeArgs) -> Result<()> {
             level: s.level + s.view_supersample,
             ..params
         };
+        if s.fold_min_pixels > 0 {
+            // The stored views keep every pixel; the finer ones report only patches of at
+            // least `fold_min_pixels` pixels (see `sampler::fold_into`).
+            let plain = sampler::SamplingOptions {
+                checkpoint: s.coarse_checkpoint.clone(),
+                ..s.options.clone()
+            };
+            let coarse = sampler::sample_tiled(&mesh, &tiling, &params, &plain, &bars)?;
+            let thresholded = sampler::SamplingOptions {
+                min_pixels: s.fold_min_pixels,
+                ..s.options.clone()
+            };
+            let rows = sampler::sample_tiled(&mesh, &tiling, &fine, &thresholded, &bars)?;
+            return Ok(sampler::fold_into(coarse, &rows, fine.level, s.level));
+        }
         sampler::sample_tiled(&mesh, &tiling, &fine, &s.options, &bars).map(|rows| {
             match s.view_supersample {
                 0 => rows,
@@ -300,8 +372,11 @@ pub fn run(args: BakeArgs) -> Result<()> {
     };
     format::write_atomic(&s.output, &bytes)
         .with_context(|| format!("{}: cannot write", s.output.display()))?;
-    // The output is complete: its checkpoint has served its purpose.
-    if let Some(checkpoint) = &s.options.checkpoint {
+    // The output is complete: its checkpoints have served their purpose.
+    for checkpoint in [&s.options.checkpoint, &s.coarse_checkpoint]
+        .into_iter()
+        .flatten()
+    {
         match std::fs::remove_file(checkpoint) {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
                 return Err(e).with_context(|| format!("{}: cannot remove", checkpoint.display()));
@@ -332,6 +407,12 @@ pub fn run(args: BakeArgs) -> Result<()> {
         "in-core"
     };
     let seconds = start.elapsed().as_secs_f64();
+    let sampled_views = view_count(s.level + s.view_supersample)
+        + if s.fold_min_pixels > 0 {
+            view_count(s.level)
+        } else {
+            0
+        };
 
     if let Some(path) = &s.stats {
         let report = json!({
@@ -356,9 +437,11 @@ pub fn run(args: BakeArgs) -> Result<()> {
             "fov_deg": s.fov_deg,
             "min_pixels": s.options.min_pixels,
             "dilate": s.options.dilate,
-            "conservative": s.options.conservative,
+            "conservative": s.conservative,
+            "conservative_raster": s.options.conservative,
             "view_supersample": s.view_supersample,
-            "sampled_views": view_count(s.level + s.view_supersample),
+            "fold_min_pixels": s.fold_min_pixels,
+            "sampled_views": sampled_views,
             "always_visible": s.options.always_visible.len(),
             "visible_fraction_mean": visible_fraction,
             "bytes": {"total": bytes.len(), "visibility": visibility_bytes},
@@ -425,6 +508,12 @@ pub fn run(args: BakeArgs) -> Result<()> {
                 s.level + s.view_supersample,
                 s.level
             );
+            if s.fold_min_pixels > 0 {
+                println!(
+                    "          folding only patches of at least {} pixels; level {} sampled plain too",
+                    s.fold_min_pixels, s.level
+                );
+            }
         }
         println!(
             "wrote {}: {} bytes, visibility {} bytes ({:.2} s total)",
@@ -458,4 +547,52 @@ fn write_mesh_tmp(
             .with_context(|| format!("{}: cannot write", path.display()))?;
     }
     Ok(tmp)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cli::args::{Cli, Command};
+    use clap::Parser;
+
+    fn settings(flags: &[&str]) -> Result<Settings, UsageError> {
+        let mut argv = vec!["patchvis", "bake", "in.ply", "-o", "out.pvis"];
+        argv.extend_from_slice(flags);
+        match Cli::try_parse_from(argv).expect("flags parse").command {
+            Command::Bake(args) => Settings::from_args(args),
+            other => panic!("parsed {other:?}"),
+        }
+    }
+
+    #[test]
+    fn supersampling_defaults_follow_the_level_and_conservative() {
+        let s = settings(&[]).unwrap();
+        assert_eq!(
+            (s.view_supersample, s.fold_min_pixels, s.resolution),
+            (DEFAULT_VIEW_SUPERSAMPLE, DEFAULT_FOLD_MIN_PIXELS, 512)
+        );
+        // The finest level has nothing finer to sample: the default turns itself off there,
+        // while asking for it explicitly is a usage error.
+        let s = settings(&["--level", "7"]).unwrap();
+        assert_eq!((s.view_supersample, s.fold_min_pixels), (0, 0));
+        let err = settings(&["--level", "7", "--view-supersample", "1"]).unwrap_err();
+        assert!(err.0.contains("--view-supersample 1"), "{}", err.0);
+        let s = settings(&["--conservative"]).unwrap();
+        assert_eq!(
+            (s.view_supersample, s.fold_min_pixels, s.resolution),
+            (
+                DEFAULT_VIEW_SUPERSAMPLE,
+                0,
+                512 * CONSERVATIVE_RESOLUTION_SCALE
+            )
+        );
+        assert!(s.conservative && !s.options.conservative);
+        let err = settings(&["--conservative", "--resolution", "8000"]).unwrap_err();
+        assert!(err.0.contains("--conservative"), "{}", err.0);
+        // A threshold at or below --min-pixels changes nothing: no extra plain pass.
+        let s = settings(&["--min-pixels", "8"]).unwrap();
+        assert_eq!((s.fold_min_pixels, s.coarse_checkpoint), (0, None));
+        let s = settings(&["--view-supersample", "0", "--fold-min-pixels", "9"]).unwrap();
+        assert_eq!((s.view_supersample, s.fold_min_pixels), (0, 0));
+    }
 }

@@ -24,7 +24,7 @@ pub struct EvalSummary {
     pub culling_rate: Summary,
     /// Ideal culling rate (true visible set) per view.
     pub ideal_culling_rate: Summary,
-    /// PSNR (dB) over the views that differ (`None` if every view is identical).
+    /// PSNR (dB) over the views whose shaded pictures differ (`None` if none do).
     pub psnr_db_differing: Option<Summary>,
     /// Frame cost of the full mesh and the culled set.
     pub frame_cost: FrameCost,
@@ -48,9 +48,12 @@ impl EvalSummary {
     pub fn of(views: &[ViewMetrics]) -> EvalSummary {
         let count = |f: fn(&ViewMetrics) -> bool| views.iter().filter(|v| f(v)).count() as u32;
         let summary = |f: fn(&ViewMetrics) -> f64| Summary::of(views.iter().map(f));
+        // A view can differ in triangle ids while its shaded pictures are equal (the missed
+        // triangle shades like the one drawn instead, e.g. coplanar neighbours): infinite
+        // PSNR, left out like identical views.
         let differing: Vec<f64> = views
             .iter()
-            .filter(|v| v.missed_pixels > 0)
+            .filter(|v| v.missed_pixels > 0 && v.psnr_db.is_finite())
             .map(|v| v.psnr_db)
             .collect();
         let full_ms = 1e3 * median(views.iter().map(|v| v.full_seconds));
@@ -150,5 +153,20 @@ mod tests {
                 .psnr_db_differing
                 .is_none()
         );
+    }
+
+    #[test]
+    fn views_that_differ_only_in_ids_leave_psnr_finite() {
+        // Regression: eval at 1024² (seed 2) panicked when a view missed pixels whose
+        // replacement shaded the same colour (infinite PSNR with missed pixels > 0).
+        let same_shade = ViewMetrics {
+            psnr_db: f64::INFINITY,
+            ..view(3, 1, 60, 0.02)
+        };
+        let s = EvalSummary::of(&[same_shade, view(5, 1, 60, 0.02)]);
+        assert_eq!(s.identical_views, 0);
+        assert_eq!(s.psnr_db_differing.map(|p| p.mean), Some(30.0));
+        let only = EvalSummary::of(&[same_shade]);
+        assert_eq!(only.psnr_db_differing, None);
     }
 }

@@ -4,6 +4,9 @@
 //!
 //! Level `l`'s views are a prefix of level `l + 1`'s (`sphere::ViewIndex`), so each patch count
 //! is tiled once and sampled once, at the finest level; coarser files take the first rows.
+//! The bakes are plain (`bake --view-supersample 0`), not `bake`'s supersampled default: the
+//! sweep shows what the stored level and patch count alone buy (the supersampled default is
+//! measured in BENCHMARKS.md, "Quality (issue 6)").
 //! Cost per patch count: one tiling, `view_count(max level)` sampling renders, and two renders
 //! per evaluation view per level.
 

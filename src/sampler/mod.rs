@@ -28,7 +28,9 @@ mod tiled_tests;
 pub use camera::{Camera, MAX_RESOLUTION, NEAR_FRACTION};
 pub use id_buffer::{IdBuffer, NO_PATCH};
 pub use raster::{Rasterizer, SUBPIXEL_BITS, render_ids, render_ids_filtered};
-pub use supersample::{MAX_VIEW_SUPERSAMPLE, supersample_rows};
+pub use supersample::{
+    FoldTargets, MAX_VIEW_SUPERSAMPLE, fold_into, fold_targets, supersample_rows,
+};
 pub use tiled::{SamplingError, SamplingOptions, sample_tiled};
 
 mod bounding;

@@ -9,35 +9,111 @@
 //! Sampling at level `L + K` and folding puts the fine views' findings into the level-`L`
 //! corners, at the file size of level `L`.
 //!
-//! The fold: every coarse row starts as the fine row of the same view (level `L`'s views are a
-//! prefix of level `L + K`'s); then every fine view `u` that is not a coarse view is located
-//! at level `L` (`sphere::locate(direction(u), L)`) and its row is OR'd into the rows of that
-//! face's three corners.
+//! The fold: every coarse row starts as the coarse view's own row (level `L`'s views are a
+//! prefix of level `L + K`'s); then the row of every fine view `u` that is not a coarse view is
+//! OR'd into the corners of the smallest level-`L` cell holding it ([`fold_targets`]):
+//! - `u` lies on a level-`L` edge (strictly between its endpoints): the edge's **two
+//!   endpoints**. At `K = 1` every fine view is such an edge midpoint.
+//! - otherwise `u` lies strictly inside a level-`L` face: that face's **three corners**
+//!   (`sphere::locate(direction(u), L)`).
+//!
+//! Both are decided on the integer lattice of `sphere::numbering` (a level-`L + K` point lies
+//! on a level-`L` edge exactly when one of its coordinates is a multiple of `2^K`), not with
+//! floating point.
 //!
 //! **Coverage.** Let `d` be any direction and `F = locate(d, L)`; the query answers the OR of
 //! `F`'s corner rows. Every fine view `u` lying in the closed face `F` is covered:
 //! - `u` is a corner of `F`: its own row is one of the OR'd rows.
-//! - `u` is strictly inside `F`: it is located in `F` and OR'd into all three corners.
-//! - `u` lies on an edge of `F` (strictly between its endpoints; coarse vertices are the only
-//!   fine views at corners): it is located in `F` or in the face across that edge, and
-//!   either way OR'd into that face's corners, which include both endpoints of the edge —
-//!   corners of `F`.
+//! - `u` lies on an edge of `F`: it is OR'd into that edge's endpoints, both corners of `F`.
+//! - `u` is strictly inside `F`: it is OR'd into all three corners of `F`.
 //!
 //! So the answer for `d` contains the row of every fine sample of `F`: the fold is exactly as
 //! conservative as the fine level, in view space, while the file keeps level `L`'s rows. The
-//! coarse views' own rows are not spread to their neighbours: every face having such a view as
-//! a corner ORs its row anyway, so spreading would only cost culling. With `K = 0` there is
-//! nothing to fold and the rows are returned unchanged.
+//! rows a fine view lands in are exactly the corners shared by every face that holds it (both
+//! faces of an edge share only its endpoints): never a corner of a face that does not hold it,
+//! which would cost culling for no guarantee (an earlier fold sent edge views to the three
+//! corners of one adjacent face: 1.9 points less culling on the bunny, BENCHMARKS.md).
+//! Coverage alone would need only one of those shared corners; using all of them keeps the
+//! fold free of an arbitrary choice and symmetric around the fine view. The coarse views' own
+//! rows are not spread to their neighbours: every face having such a view as a corner ORs its
+//! row anyway. With `K = 0` there is nothing to fold and the rows are returned unchanged.
 //!
-//! Cost: sampling is `view_count(L + K) / view_count(L)` ≈ `4^K` times the plain bake; the fold
-//! is one point location (`L` levels of 3 sign tests) and 3 row ORs per fine view.
+//! The fine rows may be sampled with a pixel threshold (`bake --fold-min-pixels T`: the fine
+//! views report only patches covering at least `T` pixels) while the coarse rows keep every
+//! pixel: [`fold_into`] takes the coarse rows and the fine rows separately. The coverage above
+//! then holds for the patches a fine sample sees with at least `T` pixels.
+//!
+//! Cost: sampling is `view_count(L + K) / view_count(L)` ≈ `4^K` times the plain bake (plus
+//! one plain pass over level `L` with a threshold); the fold is one lattice look-up (plus one
+//! point location for face-interior views) and 2 or 3 row ORs per fine view.
 
 use super::VisibilityMatrix;
-use crate::sphere::{direction, locate, view_count};
+use crate::sphere::{
+    LatticePoint, ViewIndex, direction, lattice_point, locate, view_count, view_index,
+};
 
 /// The finest extra level [`supersample_rows`] is meant for: `K = 2` already samples 16× the
 /// views of the stored level; more than that is cheaper as a finer stored level.
 pub const MAX_VIEW_SUPERSAMPLE: u32 = 2;
+
+/// The coarse views (of `level`) whose rows receive fine view `u`'s row in the fold: the two
+/// endpoints of the level-`level` edge `u` lies on, or else the three corners of the
+/// level-`level` face `u` lies in (see the module documentation); a view of `level` itself
+/// receives only its own row. `u` must be a view of some level up to `sphere::MAX_LEVEL`
+/// (caller contract).
+pub fn fold_targets(u: ViewIndex, level: u32) -> FoldTargets {
+    if u < view_count(level) {
+        return FoldTargets::Vertex(u);
+    }
+    let p = lattice_point(u).expect("fold_targets: view beyond the finest sphere level");
+    // `p` is new at its own level `p.level > level`; on the level-`level` lattice scale it is
+    // `coords / step` with `step = 2^(p.level - level)`.
+    let step = 1i32 << (p.level - level);
+    let on_line = p.coords.iter().position(|c| c % step == 0);
+    let Some(t) = on_line else {
+        return FoldTargets::Face(locate(direction(u), level).views);
+    };
+    // |c_t| is a multiple of `step`, and so is |c_u| + |c_w| (the coordinates' absolute values
+    // sum to 2^p.level); neither of c_u, c_w is (else all three would be and `u` would be a
+    // coarse vertex), so both are nonzero. The edge's endpoints round |c_u| down and up to
+    // multiples of `step` along the line |c_t| = const, keeping the signs.
+    let (iu, iw) = ((t + 1) % 3, (t + 2) % 3);
+    let (cu, cw) = (p.coords[iu], p.coords[iw]);
+    let r = cu.abs() % step;
+    let endpoint = |du: i32| {
+        let mut coords = p.coords;
+        coords[iu] = cu.signum() * (cu.abs() + du);
+        coords[iw] = cw.signum() * (cw.abs() - du);
+        view_index(LatticePoint {
+            level,
+            coords: coords.map(|c| c / step),
+        })
+    };
+    let (a, b) = (endpoint(-r), endpoint(step - r));
+    FoldTargets::Edge([a.min(b), a.max(b)])
+}
+
+/// Where a fine view's row goes in the fold: see [`fold_targets`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FoldTargets {
+    /// The view is a coarse view: its own row.
+    Vertex(ViewIndex),
+    /// The view lies on a coarse edge: its two endpoints (smaller index first).
+    Edge([ViewIndex; 2]),
+    /// The view lies inside a coarse face: its three corners (in `locate`'s order).
+    Face([ViewIndex; 3]),
+}
+
+impl FoldTargets {
+    /// The coarse views, as a slice.
+    pub fn views(&self) -> &[ViewIndex] {
+        match self {
+            FoldTargets::Vertex(v) => core::slice::from_ref(v),
+            FoldTargets::Edge(e) => e,
+            FoldTargets::Face(f) => f,
+        }
+    }
+}
 
 /// Folds the rows of a level-`fine_level` sampling (`fine`, one row per view of that level)
 /// into rows for the views of `level`, so that the corners of every level-`level` face
@@ -51,20 +127,45 @@ pub fn supersample_rows(fine: &VisibilityMatrix, fine_level: u32, level: u32) ->
         fine_level >= level,
         "fine level {fine_level} is coarser than the stored level {level}"
     );
+    let coarse_views = view_count(level);
+    let mut coarse = VisibilityMatrix::new(coarse_views, fine.patches());
+    for v in 0..coarse_views.min(fine.views()) {
+        coarse.row_mut(v).copy_from_slice(fine.row(v));
+    }
+    fold_into(coarse, fine, fine_level, level)
+}
+
+/// [`supersample_rows`] with the coarse views' rows given separately: returns `coarse` with
+/// the row of every fine view that is not a coarse view OR'd into its [`fold_targets`]. The
+/// coarse rows of `fine` are not used, so the fine pass may be sampled with a pixel threshold
+/// while `coarse` keeps every pixel.
+///
+/// Panics (caller contract) if `fine_level < level`, `fine` does not have one row per view of
+/// `fine_level`, `coarse` not one per view of `level`, or their patch counts differ.
+pub fn fold_into(
+    mut coarse: VisibilityMatrix,
+    fine: &VisibilityMatrix,
+    fine_level: u32,
+    level: u32,
+) -> VisibilityMatrix {
+    assert!(
+        fine_level >= level,
+        "fine level {fine_level} is coarser than the stored level {level}"
+    );
     assert_eq!(
         fine.views(),
         view_count(fine_level),
         "the fine matrix must have one row per view of level {fine_level}"
     );
-    let coarse_views = view_count(level);
-    let mut coarse = VisibilityMatrix::new(coarse_views, fine.patches());
-    for v in 0..coarse_views {
-        coarse.row_mut(v).copy_from_slice(fine.row(v));
-    }
-    for u in coarse_views..fine.views() {
-        let face = locate(direction(u), level);
+    assert_eq!(
+        coarse.views(),
+        view_count(level),
+        "the coarse matrix must have one row per view of level {level}"
+    );
+    assert_eq!(coarse.patches(), fine.patches(), "patch counts differ");
+    for u in view_count(level)..fine.views() {
         let row = fine.row(u);
-        for corner in face.views {
+        for &corner in fold_targets(u, level).views() {
             for (dst, &src) in coarse.row_mut(corner).iter_mut().zip(row) {
                 *dst |= src;
             }
@@ -138,25 +239,102 @@ mod tests {
     }
 
     #[test]
-    fn one_fine_view_marks_exactly_its_face_corners() {
-        let (level, fine_level, patch) = (2, 3, 77);
+    fn one_fine_view_marks_exactly_its_fold_targets() {
+        let (level, fine_level, patch) = (2, 4, 77);
         for u in 0..view_count(fine_level) {
             let mut fine = VisibilityMatrix::new(view_count(fine_level), 100);
             fine.set(u, patch);
             let coarse = supersample_rows(&fine, fine_level, level);
-            let expected: Vec<u32> = if u < view_count(level) {
-                // A coarse view keeps its own row and spreads it nowhere.
-                vec![u]
-            } else {
-                locate(direction(u), level).views.to_vec()
-            };
+            let expected = fold_targets(u, level);
             for v in 0..view_count(level) {
-                assert_eq!(coarse.get(v, patch), expected.contains(&v), "u {u} v {v}");
+                assert_eq!(
+                    coarse.get(v, patch),
+                    expected.views().contains(&v),
+                    "u {u} v {v}"
+                );
                 // No other patch is ever set.
                 let bits: u32 = coarse.row(v).iter().map(|w| w.count_ones()).sum();
                 assert_eq!(bits, u32::from(coarse.get(v, patch)), "u {u} v {v}");
             }
         }
+    }
+
+    #[test]
+    fn fold_targets_are_the_corners_shared_by_every_face_holding_the_view() {
+        // Minimality and soundness together, checked geometrically: a fine view goes to
+        // exactly the coarse views that are corners of every closed leaf face containing it
+        // (1 face inside a face, the 2 faces of an edge: their 2 shared endpoints).
+        for (level, fine_level) in [(0, 1), (0, 2), (1, 2), (1, 3), (2, 3), (2, 4), (3, 5)] {
+            let faces = leaves(level);
+            let (mut on_edges, mut inside) = (0, 0);
+            for u in view_count(level)..view_count(fine_level) {
+                let holding: Vec<&Face> = faces
+                    .iter()
+                    .filter(|f| in_closed_face(f, direction(u), 1e-5))
+                    .collect();
+                let mut shared: Vec<u32> = holding[0]
+                    .views
+                    .iter()
+                    .copied()
+                    .filter(|c| holding.iter().all(|f| f.views.contains(c)))
+                    .collect();
+                shared.sort_unstable();
+                let mut got = fold_targets(u, level).views().to_vec();
+                got.sort_unstable();
+                assert_eq!(got, shared, "level {level}/{fine_level}: view {u}");
+                match holding.len() {
+                    1 => inside += 1,
+                    2 => on_edges += 1,
+                    n => panic!("view {u} lies in {n} faces"),
+                }
+            }
+            // Level L has 12·4^L edges, each split into 2^K pieces by 2^K − 1 fine views;
+            // the rest of the new views are face interiors.
+            let k = fine_level - level;
+            let edges = 12 * (1u32 << (2 * level));
+            assert_eq!(
+                on_edges,
+                edges * ((1 << k) - 1),
+                "level {level}/{fine_level}"
+            );
+            assert_eq!(
+                inside + on_edges,
+                view_count(fine_level) - view_count(level)
+            );
+        }
+    }
+
+    #[test]
+    fn at_one_extra_level_every_fine_view_folds_into_its_two_parents() {
+        for level in 0..=4 {
+            for u in view_count(level)..view_count(level + 1) {
+                let parents = crate::sphere::parents(u).expect("a new view has parents");
+                assert_eq!(
+                    fold_targets(u, level),
+                    FoldTargets::Edge(parents),
+                    "view {u}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn fold_into_keeps_the_given_coarse_rows_and_ignores_the_fine_ones() {
+        let (level, fine_level) = (1, 2);
+        let fine = random_matrix(view_count(fine_level), 70, 3);
+        let coarse = random_matrix(view_count(level), 70, 4);
+        let folded = fold_into(coarse.clone(), &fine, fine_level, level);
+        let mut expected = coarse;
+        for u in view_count(level)..view_count(fine_level) {
+            for &c in fold_targets(u, level).views() {
+                for (d, &s) in expected.row_mut(c).iter_mut().zip(fine.row(u)) {
+                    *d |= s;
+                }
+            }
+        }
+        assert_eq!(folded, expected);
+        // The fine matrix's own coarse rows were random and different: they were not used.
+        assert_ne!(fine.row(0), folded.row(0));
     }
 
     #[test]
