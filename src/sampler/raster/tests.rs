@@ -322,6 +322,57 @@ fn unclipped_projection_is_used_only_where_it_equals_the_full_one() {
     assert!(!sphere_needs_no_clip(&camera, [0.0, 0.0, 0.0], f32::NAN));
 }
 
+#[test]
+fn batched_projection_equals_the_single_one_bit_for_bit() {
+    let mut rng = Rng(11);
+    let mut batch = ScreenBatch::default();
+    for (eye, resolution) in [([0.0, 0.0, 5.0], 64), ([3.0, -2.0, 4.0], 512)] {
+        let camera = Camera::look_at(eye, [0.0, 0.0, 0.0], 45.0, resolution);
+        for len in 0..=9 {
+            let mut points: Vec<[f32; 3]> = (0..len)
+                .map(|_| [rng.signed(), rng.signed(), rng.signed()])
+                .collect();
+            // The image centre: a half-pixel tie of the rounding.
+            points.push([0.0, 0.0, 0.0]);
+            batch.project(&camera, &points);
+            for (i, &p) in points.iter().enumerate() {
+                let i = i as u32;
+                let single = project_unclipped(&camera, p).screen;
+                let [v, ..] = batch.triangle([i; 3], batch.corners([i; 3]));
+                assert_eq!(
+                    (v.x, v.y, v.q.to_bits()),
+                    (single.x, single.y, single.q.to_bits())
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn snapping_rounds_half_up_at_every_fraction() {
+    // `floor_positive` against the truncating conversion it replaces, on the whole
+    // sub-pixel range, including exact integers and halves.
+    let mut rng = Rng(5);
+    for k in 0..200_000 {
+        let v = rng.signed() as f64 * COORD_LIMIT;
+        let v = match k % 3 {
+            0 => v.floor(),
+            1 => v.floor() + 0.5,
+            _ => v,
+        };
+        let expected = ((v + 0.5 + (1u64 << 30) as f64) as i64 - (1i64 << 30)) as i32;
+        assert_eq!(snap_coordinate(v, 1.0 / SUBPIXEL as f64), expected, "{v}");
+    }
+}
+
+#[test]
+fn only_boxes_between_pixel_centres_cover_no_centre() {
+    // Pixel centres at 128 and 384 sub-pixel units.
+    assert!(covers_no_centre([130, 380, 200], [130, 140, 380]));
+    assert!(!covers_no_centre([128, 380, 200], [130, 140, 384]));
+    assert!(covers_no_centre([385, 600, 500], [0, 1000, 500]));
+}
+
 fn screen_vertex() -> impl Strategy<Value = ScreenVertex> {
     let coordinate = prop_oneof![-4_000i32..16_000, -(1i32 << 28)..(1i32 << 28),];
     (coordinate.clone(), coordinate, 0.01f32..10.0).prop_map(|(x, y, q)| ScreenVertex { x, y, q })
@@ -341,6 +392,25 @@ fn small_triangle() -> impl Strategy<Value = [ScreenVertex; 3]> {
                 q,
             })
         })
+}
+
+proptest! {
+    #[test]
+    fn a_triangle_without_a_centre_in_its_box_draws_nothing(
+        tri in prop_oneof![
+            [screen_vertex(), screen_vertex(), screen_vertex()],
+            small_triangle(),
+        ],
+        resolution in 1u32..48,
+    ) {
+        let mut covered_pixels = 0;
+        scan_triangle(tri, resolution, DEFAULT_PATHS, |_, _, covered| {
+            covered_pixels += u32::from(covered)
+        });
+        if covers_no_centre(tri.map(|v| v.x), tri.map(|v| v.y)) {
+            prop_assert_eq!(covered_pixels, 0);
+        }
+    }
 }
 
 proptest! {
