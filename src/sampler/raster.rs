@@ -297,24 +297,13 @@ fn snap(c: [f64; 3]) -> ScreenVertex {
 /// clamped to `±COORD_LIMIT` and rounded half up.
 #[inline(always)]
 pub(crate) fn snap_coordinate(v: f64, inv_w: f64) -> i32 {
-    // Round half up as `floor(v + 0.5)`, with the floor taken of a value made positive:
-    // `f64::round` is a libm call on baseline x86-64 and was 3 % of a view.
+    // Round half up as `floor(v + 0.5)`, with the floor done by truncating a value made
+    // positive: `f64::round` is a libm call on baseline x86-64 and was 3 % of a view. The
+    // shifted value lies in `2^30 ± (2^28 + 1)`, inside `i32`, so truncating to `i32` is
+    // the same as truncating to `i64`.
     const OFFSET: f64 = (1u64 << 30) as f64;
     let v = (v * inv_w * SUBPIXEL as f64).clamp(-COORD_LIMIT, COORD_LIMIT);
-    floor_positive(v + 0.5 + OFFSET).wrapping_sub(OFFSET as i32)
-}
-
-/// `floor(t)` for `0 <= t < 2^31`, in float operations and bit moves only: adding 2^52
-/// leaves `t` rounded to an integer in the low mantissa bits, and one compare undoes a
-/// rounding up. Unlike a float-to-integer conversion (which SSE2 has only as a scalar
-/// instruction for this range), this vectorizes, so [`ScreenBatch::project`] runs packed.
-#[inline(always)]
-fn floor_positive(t: f64) -> i32 {
-    const MAGIC: f64 = (1u64 << 52) as f64;
-    let shifted = t + MAGIC;
-    let rounded = shifted - MAGIC;
-    // The low 32 mantissa bits of `shifted` are the rounded integer (it is below 2^31).
-    (shifted.to_bits() as u32 as i32).wrapping_sub(i32::from(rounded > t))
+    ((v + 0.5 + OFFSET) as i32).wrapping_sub(OFFSET as i32)
 }
 
 /// One edge function `E(p) = (to − from) × (p − from)` (positive inside a triangle of positive

@@ -379,9 +379,9 @@ impl ViewContext<'_> {
             // triangles (most of a mesh much finer than the image) leave after a box test.
             screen.project(camera, vertices);
             for (&tri, &input) in triangles.iter().zip(order) {
-                let xy = screen.corners(tri);
-                if conservative || !covers_no_centre(xy.0, xy.1) {
-                    place(screen.triangle(tri, xy), !input);
+                let tri = screen.triangle(tri);
+                if conservative || !covers_no_centre(tri) {
+                    place(tri, !input);
                 }
             }
             return;
