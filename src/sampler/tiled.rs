@@ -15,7 +15,10 @@
 //! the buffer independent of drawing order, so the result equals the reference render
 //! ([`super::sample`]) bit for bit. The mesh is regrouped by patch (`patch_mesh.rs`), so a
 //! view transforms only the vertices of the patches it draws, and patches far from the near
-//! plane and guard band (all of them, in sampling views) skip the clip-plane tests.
+//! plane and guard band (all of them, in sampling views) skip the clip-plane tests: their
+//! vertices are projected four at a time (`raster/batch.rs`), and a triangle whose bounding
+//! box holds no pixel centre (most of them on meshes much finer than the image) is dropped
+//! after a box test, before winding, deferral or edge setup.
 //!
 //! Options: `min_pixels` (a patch counts only if it covers that many pixels), `dilate` (also
 //! mark edge neighbours of visible patches that may face the eye), `always_visible` (patches
