@@ -22,6 +22,9 @@ use super::id_buffer::IdBuffer;
 use crate::ooc::Mesh;
 use crate::tiling::PatchId;
 
+mod batch;
+pub(crate) use batch::{ScreenBatch, covers_no_centre};
+
 /// Fractional bits of snapped screen coordinates (1/256 pixel, as on D3D11-class hardware).
 pub const SUBPIXEL_BITS: u32 = 8;
 const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
@@ -262,8 +265,8 @@ pub(crate) fn sphere_needs_no_clip(camera: &Camera, center: [f32; 3], radius: f3
 
 /// [`project`] for a vertex that is known to need no clipping (see [`sphere_needs_no_clip`]):
 /// the same transform, outcodes and snapping, without the five plane tests (a third of the
-/// work of a projection).
-#[inline]
+/// work of a projection). The reference for [`ScreenBatch::project`], which production uses.
+#[cfg(test)]
 pub(crate) fn project_unclipped(camera: &Camera, p: [f32; 3]) -> ProjectedVertex {
     let c = camera.clip(p);
     let [cx, cy, w] = c;
@@ -283,18 +286,24 @@ pub(crate) fn project_unclipped(camera: &Camera, p: [f32; 3]) -> ProjectedVertex
 #[inline]
 fn snap(c: [f64; 3]) -> ScreenVertex {
     let inv_w = 1.0 / c[2];
-    // Round half up as `floor(v + 0.5)`, with the floor done by truncating a value made
-    // positive: `f64::round` is a libm call on baseline x86-64 and was 3 % of a view.
-    const OFFSET: f64 = (1u64 << 30) as f64;
-    let fixed = |v: f64| {
-        let v = (v * inv_w * SUBPIXEL as f64).clamp(-COORD_LIMIT, COORD_LIMIT);
-        ((v + 0.5 + OFFSET) as i64 - OFFSET as i64) as i32
-    };
     ScreenVertex {
-        x: fixed(c[0]),
-        y: fixed(c[1]),
+        x: snap_coordinate(c[0], inv_w),
+        y: snap_coordinate(c[1], inv_w),
         q: inv_w as f32,
     }
+}
+
+/// The sub-pixel coordinate of clip coordinate `v` at `1/w = inv_w`: `v · inv_w · 256`
+/// clamped to `±COORD_LIMIT` and rounded half up.
+#[inline(always)]
+pub(crate) fn snap_coordinate(v: f64, inv_w: f64) -> i32 {
+    // Round half up as `floor(v + 0.5)`, with the floor done by truncating a value made
+    // positive: `f64::round` is a libm call on baseline x86-64 and was 3 % of a view. The
+    // shifted value lies in `2^30 ± (2^28 + 1)`, inside `i32`, so truncating to `i32` is
+    // the same as truncating to `i64`.
+    const OFFSET: f64 = (1u64 << 30) as f64;
+    let v = (v * inv_w * SUBPIXEL as f64).clamp(-COORD_LIMIT, COORD_LIMIT);
+    ((v + 0.5 + OFFSET) as i32).wrapping_sub(OFFSET as i32)
 }
 
 /// One edge function `E(p) = (to − from) × (p − from)` (positive inside a triangle of positive

@@ -15,7 +15,10 @@
 //! the buffer independent of drawing order, so the result equals the reference render
 //! ([`super::sample`]) bit for bit. The mesh is regrouped by patch (`patch_mesh.rs`), so a
 //! view transforms only the vertices of the patches it draws, and patches far from the near
-//! plane and guard band (all of them, in sampling views) skip the clip-plane tests.
+//! plane and guard band (all of them, in sampling views) skip the clip-plane tests: their
+//! vertices are projected four at a time (`raster/batch.rs`), and a triangle whose bounding
+//! box holds no pixel centre (most of them on meshes much finer than the image) is dropped
+//! after a box test, before winding, deferral or edge setup.
 //!
 //! Options: `min_pixels` (a patch counts only if it covers that many pixels), `dilate` (also
 //! mark edge neighbours of visible patches that may face the eye), `always_visible` (patches
@@ -37,8 +40,8 @@ use super::key_buffer::KeyBuffer;
 use super::patch_graph::{PatchGraph, may_face};
 use super::patch_mesh::{PatchMesh, Storage};
 use super::raster::{
-    DEFAULT_PATHS, ProjectedVertex, ScreenVertex, draw_triangle, project, project_unclipped,
-    scan_triangle, sphere_needs_no_clip, view_planes,
+    DEFAULT_PATHS, ProjectedVertex, ScreenBatch, ScreenVertex, covers_no_centre, draw_triangle,
+    project, scan_triangle, sphere_needs_no_clip, view_planes,
 };
 use super::{SamplingParams, VisibilityMatrix};
 use crate::ooc::Mesh;
@@ -227,6 +230,8 @@ struct ViewContext<'a> {
 struct ViewScratch {
     keys: KeyBuffer,
     projected: Vec<ProjectedVertex>,
+    /// Screen vertices of a patch that needs no clipping.
+    screen: ScreenBatch,
     drawn: Vec<u64>,
     /// First-pass triangles put off as facing away: screen corners and key low half.
     deferred: Vec<([ScreenVertex; 3], u32)>,
@@ -243,6 +248,7 @@ impl ViewScratch {
         ViewScratch {
             keys: KeyBuffer::new(resolution),
             projected: Vec::new(),
+            screen: ScreenBatch::default(),
             drawn: vec![0; words],
             deferred: Vec::new(),
             pixels: vec![0; patch_count as usize + 1],
@@ -370,51 +376,59 @@ impl ViewContext<'_> {
     /// but those facing away (which go to `scratch.deferred`), in the tested pass those the
     /// occlusion tiles do not hide.
     fn draw_patch(&self, p: usize, camera: &Camera, scratch: &mut ViewScratch, pass: Pass) {
-        let planes = view_planes(camera);
         let vertices = self.mesh.vertices(p);
         let ViewScratch {
             keys,
             projected,
+            screen,
             deferred,
             ..
         } = scratch;
-        projected.clear();
         let patch = &self.tiling.patches[p];
-        if sphere_needs_no_clip(camera, patch.center, patch.radius) {
-            projected.extend(vertices.iter().map(|&v| project_unclipped(camera, v)));
-        } else {
-            projected.extend(vertices.iter().map(|&v| project(camera, &planes, v)));
-        }
         let (start, triangles) = self.mesh.triangles(p);
         let order = &self.tiling.order[start..start + triangles.len()];
         let resolution = camera.resolution();
         let conservative = self.options.conservative;
+        let mut place = |tri: [ScreenVertex; 3], low: u32| {
+            match pass {
+                Pass::First => {
+                    // Past the cap a back face is drawn at once: slower (no tile test), same
+                    // result, and the heap stays bounded.
+                    if winding(tri) == self.back_winding && deferred.len() < MAX_DEFERRED {
+                        deferred.push((tri, low));
+                        return;
+                    }
+                }
+                Pass::Tested => {
+                    if keys.triangle_hidden(tri, conservative) {
+                        return;
+                    }
+                }
+            }
+            self.scan(tri, low, resolution, keys);
+        };
+        if sphere_needs_no_clip(camera, patch.center, patch.radius) {
+            // Every patch of a sampling view: packed projection, and the sub-pixel
+            // triangles (most of a mesh much finer than the image) leave after a box test.
+            screen.project(camera, vertices);
+            for (&tri, &input) in triangles.iter().zip(order) {
+                let tri = screen.triangle(tri);
+                if conservative || !covers_no_centre(tri) {
+                    place(tri, !input);
+                }
+            }
+            return;
+        }
+        let planes = view_planes(camera);
+        projected.clear();
+        projected.extend(vertices.iter().map(|&v| project(camera, &planes, v)));
         for (tri, &input) in triangles.iter().zip(order) {
-            let low = !input;
             draw_triangle(
                 tri.map(|i| projected[i as usize]),
                 || tri.map(|i| vertices[i as usize]),
                 camera,
                 &planes,
-                |screen| {
-                    match pass {
-                        Pass::First => {
-                            // Past the cap a back face is drawn at once: slower (no tile
-                            // test), same result, and the heap stays bounded.
-                            if winding(screen) == self.back_winding && deferred.len() < MAX_DEFERRED
-                            {
-                                deferred.push((screen, low));
-                                return;
-                            }
-                        }
-                        Pass::Tested => {
-                            if keys.triangle_hidden(screen, conservative) {
-                                return;
-                            }
-                        }
-                    }
-                    self.scan(screen, low, resolution, keys);
-                },
+                |screen| place(screen, !input),
             );
         }
     }

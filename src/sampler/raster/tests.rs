@@ -322,6 +322,47 @@ fn unclipped_projection_is_used_only_where_it_equals_the_full_one() {
     assert!(!sphere_needs_no_clip(&camera, [0.0, 0.0, 0.0], f32::NAN));
 }
 
+#[test]
+fn batched_projection_equals_the_single_one_bit_for_bit() {
+    let mut rng = Rng(11);
+    let mut batch = ScreenBatch::default();
+    for (eye, resolution) in [([0.0, 0.0, 5.0], 64), ([3.0, -2.0, 4.0], 512)] {
+        let camera = Camera::look_at(eye, [0.0, 0.0, 0.0], 45.0, resolution);
+        for len in 0..=9 {
+            let mut points: Vec<[f32; 3]> = (0..len)
+                .map(|_| [rng.signed(), rng.signed(), rng.signed()])
+                .collect();
+            // The image centre: a half-pixel tie of the rounding.
+            points.push([0.0, 0.0, 0.0]);
+            batch.project(&camera, &points);
+            for (i, &p) in points.iter().enumerate() {
+                let i = i as u32;
+                let single = project_unclipped(&camera, p).screen;
+                let [v, ..] = batch.triangle([i; 3]);
+                assert_eq!(
+                    (v.x, v.y, v.q.to_bits()),
+                    (single.x, single.y, single.q.to_bits())
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn only_boxes_between_pixel_centres_cover_no_centre() {
+    // Pixel centres at 128 and 384 sub-pixel units.
+    let tri = |x: [i32; 3], y: [i32; 3]| {
+        [0, 1, 2].map(|k| ScreenVertex {
+            x: x[k],
+            y: y[k],
+            q: 1.0,
+        })
+    };
+    assert!(covers_no_centre(tri([130, 380, 200], [130, 140, 380])));
+    assert!(!covers_no_centre(tri([128, 380, 200], [130, 140, 384])));
+    assert!(covers_no_centre(tri([385, 600, 500], [0, 1000, 500])));
+}
+
 fn screen_vertex() -> impl Strategy<Value = ScreenVertex> {
     let coordinate = prop_oneof![-4_000i32..16_000, -(1i32 << 28)..(1i32 << 28),];
     (coordinate.clone(), coordinate, 0.01f32..10.0).prop_map(|(x, y, q)| ScreenVertex { x, y, q })
@@ -341,6 +382,25 @@ fn small_triangle() -> impl Strategy<Value = [ScreenVertex; 3]> {
                 q,
             })
         })
+}
+
+proptest! {
+    #[test]
+    fn a_triangle_without_a_centre_in_its_box_draws_nothing(
+        tri in prop_oneof![
+            [screen_vertex(), screen_vertex(), screen_vertex()],
+            small_triangle(),
+        ],
+        resolution in 1u32..48,
+    ) {
+        let mut covered_pixels = 0;
+        scan_triangle(tri, resolution, DEFAULT_PATHS, |_, _, covered| {
+            covered_pixels += u32::from(covered)
+        });
+        if covers_no_centre(tri) {
+            prop_assert_eq!(covered_pixels, 0);
+        }
+    }
 }
 
 proptest! {
