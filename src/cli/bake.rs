@@ -1,7 +1,7 @@
 //! `patchvis bake`: checked settings, then tile → sample → encode, with a timing and peak-heap
 //! record per stage, and outputs that appear only once everything succeeded.
 
-use super::args::{BakeArgs, TilingArg};
+use super::args::{BackendArg, BakeArgs, TilingArg};
 use super::progress::Bars;
 use super::{UsageError, alloc};
 use anyhow::{Context, Result};
@@ -36,6 +36,8 @@ pub struct Settings {
     tiling: tiling::TilingOptions,
     /// Heap budget in bytes (`--memory`, or [`default_memory_budget`]).
     memory_budget: u64,
+    /// `--backend`.
+    backend: BackendArg,
 }
 
 /// Smallest default budget: below this the machine is too small to bake anything large
@@ -110,6 +112,18 @@ impl Settings {
                 args.level
             )));
         }
+        if args.backend == BackendArg::Gpu {
+            if !cfg!(feature = "gpu") {
+                return Err(UsageError(
+                    "--backend gpu: this patchvis was built without the `gpu` feature".into(),
+                ));
+            }
+            if let Some(flag) = cpu_only_flag(args.conservative, args.resume) {
+                return Err(UsageError(format!(
+                    "--backend gpu: {flag} needs the CPU backend (--backend cpu or auto)"
+                )));
+            }
+        }
         let always_visible = match &args.always_visible {
             Some(spec) => parse_patch_ids(spec)?,
             None => Vec::new(),
@@ -143,6 +157,7 @@ impl Settings {
             view_supersample: args.view_supersample,
             quiet: args.quiet,
             memory_budget,
+            backend: args.backend,
             tiling: tiling::TilingOptions {
                 mode: match args.tiling {
                     TilingArg::Auto => tiling::TilingMode::Auto,
@@ -152,6 +167,68 @@ impl Settings {
                 memory_budget,
             },
         })
+    }
+}
+
+/// The first flag the GPU backend does not implement, if any.
+fn cpu_only_flag(conservative: bool, resume: bool) -> Option<&'static str> {
+    if conservative {
+        Some("--conservative")
+    } else if resume {
+        Some("--resume")
+    } else {
+        None
+    }
+}
+
+/// The sampler `--backend` chose.
+enum Backend {
+    Cpu,
+    #[cfg(feature = "gpu")]
+    Gpu(Box<sampler::gpu::GpuSampler>),
+}
+
+impl Backend {
+    /// Opens the backend of `--backend`: `gpu` fails without an adapter; `auto` takes a
+    /// hardware adapter and otherwise says on stderr why it samples on the CPU (a software
+    /// rasterizer such as lavapipe is slower than the CPU backend, BENCHMARKS.md).
+    fn open(s: &Settings) -> Result<Backend> {
+        match s.backend {
+            BackendArg::Cpu => Ok(Backend::Cpu),
+            #[cfg(feature = "gpu")]
+            BackendArg::Gpu => sampler::gpu::GpuSampler::new()
+                .map(|g| Backend::Gpu(Box::new(g)))
+                .context("--backend gpu"),
+            #[cfg(not(feature = "gpu"))]
+            BackendArg::Gpu => unreachable!("refused by Settings::from_args"),
+            BackendArg::Auto => {
+                let why_cpu = if let Some(flag) =
+                    cpu_only_flag(s.options.conservative, s.options.resume)
+                {
+                    format!("{flag} needs it")
+                } else {
+                    #[cfg(feature = "gpu")]
+                    match sampler::gpu::GpuSampler::new() {
+                        Ok(g) if !g.is_software() => return Ok(Backend::Gpu(Box::new(g))),
+                        Ok(g) => format!("{} is a software rasterizer", g.adapter()),
+                        Err(e) => e.to_string(),
+                    }
+                    #[cfg(not(feature = "gpu"))]
+                    "built without the `gpu` feature".to_string()
+                };
+                eprintln!("--backend auto: sampling on the CPU ({why_cpu})");
+                Ok(Backend::Cpu)
+            }
+        }
+    }
+
+    /// `cpu`, or `gpu: ADAPTER`.
+    fn describe(&self) -> String {
+        match self {
+            Backend::Cpu => "cpu".into(),
+            #[cfg(feature = "gpu")]
+            Backend::Gpu(g) => format!("gpu: {}", g.adapter()),
+        }
     }
 }
 
@@ -240,6 +317,8 @@ pub fn run(args: BakeArgs) -> Result<()> {
     let s = Settings::from_args(args)?;
     let bars = Bars::new(!s.quiet);
     let start = Instant::now();
+    // Before any work, so that a missing GPU fails at once.
+    let backend = Backend::open(&s)?;
     let mut stages = Vec::new();
 
     let open = OpenOptions {
@@ -269,7 +348,15 @@ pub fn run(args: BakeArgs) -> Result<()> {
             level: s.level + s.view_supersample,
             ..params
         };
-        sampler::sample_tiled(&mesh, &tiling, &fine, &s.options, &bars).map(|rows| {
+        let rows = match &backend {
+            Backend::Cpu => sampler::sample_tiled(&mesh, &tiling, &fine, &s.options, &bars)
+                .map_err(anyhow::Error::from),
+            #[cfg(feature = "gpu")]
+            Backend::Gpu(gpu) => gpu
+                .sample(&mesh, &tiling, &fine, &s.options, &bars)
+                .context("GPU sampling failed"),
+        };
+        rows.map(|rows| {
             match s.view_supersample {
                 0 => rows,
                 _ => sampler::supersample_rows(&rows, fine.level, s.level),
@@ -357,6 +444,7 @@ pub fn run(args: BakeArgs) -> Result<()> {
             "dilate": s.options.dilate,
             "conservative": s.options.conservative,
             "view_supersample": s.view_supersample,
+            "backend": backend.describe(),
             "sampled_views": view_count(s.level + s.view_supersample),
             "always_visible": s.options.always_visible.len(),
             "visible_fraction_mean": visible_fraction,
@@ -417,6 +505,9 @@ pub fn run(args: BakeArgs) -> Result<()> {
             100.0 * visible_fraction,
             secs("sampling")
         );
+        if !matches!(backend, Backend::Cpu) {
+            println!("          sampled on the {}", backend.describe());
+        }
         if s.view_supersample > 0 {
             println!(
                 "          view supersampling: sampled {} views (level {}), folded into level {}",
