@@ -45,7 +45,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (mut cpu_rows, mut gpu_rows) = (None, None);
     for _ in 0..runs {
         let start = Instant::now();
-        cpu_rows = Some(sample_tiled(&mesh, &tiling, &params, &options, &NoProgress)?);
+        cpu_rows = Some(sample_tiled(
+            &mesh,
+            &tiling,
+            &params,
+            &options,
+            &NoProgress,
+        )?);
         cpu_times.push(start.elapsed().as_secs_f64());
         let start = Instant::now();
         gpu_rows = Some(gpu.sample(&mesh, &tiling, &params, &options, &NoProgress)?);

@@ -69,23 +69,30 @@ fn compare(test: &str, level: u32, resolution: u32, options: &SamplingOptions) {
     let Some(gpu) = gpu(test) else { return };
     let (mesh, tiling) = bunny();
     let params = SamplingParams::for_mesh(mesh, level, resolution, 45.0);
+    let start = std::time::Instant::now();
     let cpu = sample_tiled(mesh, tiling, &params, options, &NoProgress).expect("CPU sampling");
+    let cpu_seconds = start.elapsed().as_secs_f64();
+    let start = std::time::Instant::now();
     let on_gpu = gpu
         .sample(mesh, tiling, &params, options, &NoProgress)
         .expect("GPU sampling");
+    let gpu_seconds = start.elapsed().as_secs_f64();
     let (only_cpu, only_gpu, set) = differences(&cpu, &on_gpu);
     let bits = u64::from(cpu.views()) * u64::from(cpu.patches());
     let different = (only_cpu + only_gpu) as f64 / bits as f64;
     let _ = writeln!(
         std::io::stderr(),
-        "{test} on {}: {} views x {} patches, {set} bits set on the CPU; {only_cpu} only on the CPU, {only_gpu} only on the GPU ({:.4}% of bits)",
+        "{test} on {}: {} views x {} patches, {set} bits set on the CPU; {only_cpu} only on the CPU, {only_gpu} only on the GPU ({:.4}% of bits); CPU {cpu_seconds:.2} s, GPU {gpu_seconds:.2} s",
         gpu.adapter(),
         cpu.views(),
         cpu.patches(),
         100.0 * different
     );
     // A broken GPU path (nothing drawn, wrong camera) would differ in most set bits.
-    assert!(set > bits / 10, "the CPU sees too little to compare: {set} of {bits}");
+    assert!(
+        set > bits / 10,
+        "the CPU sees too little to compare: {set} of {bits}"
+    );
     assert!(
         different < MAX_DIFFERENT_BITS,
         "{test}: {only_cpu} bits only on the CPU and {only_gpu} only on the GPU of {bits}"
@@ -94,7 +101,7 @@ fn compare(test: &str, level: u32, resolution: u32, options: &SamplingOptions) {
 
 #[test]
 fn gpu_rows_match_cpu_rows_on_the_bunny() {
-    compare("plain", 3, 256, &SamplingOptions::default());
+    compare("plain", 2, 256, &SamplingOptions::default());
 }
 
 #[test]
@@ -105,7 +112,7 @@ fn gpu_min_pixels_dilate_and_always_visible_match_the_cpu() {
         always_visible: vec![0, 199],
         ..SamplingOptions::default()
     };
-    compare("options", 2, 256, &options);
+    compare("options", 1, 256, &options);
 }
 
 #[test]
@@ -143,7 +150,7 @@ fn bake(dir: &std::path::Path, extra: &[&str], env: &[(&str, &str)]) -> Output {
         "--patches",
         "50",
         "--level",
-        "1",
+        "0",
         "--resolution",
         "64",
         "--quiet",
@@ -191,7 +198,11 @@ fn backend_gpu_bakes_a_file_that_verifies() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let out = bake(dir.path(), &["--backend", "gpu", "--view-supersample", "1"], &[]);
+    let out = bake(
+        dir.path(),
+        &["--backend", "gpu", "--view-supersample", "1"],
+        &[],
+    );
     assert!(
         out.status.success(),
         "stderr: {}",
@@ -211,5 +222,8 @@ fn backend_gpu_bakes_a_file_that_verifies() {
     let out = bake(dir.path(), &["--backend", "gpu", "--conservative"], &[]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
-    assert!(stderr.contains("--conservative needs the CPU backend"), "{stderr}");
+    assert!(
+        stderr.contains("--conservative needs the CPU backend"),
+        "{stderr}"
+    );
 }

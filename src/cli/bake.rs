@@ -202,20 +202,19 @@ impl Backend {
             #[cfg(not(feature = "gpu"))]
             BackendArg::Gpu => unreachable!("refused by Settings::from_args"),
             BackendArg::Auto => {
-                let why_cpu = if let Some(flag) =
-                    cpu_only_flag(s.options.conservative, s.options.resume)
-                {
-                    format!("{flag} needs it")
-                } else {
-                    #[cfg(feature = "gpu")]
-                    match sampler::gpu::GpuSampler::new() {
-                        Ok(g) if !g.is_software() => return Ok(Backend::Gpu(Box::new(g))),
-                        Ok(g) => format!("{} is a software rasterizer", g.adapter()),
-                        Err(e) => e.to_string(),
-                    }
-                    #[cfg(not(feature = "gpu"))]
-                    "built without the `gpu` feature".to_string()
-                };
+                let why_cpu =
+                    if let Some(flag) = cpu_only_flag(s.options.conservative, s.options.resume) {
+                        format!("{flag} needs it")
+                    } else {
+                        #[cfg(feature = "gpu")]
+                        match sampler::gpu::GpuSampler::new() {
+                            Ok(g) if !g.is_software() => return Ok(Backend::Gpu(Box::new(g))),
+                            Ok(g) => format!("{} is a software rasterizer", g.adapter()),
+                            Err(e) => e.to_string(),
+                        }
+                        #[cfg(not(feature = "gpu"))]
+                        "built without the `gpu` feature".to_string()
+                    };
                 eprintln!("--backend auto: sampling on the CPU ({why_cpu})");
                 Ok(Backend::Cpu)
             }
@@ -356,11 +355,9 @@ pub fn run(args: BakeArgs) -> Result<()> {
                 .sample(&mesh, &tiling, &fine, &s.options, &bars)
                 .context("GPU sampling failed"),
         };
-        rows.map(|rows| {
-            match s.view_supersample {
-                0 => rows,
-                _ => sampler::supersample_rows(&rows, fine.level, s.level),
-            }
+        rows.map(|rows| match s.view_supersample {
+            0 => rows,
+            _ => sampler::supersample_rows(&rows, fine.level, s.level),
         })
     })?;
     let contents = BakeContents {

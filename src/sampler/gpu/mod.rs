@@ -3,8 +3,8 @@
 //!
 //! Technique: Meruvia 2002, section 3, on graphics hardware as the paper ran it, with the
 //! ID-bitfield reduction of the second paper done in a compute pass. The mesh is uploaded
-//! once, regrouped by patch and de-indexed (`upload.rs`: each vertex holds its position
-//! relative to the bounding-sphere centre and its patch id). Views go in batches, one command
+//! once, regrouped by patch (`upload.rs`: each patch's own vertices, holding the position
+//! relative to the bounding-sphere centre and the patch id, and its triangles as indices). Views go in batches, one command
 //! buffer per batch: every view of the batch renders into its own layer of an R32Uint array
 //! texture (the patch id; empty pixels keep [`NO_PATCH`]) with a `Depth32Float` layer
 //! (reversed Z: depth `near / w`, cleared to 0, nearest wins), then one compute dispatch over
@@ -22,7 +22,7 @@
 //! CPU backend's post-processing of the rows; `conservative` and `resume` are refused
 //! ([`GpuError::Unsupported`]); no checkpoint is written.
 //!
-//! Cost: mesh upload 48 bytes per triangle (GPU memory, once); per view one full draw of
+//! Cost: mesh upload about 22 bytes per triangle (GPU memory, once); per view one full draw of
 //! the mesh (no culling by coarser levels) and one pass over the pixels; per batch one
 //! submission and `views × ⌈patches / 64⌉ × 8` bytes read back. GPU memory besides the mesh:
 //! `resolution² × 8` bytes per batched view, capped at [`BATCH_TARGET_BYTES`].
@@ -277,13 +277,9 @@ impl GpuSampler {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let words32_u32 = u32::try_from(words32).expect("row words fit the storage limit");
-        let param_words = [
-            params.resolution,
-            patches,
-            words32_u32,
-            options.min_pixels,
-        ];
+        let words32_u32 =
+            u32::try_from(words32).expect("fewer than 2^32 patches make fewer than 2^28 words");
+        let param_words = [params.resolution, patches, words32_u32, options.min_pixels];
         queue.write_buffer(&reduce_params, 0, &u32s_to_bytes(&param_words));
         let matrices = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("view matrices"),
@@ -338,7 +334,11 @@ impl GpuSampler {
             let mut matrix_bytes = Vec::with_capacity((MATRIX_BYTES * u64::from(count)) as usize);
             for view in first..first + count {
                 let camera = Camera::sampling_view(params, view);
-                matrix_bytes.extend(view_matrix(&camera, params.center).map(f32::to_le_bytes).concat());
+                matrix_bytes.extend(
+                    view_matrix(&camera, params.center)
+                        .map(f32::to_le_bytes)
+                        .concat(),
+                );
             }
             // Ordered after the previous submission and before the next one, so the batch in
             // flight keeps its matrices.
@@ -381,9 +381,10 @@ impl GpuSampler {
                 pass.set_pipeline(&self.render);
                 pass.set_bind_group(0, &render_group, &[]);
                 for chunk in &chunks {
-                    pass.set_vertex_buffer(0, chunk.buffer.slice(..));
+                    pass.set_vertex_buffer(0, chunk.vertices.slice(..));
+                    pass.set_index_buffer(chunk.indices.slice(..), wgpu::IndexFormat::Uint32);
                     // The instance index selects the view's matrix.
-                    pass.draw(0..chunk.vertices, layer..layer + 1);
+                    pass.draw_indexed(0..chunk.index_count, 0, layer..layer + 1);
                 }
             }
             {
@@ -521,7 +522,7 @@ fn batch_views(
     counting: bool,
     limits: &wgpu::Limits,
 ) -> Result<u32, GpuError> {
-    let storage = u64::from(limits.max_storage_buffer_binding_size);
+    let storage = limits.max_storage_buffer_binding_size;
     let row_bytes = words32 * 4;
     if row_bytes > storage {
         return Err(GpuError::TooLarge {
@@ -785,4 +786,57 @@ fn u32s_to_bytes(words: &[u32]) -> Vec<u8> {
 /// `name (type, backend)` of an adapter.
 fn describe(info: &wgpu::AdapterInfo) -> String {
     format!("{} ({:?}, {:?})", info.name, info.device_type, info.backend)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The clip matrix puts every point where the CPU camera does: pixel
+    /// `((x/w + 1) · res/2, (1 − y/w) · res/2)` equals [`Camera::project`], and the depth
+    /// `near / w` is 1 on the near plane.
+    #[test]
+    fn view_matrix_projects_like_the_cpu_camera() {
+        let params = SamplingParams {
+            level: 2,
+            resolution: 512,
+            fov_deg: 45.0,
+            center: [1000.0, -20.0, 3.5],
+            radius: 2.0,
+        };
+        let half = f64::from(params.resolution) / 2.0;
+        for view in 0..view_count(params.level) {
+            let camera = Camera::sampling_view(&params, view);
+            let m = view_matrix(&camera, params.center).map(f64::from);
+            for k in 0..50 {
+                let t = f64::from(k) * 0.37;
+                let offset = [t.sin() * 1.5, (2.0 * t).cos() * 1.5, (3.0 * t).sin() * 1.2];
+                let p: [f32; 3] = std::array::from_fn(|i| params.center[i] + offset[i] as f32);
+                let rel: [f64; 3] =
+                    std::array::from_fn(|i| f64::from(p[i]) - f64::from(params.center[i]));
+                let row = |r: usize| {
+                    m[4 * r] * rel[0] + m[4 * r + 1] * rel[1] + m[4 * r + 2] * rel[2] + m[4 * r + 3]
+                };
+                let (x, y, w) = (row(0), row(1), row(3));
+                let [px, py] = camera.project(p).expect("in front of the camera");
+                let (gx, gy) = ((x / w + 1.0) * half, (1.0 - y / w) * half);
+                // f32 matrix entries: agreement to a few thousandths of a pixel.
+                assert!(
+                    (gx - px).abs() < 2e-3 && (gy - py).abs() < 2e-3,
+                    "view {view}: GPU ({gx}, {gy}), CPU ({px}, {py})"
+                );
+            }
+            // On the near plane the depth is 1.
+            let f = camera.forward();
+            let e = camera.eye();
+            let on_near: [f64; 3] =
+                std::array::from_fn(|i| e[i] + f[i] * camera.near() - f64::from(params.center[i]));
+            let w = m[12] * on_near[0] + m[13] * on_near[1] + m[14] * on_near[2] + m[15];
+            assert!(
+                (m[11] / w - 1.0).abs() < 1e-3,
+                "view {view}: depth {}",
+                m[11] / w
+            );
+        }
+    }
 }
