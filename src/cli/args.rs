@@ -109,6 +109,21 @@ pub struct BakeArgs {
     /// Print nothing but errors; no progress bars.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Where to render the ID buffers: cpu (exact, reproducible), gpu (wgpu; fails without an
+    /// adapter), auto (a hardware GPU if there is one, else the CPU).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu, value_name = "BACKEND")]
+    pub backend: BackendArg,
+}
+
+/// `--backend`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum BackendArg {
+    /// The CPU rasterizer: bit-exact, deterministic, checkpoints and every option.
+    Cpu,
+    /// The GPU through wgpu (Vulkan, Metal or DX12); an error if there is none.
+    Gpu,
+    /// A hardware GPU if one is found, else the CPU (saying why on stderr).
+    Auto,
 }
 
 /// `--tiling`.

@@ -1,7 +1,7 @@
 //! `patchvis bake`: checked settings, then tile → sample → encode, with a timing and peak-heap
 //! record per stage, and outputs that appear only once everything succeeded.
 
-use super::args::{BakeArgs, TilingArg};
+use super::args::{BackendArg, BakeArgs, TilingArg};
 use super::progress::Bars;
 use super::{UsageError, alloc};
 use anyhow::{Context, Result};
@@ -57,6 +57,8 @@ pub struct Settings {
     tiling: tiling::TilingOptions,
     /// Heap budget in bytes (`--memory`, or [`default_memory_budget`]).
     memory_budget: u64,
+    /// `--backend`.
+    backend: BackendArg,
 }
 
 /// Smallest default budget: below this the machine is too small to bake anything large
@@ -153,6 +155,18 @@ impl Settings {
         } else {
             DEFAULT_FOLD_MIN_PIXELS
         });
+        if args.backend == BackendArg::Gpu {
+            if !cfg!(feature = "gpu") {
+                return Err(UsageError(
+                    "--backend gpu: this patchvis was built without the `gpu` feature".into(),
+                ));
+            }
+            if let Some(flag) = cpu_only_flag(args.conservative_raster, args.resume) {
+                return Err(UsageError(format!(
+                    "--backend gpu: {flag} needs the CPU backend (--backend cpu or auto)"
+                )));
+            }
+        }
         let always_visible = match &args.always_visible {
             Some(spec) => parse_patch_ids(spec)?,
             None => Vec::new(),
@@ -201,6 +215,7 @@ impl Settings {
             coarse_checkpoint,
             quiet: args.quiet,
             memory_budget,
+            backend: args.backend,
             tiling: tiling::TilingOptions {
                 mode: match args.tiling {
                     TilingArg::Auto => tiling::TilingMode::Auto,
@@ -210,6 +225,67 @@ impl Settings {
                 memory_budget,
             },
         })
+    }
+}
+
+/// The first flag the GPU backend does not implement, if any.
+fn cpu_only_flag(conservative: bool, resume: bool) -> Option<&'static str> {
+    if conservative {
+        Some("--conservative-raster")
+    } else if resume {
+        Some("--resume")
+    } else {
+        None
+    }
+}
+
+/// The sampler `--backend` chose.
+enum Backend {
+    Cpu,
+    #[cfg(feature = "gpu")]
+    Gpu(Box<sampler::gpu::GpuSampler>),
+}
+
+impl Backend {
+    /// Opens the backend of `--backend`: `gpu` fails without an adapter; `auto` takes a
+    /// hardware adapter and otherwise says on stderr why it samples on the CPU (a software
+    /// rasterizer such as lavapipe is slower than the CPU backend, BENCHMARKS.md).
+    fn open(s: &Settings) -> Result<Backend> {
+        match s.backend {
+            BackendArg::Cpu => Ok(Backend::Cpu),
+            #[cfg(feature = "gpu")]
+            BackendArg::Gpu => sampler::gpu::GpuSampler::new()
+                .map(|g| Backend::Gpu(Box::new(g)))
+                .context("--backend gpu"),
+            #[cfg(not(feature = "gpu"))]
+            BackendArg::Gpu => unreachable!("refused by Settings::from_args"),
+            BackendArg::Auto => {
+                let why_cpu =
+                    if let Some(flag) = cpu_only_flag(s.options.conservative, s.options.resume) {
+                        format!("{flag} needs it")
+                    } else {
+                        #[cfg(feature = "gpu")]
+                        match sampler::gpu::GpuSampler::new() {
+                            Ok(g) if !g.is_software() => return Ok(Backend::Gpu(Box::new(g))),
+                            Ok(g) => format!("{} is a software rasterizer", g.adapter()),
+                            Err(e) => e.to_string(),
+                        }
+                        #[cfg(not(feature = "gpu"))]
+                        "built without the `gpu` feature".to_string()
+                    };
+                eprintln!("--backend auto: sampling on the CPU ({why_cpu})");
+                Ok(Backend::Cpu)
+            }
+        }
+    }
+
+    /// `cpu`, or `gpu: ADAPTER`.
+    fn describe(&self) -> String {
+        match self {
+            Backend::Cpu => "cpu".into(),
+            #[cfg(feature = "gpu")]
+            Backend::Gpu(g) => format!("gpu: {}", g.adapter()),
+        }
     }
 }
 
@@ -298,6 +374,8 @@ pub fn run(args: BakeArgs) -> Result<()> {
     let s = Settings::from_args(args)?;
     let bars = Bars::new(!s.quiet);
     let start = Instant::now();
+    // Before any work, so that a missing GPU fails at once.
+    let backend = Backend::open(&s)?;
     let mut stages = Vec::new();
 
     let open = OpenOptions {
@@ -327,6 +405,15 @@ pub fn run(args: BakeArgs) -> Result<()> {
             level: s.level + s.view_supersample,
             ..params
         };
+        let sample = |p: &SamplingParams, o: &sampler::SamplingOptions| match &backend {
+            Backend::Cpu => {
+                sampler::sample_tiled(&mesh, &tiling, p, o, &bars).map_err(anyhow::Error::from)
+            }
+            #[cfg(feature = "gpu")]
+            Backend::Gpu(gpu) => gpu
+                .sample(&mesh, &tiling, p, o, &bars)
+                .context("GPU sampling failed"),
+        };
         if s.fold_min_pixels > 0 {
             // The stored views keep every pixel; the finer ones report only patches of at
             // least `fold_min_pixels` pixels (see `sampler::fold_into`).
@@ -334,19 +421,17 @@ pub fn run(args: BakeArgs) -> Result<()> {
                 checkpoint: s.coarse_checkpoint.clone(),
                 ..s.options.clone()
             };
-            let coarse = sampler::sample_tiled(&mesh, &tiling, &params, &plain, &bars)?;
+            let coarse = sample(&params, &plain)?;
             let thresholded = sampler::SamplingOptions {
                 min_pixels: s.fold_min_pixels,
                 ..s.options.clone()
             };
-            let rows = sampler::sample_tiled(&mesh, &tiling, &fine, &thresholded, &bars)?;
+            let rows = sample(&fine, &thresholded)?;
             return Ok(sampler::fold_into(coarse, &rows, fine.level, s.level));
         }
-        sampler::sample_tiled(&mesh, &tiling, &fine, &s.options, &bars).map(|rows| {
-            match s.view_supersample {
-                0 => rows,
-                _ => sampler::supersample_rows(&rows, fine.level, s.level),
-            }
+        sample(&fine, &s.options).map(|rows| match s.view_supersample {
+            0 => rows,
+            _ => sampler::supersample_rows(&rows, fine.level, s.level),
         })
     })?;
     let contents = BakeContents {
@@ -441,6 +526,7 @@ pub fn run(args: BakeArgs) -> Result<()> {
             "conservative_raster": s.options.conservative,
             "view_supersample": s.view_supersample,
             "fold_min_pixels": s.fold_min_pixels,
+            "backend": backend.describe(),
             "sampled_views": sampled_views,
             "always_visible": s.options.always_visible.len(),
             "visible_fraction_mean": visible_fraction,
@@ -501,6 +587,9 @@ pub fn run(args: BakeArgs) -> Result<()> {
             100.0 * visible_fraction,
             secs("sampling")
         );
+        if !matches!(backend, Backend::Cpu) {
+            println!("          sampled on the {}", backend.describe());
+        }
         if s.view_supersample > 0 {
             println!(
                 "          view supersampling: sampled {} views (level {}), folded into level {}",

@@ -11,6 +11,8 @@ mod camera;
 mod checkpoint;
 mod clip;
 mod conservative;
+#[cfg(feature = "gpu")]
+pub mod gpu;
 mod id_buffer;
 mod key_buffer;
 mod patch_graph;

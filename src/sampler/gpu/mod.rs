@@ -1,0 +1,842 @@
+//! GPU sampling backend (wgpu): the visibility matrix of [`super::sample_tiled`], with the ID
+//! buffers rendered by the GPU's rasterizer and reduced to per-view patch bitfields on the GPU.
+//!
+//! Technique: Meruvia 2002, section 3, on graphics hardware as the paper ran it, with the
+//! ID-bitfield reduction of the second paper done in a compute pass. The mesh is uploaded
+//! once, regrouped by patch (`upload.rs`: each patch's own vertices, holding the position
+//! relative to the bounding-sphere centre and the patch id, and its triangles as indices). Views go in batches, one command
+//! buffer per batch: every view of the batch renders into its own layer of an R32Uint array
+//! texture (the patch id; empty pixels keep [`NO_PATCH`]) with a `Depth32Float` layer
+//! (reversed Z: depth `near / w`, cleared to 0, nearest wins), then one compute dispatch over
+//! all layers sets bit `id` of the view's row with `atomicOr` (`reduce.wgsl`; with
+//! `min_pixels` it counts pixels with `atomicAdd` and thresholds them instead), and only the
+//! rows are copied back, never an image. Two read-back buffers let the CPU read batch `k`
+//! while the GPU draws batch `k + 1`.
+//!
+//! The cameras are [`Camera::sampling`]'s (same eye, basis, field of view, near plane and
+//! resolution; `view_matrix` turns one into a clip matrix). The result is not bit-identical
+//! to the CPU backend's: the GPU transforms in `f32` and snaps vertices with its own subpixel
+//! precision and tie rules, so pixels on triangle edges can change hands, and a patch seen
+//! only through such pixels can differ (tests/gpu.rs bounds the difference; BENCHMARKS.md
+//! records it). Options: `min_pixels` runs on the GPU; `dilate` and `always_visible` are the
+//! CPU backend's post-processing of the rows; `conservative` and `resume` are refused
+//! ([`GpuError::Unsupported`]); no checkpoint is written.
+//!
+//! Cost: mesh upload about 22 bytes per triangle (GPU memory, once); per view one full draw of
+//! the mesh (no culling by coarser levels) and one pass over the pixels; per batch one
+//! submission and `views × ⌈patches / 64⌉ × 8` bytes read back. GPU memory besides the mesh:
+//! `resolution² × 8` bytes per batched view, capped at [`BATCH_TARGET_BYTES`].
+
+mod upload;
+
+use super::patch_graph::{PatchGraph, may_face};
+use super::{Camera, SamplingOptions, SamplingParams, VisibilityMatrix};
+use crate::ooc::Mesh;
+use crate::progress::Progress;
+use crate::sphere::view_count;
+use crate::tiling::{PatchId, Tiling};
+use std::sync::mpsc;
+
+/// The id of an empty pixel in the GPU's ID buffers (the colour target's clear value); the
+/// shaders' `NO_PATCH`. Patch ids stay below it because a tiling has fewer than `2^32 - 1`
+/// patches.
+pub const NO_PATCH: u32 = u32::MAX;
+
+/// Most views in one batch: the length of the shader's matrix array (`render.wgsl`), 16 KiB
+/// of uniforms, well below the 64 KiB every device allows.
+pub const MAX_BATCH_VIEWS: u32 = 256;
+
+/// GPU memory a batch's ID and depth layers may take. Large enough that a batch holds
+/// dozens of 512² views (amortising a submission and its read-back), small enough for any
+/// discrete or integrated GPU.
+pub const BATCH_TARGET_BYTES: u64 = 256 << 20;
+
+/// Bytes per pixel of a batched view: a 4-byte patch id and a 4-byte depth.
+const BYTES_PER_PIXEL: u64 = 8;
+
+/// Side of the square workgroup of the per-pixel passes (`reduce.wgsl` `PIXEL_GROUP`).
+const PIXEL_GROUP: u32 = 16;
+
+/// Invocations per workgroup of the threshold pass (`reduce.wgsl` `WORD_GROUP`).
+const WORD_GROUP: u32 = 64;
+
+/// Bytes of one view's clip matrix in the uniform array (a `mat4x4<f32>`).
+const MATRIX_BYTES: u64 = 64;
+
+/// Why the GPU backend could not sample.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No GPU adapter is available (no driver, no Vulkan/Metal/DX12 loader, or none found).
+    #[error("no GPU adapter found ({0})")]
+    NoAdapter(String),
+    /// The adapter exists but refused to open a device.
+    #[error("GPU adapter {adapter}: cannot open a device: {reason}")]
+    Device {
+        /// The adapter's description.
+        adapter: String,
+        /// wgpu's reason.
+        reason: String,
+    },
+    /// A sampling option the GPU backend does not implement.
+    #[error("the GPU backend does not support {0}; use the CPU backend")]
+    Unsupported(&'static str),
+    /// The job exceeds one of the device's limits.
+    #[error("{what} needs {needed}, but this GPU allows at most {limit}")]
+    TooLarge {
+        /// What does not fit.
+        what: &'static str,
+        /// What it needs.
+        needed: u64,
+        /// The device's limit.
+        limit: u64,
+    },
+    /// The device reported an error while sampling (out of memory, device lost, …).
+    #[error("GPU error: {0}")]
+    Failed(String),
+}
+
+/// One line of an error text from wgpu, whose messages may span several lines.
+fn one_line(text: impl std::fmt::Display) -> String {
+    text.to_string()
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// An open GPU device with the sampling pipelines compiled: create once, sample many times.
+#[derive(Debug)]
+pub struct GpuSampler {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    info: wgpu::AdapterInfo,
+    render: wgpu::RenderPipeline,
+    render_layout: wgpu::BindGroupLayout,
+    mark: wgpu::ComputePipeline,
+    count: wgpu::ComputePipeline,
+    threshold: wgpu::ComputePipeline,
+    reduce_layout: wgpu::BindGroupLayout,
+}
+
+impl GpuSampler {
+    /// Opens the highest-performance adapter wgpu finds (honouring wgpu's `WGPU_BACKEND` and
+    /// `WGPU_ADAPTER_NAME` environment variables) and compiles the pipelines.
+    pub fn new() -> Result<GpuSampler, GpuError> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::NoAdapter(one_line(e)))?;
+        let info = adapter.get_info();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("patchvis sampling"),
+            // Everything the adapter offers: big meshes want its largest buffers.
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device {
+            adapter: describe(&info),
+            reason: one_line(e),
+        })?;
+        let pipelines = Pipelines::new(&device);
+        Ok(GpuSampler {
+            device,
+            queue,
+            info,
+            render: pipelines.render,
+            render_layout: pipelines.render_layout,
+            mark: pipelines.mark,
+            count: pipelines.count,
+            threshold: pipelines.threshold,
+            reduce_layout: pipelines.reduce_layout,
+        })
+    }
+
+    /// The adapter, e.g. `llvmpipe (LLVM 15.0.6, 256 bits) (Cpu, Vulkan)`.
+    pub fn adapter(&self) -> String {
+        describe(&self.info)
+    }
+
+    /// Whether the adapter is a software rasterizer on the CPU (Mesa's lavapipe, WARP, …).
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// Renders every view of `params` on the GPU and returns which patches each one shows,
+    /// for the patches of `tiling` (a tiling of `mesh`); the counterpart of
+    /// [`super::sample_tiled`] (see the module documentation for the differences).
+    ///
+    /// Panics (caller contract) if an always-visible id is not a patch of `tiling`.
+    pub fn sample(
+        &self,
+        mesh: &Mesh,
+        tiling: &Tiling,
+        params: &SamplingParams,
+        options: &SamplingOptions,
+        progress: &dyn Progress,
+    ) -> Result<VisibilityMatrix, GpuError> {
+        if options.conservative {
+            return Err(GpuError::Unsupported("conservative rasterization"));
+        }
+        if options.resume {
+            return Err(GpuError::Unsupported("resuming from a checkpoint"));
+        }
+        assert!(
+            params.radius > 0.0 && params.radius.is_finite(),
+            "sampling radius must be positive and finite, got {}",
+            params.radius
+        );
+        let patch_count = u32::try_from(tiling.patches.len())
+            .ok()
+            .filter(|&n| n < NO_PATCH)
+            .expect("a tiling has fewer than 2^32 - 1 patches");
+        for &p in &options.always_visible {
+            assert!(
+                p < patch_count,
+                "always-visible patch {p} is not below {patch_count}"
+            );
+        }
+        let limits = self.device.limits();
+        if params.resolution > limits.max_texture_dimension_2d {
+            return Err(GpuError::TooLarge {
+                what: "the ID buffer side (pixels)",
+                needed: params.resolution.into(),
+                limit: limits.max_texture_dimension_2d.into(),
+            });
+        }
+        let views = view_count(params.level);
+        let mut matrix = VisibilityMatrix::new(views, patch_count);
+        progress.start("sampling", u64::from(views));
+        if patch_count > 0 {
+            // Out-of-memory and validation errors become values instead of wgpu's default
+            // panic; scopes pop in reverse order.
+            let memory_scope = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+            let validation_scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+            let sampled = self.sample_rows(mesh, tiling, params, options, &mut matrix, progress);
+            let validation = pollster::block_on(validation_scope.pop());
+            let memory = pollster::block_on(memory_scope.pop());
+            sampled?;
+            if let Some(e) = memory.or(validation) {
+                return Err(GpuError::Failed(one_line(e)));
+            }
+            post_process(mesh, tiling, params, options, &mut matrix);
+        } else {
+            progress.inc(u64::from(views));
+        }
+        progress.finish();
+        Ok(matrix)
+    }
+
+    /// Fills the rows of `matrix` batch by batch (the module documentation's technique).
+    fn sample_rows(
+        &self,
+        mesh: &Mesh,
+        tiling: &Tiling,
+        params: &SamplingParams,
+        options: &SamplingOptions,
+        matrix: &mut VisibilityMatrix,
+        progress: &dyn Progress,
+    ) -> Result<(), GpuError> {
+        let (device, queue) = (&self.device, &self.queue);
+        let limits = device.limits();
+        let patches = matrix.patches();
+        let words64 = u64::from(patches).div_ceil(64);
+        let words32 = 2 * words64;
+        let counting = options.min_pixels > 1;
+        let batch = batch_views(params.resolution, patches, words32, counting, &limits)?;
+        let chunks = upload::upload_mesh(device, queue, mesh, tiling, params.center, &limits)?;
+
+        let layers = Layers::new(device, params.resolution, batch);
+        let row_bytes = words32 * 4;
+        let bits = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("rows"),
+            size: row_bytes * u64::from(batch),
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        // Pixel counts for `min_pixels`; a placeholder word otherwise (the binding must exist).
+        // Created zeroed; `threshold` resets what it read.
+        let counts = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("pixel counts"),
+            size: if counting {
+                4 * u64::from(patches) * u64::from(batch)
+            } else {
+                4
+            },
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let reduce_params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("reduce parameters"),
+            size: 16,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let words32_u32 =
+            u32::try_from(words32).expect("fewer than 2^32 patches make fewer than 2^28 words");
+        let param_words = [params.resolution, patches, words32_u32, options.min_pixels];
+        queue.write_buffer(&reduce_params, 0, &u32s_to_bytes(&param_words));
+        let matrices = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("view matrices"),
+            size: MATRIX_BYTES * u64::from(MAX_BATCH_VIEWS),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let render_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("render"),
+            layout: &self.render_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: matrices.as_entire_binding(),
+            }],
+        });
+        let reduce_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("reduce"),
+            layout: &self.reduce_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&layers.ids_array),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: bits.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: counts.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: reduce_params.as_entire_binding(),
+                },
+            ],
+        });
+        let read_back: [wgpu::Buffer; 2] = std::array::from_fn(|_| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("rows read-back"),
+                size: row_bytes * u64::from(batch),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+
+        let views = matrix.views();
+        let pixel_groups = params.resolution.div_ceil(PIXEL_GROUP);
+        let mut pending: Option<Pending> = None;
+        for (k, first) in (0..views).step_by(batch as usize).enumerate() {
+            let count = batch.min(views - first);
+            let mut matrix_bytes = Vec::with_capacity((MATRIX_BYTES * u64::from(count)) as usize);
+            for view in first..first + count {
+                let camera = Camera::sampling_view(params, view);
+                matrix_bytes.extend(
+                    view_matrix(&camera, params.center)
+                        .map(f32::to_le_bytes)
+                        .concat(),
+                );
+            }
+            // Ordered after the previous submission and before the next one, so the batch in
+            // flight keeps its matrices.
+            queue.write_buffer(&matrices, 0, &matrix_bytes);
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("sampling batch"),
+            });
+            encoder.clear_buffer(&bits, 0, None);
+            for layer in 0..count {
+                let (ids, depth) = &layers.per_view[layer as usize];
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("ID buffer"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: ids,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color {
+                                r: f64::from(NO_PATCH),
+                                g: 0.0,
+                                b: 0.0,
+                                a: 0.0,
+                            }),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: depth,
+                        // Reversed Z: 0 is infinitely far.
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(0.0),
+                            store: wgpu::StoreOp::Discard,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(&self.render);
+                pass.set_bind_group(0, &render_group, &[]);
+                for chunk in &chunks {
+                    pass.set_vertex_buffer(0, chunk.vertices.slice(..));
+                    pass.set_index_buffer(chunk.indices.slice(..), wgpu::IndexFormat::Uint32);
+                    // The instance index selects the view's matrix.
+                    pass.draw_indexed(0..chunk.index_count, 0, layer..layer + 1);
+                }
+            }
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("reduce"),
+                    timestamp_writes: None,
+                });
+                pass.set_bind_group(0, &reduce_group, &[]);
+                if counting {
+                    pass.set_pipeline(&self.count);
+                    pass.dispatch_workgroups(pixel_groups, pixel_groups, count);
+                    pass.set_pipeline(&self.threshold);
+                    pass.dispatch_workgroups(words32_u32.div_ceil(WORD_GROUP), count, 1);
+                } else {
+                    pass.set_pipeline(&self.mark);
+                    pass.dispatch_workgroups(pixel_groups, pixel_groups, count);
+                }
+            }
+            let target = &read_back[k % 2];
+            encoder.copy_buffer_to_buffer(&bits, 0, target, 0, row_bytes * u64::from(count));
+            let submission = queue.submit([encoder.finish()]);
+            if let Some(done) = pending.take() {
+                self.read_rows(&done, words64, matrix)?;
+                progress.inc(u64::from(done.count));
+            }
+            pending = Some(Pending {
+                buffer: target.clone(),
+                submission,
+                first,
+                count,
+            });
+        }
+        if let Some(done) = pending.take() {
+            self.read_rows(&done, words64, matrix)?;
+            progress.inc(u64::from(done.count));
+        }
+        Ok(())
+    }
+
+    /// Waits for the batch `done`, then copies its rows from the read-back buffer.
+    fn read_rows(
+        &self,
+        done: &Pending,
+        words64: u64,
+        matrix: &mut VisibilityMatrix,
+    ) -> Result<(), GpuError> {
+        let bytes = words64 * 8 * u64::from(done.count);
+        let slice = done.buffer.slice(..bytes);
+        let (sender, receiver) = mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |result| {
+            // The receiver waits below; a send can only fail if it is gone.
+            let _ = sender.send(result);
+        });
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(done.submission.clone()),
+                timeout: None,
+            })
+            .map_err(|e| GpuError::Failed(one_line(e)))?;
+        receiver
+            .recv()
+            .map_err(|_| GpuError::Failed("the read-back never completed".into()))?
+            .map_err(|e| GpuError::Failed(one_line(e)))?;
+        {
+            let data = slice
+                .get_mapped_range()
+                .map_err(|e| GpuError::Failed(one_line(e)))?;
+            // Rows of 32-bit words, low word first: exactly the little-endian bytes of the
+            // 64-bit words of a matrix row.
+            for (i, row_bytes) in data.chunks_exact(words64 as usize * 8).enumerate() {
+                let row = matrix.row_mut(done.first + i as u32);
+                for (word, bytes) in row.iter_mut().zip(row_bytes.chunks_exact(8)) {
+                    *word = u64::from_le_bytes(bytes.try_into().expect("8-byte chunk"));
+                }
+            }
+        }
+        done.buffer.unmap();
+        Ok(())
+    }
+}
+
+/// A submitted batch whose rows are still to be read.
+struct Pending {
+    buffer: wgpu::Buffer,
+    submission: wgpu::SubmissionIndex,
+    first: u32,
+    count: u32,
+}
+
+/// Adds what the CPU backend adds after point sampling: `dilate`'s facing neighbours of the
+/// seen patches, then the always-visible patches (as `tiled.rs` does per view).
+fn post_process(
+    mesh: &Mesh,
+    tiling: &Tiling,
+    params: &SamplingParams,
+    options: &SamplingOptions,
+    matrix: &mut VisibilityMatrix,
+) {
+    let patches = matrix.patches();
+    if options.dilate {
+        let graph = PatchGraph::new(mesh, &tiling.patch_of, patches);
+        for view in 0..matrix.views() {
+            let eye = Camera::sampling_view(params, view).eye();
+            let seen = matrix.row(view).to_vec();
+            let row = matrix.row_mut(view);
+            for (w, &word) in seen.iter().enumerate() {
+                let mut rest = word;
+                while rest != 0 {
+                    let p = (w * 64) as u32 + rest.trailing_zeros();
+                    rest &= rest - 1;
+                    for &q in graph.neighbours(p as PatchId) {
+                        let (qw, bit) = (q as usize / 64, 1u64 << (q % 64));
+                        if row[qw] & bit == 0 && may_face(&tiling.patches[q as usize], eye) {
+                            row[qw] |= bit;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    for view in 0..matrix.views() {
+        for &p in &options.always_visible {
+            matrix.set(view, p);
+        }
+    }
+}
+
+/// How many views a batch holds: as many as [`BATCH_TARGET_BYTES`], [`MAX_BATCH_VIEWS`] and
+/// the device's array-layer and storage-binding limits allow; at least one, or an error if
+/// even one view does not fit.
+fn batch_views(
+    resolution: u32,
+    patches: u32,
+    words32: u64,
+    counting: bool,
+    limits: &wgpu::Limits,
+) -> Result<u32, GpuError> {
+    let storage = limits.max_storage_buffer_binding_size;
+    let row_bytes = words32 * 4;
+    if row_bytes > storage {
+        return Err(GpuError::TooLarge {
+            what: "one view's row of patch bits (bytes)",
+            needed: row_bytes,
+            limit: storage,
+        });
+    }
+    let count_bytes = 4 * u64::from(patches);
+    if counting && count_bytes > storage {
+        return Err(GpuError::TooLarge {
+            what: "one view's pixel counts for --min-pixels (bytes)",
+            needed: count_bytes,
+            limit: storage,
+        });
+    }
+    let layer_bytes = u64::from(resolution).pow(2) * BYTES_PER_PIXEL;
+    let mut batch = (BATCH_TARGET_BYTES / layer_bytes)
+        .max(1)
+        .min(u64::from(MAX_BATCH_VIEWS))
+        .min(u64::from(limits.max_texture_array_layers))
+        .min(u64::from(limits.max_compute_workgroups_per_dimension))
+        .min(storage / row_bytes);
+    if counting {
+        batch = batch.min(storage / count_bytes);
+    }
+    Ok(batch.max(1) as u32)
+}
+
+/// The batch's render targets: per view an ID layer and a depth layer, and the ID layers as
+/// one array for the reduction.
+struct Layers {
+    per_view: Vec<(wgpu::TextureView, wgpu::TextureView)>,
+    ids_array: wgpu::TextureView,
+}
+
+impl Layers {
+    fn new(device: &wgpu::Device, resolution: u32, batch: u32) -> Layers {
+        let texture = |label, format, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: resolution,
+                    height: resolution,
+                    depth_or_array_layers: batch,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let ids = texture(
+            "ID buffers",
+            wgpu::TextureFormat::R32Uint,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
+        let depth = texture(
+            "depth buffers",
+            wgpu::TextureFormat::Depth32Float,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        let layer = |texture: &wgpu::Texture, i| {
+            texture.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2),
+                base_array_layer: i,
+                array_layer_count: Some(1),
+                ..Default::default()
+            })
+        };
+        Layers {
+            per_view: (0..batch)
+                .map(|i| (layer(&ids, i), layer(&depth, i)))
+                .collect(),
+            ids_array: ids.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            }),
+        }
+    }
+}
+
+/// The compiled pipelines and their bind group layouts.
+struct Pipelines {
+    render: wgpu::RenderPipeline,
+    render_layout: wgpu::BindGroupLayout,
+    mark: wgpu::ComputePipeline,
+    count: wgpu::ComputePipeline,
+    threshold: wgpu::ComputePipeline,
+    reduce_layout: wgpu::BindGroupLayout,
+}
+
+impl Pipelines {
+    fn new(device: &wgpu::Device) -> Pipelines {
+        let render_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("render.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("render.wgsl").into()),
+        });
+        let reduce_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("reduce.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("reduce.wgsl").into()),
+        });
+        let render_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("render"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let storage = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let reduce_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("reduce"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Uint,
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                storage(1),
+                storage(2),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let render_pipeline_layout =
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("render"),
+                bind_group_layouts: &[Some(&render_layout)],
+                immediate_size: 0,
+            });
+        let reduce_pipeline_layout =
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("reduce"),
+                bind_group_layouts: &[Some(&reduce_layout)],
+                immediate_size: 0,
+            });
+        let render = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("ID buffer"),
+            layout: Some(&render_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &render_module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(upload::vertex_layout())],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                // Both windings count, as on the CPU: a back face can be the visible one on an
+                // open mesh.
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: wgpu::TextureFormat::Depth32Float,
+                depth_write_enabled: Some(true),
+                // Reversed Z: larger is nearer.
+                depth_compare: Some(wgpu::CompareFunction::Greater),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &render_module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: wgpu::TextureFormat::R32Uint,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let compute = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&reduce_pipeline_layout),
+                module: &reduce_module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        Pipelines {
+            render,
+            render_layout,
+            mark: compute("mark"),
+            count: compute("count"),
+            threshold: compute("threshold"),
+            reduce_layout,
+        }
+    }
+}
+
+/// The clip matrix of `camera` for positions relative to `center`, row-major (`clip = M ·
+/// (p − center, 1)`): `x` and `y` are [`Camera::clip`]'s, rescaled to normalised device
+/// coordinates (`x / w` in `[−1, 1]` across the image, `y` up), `z = near` so that the depth
+/// `near / w` is 1 on the near plane and falls towards 0 far away (reversed Z, which keeps
+/// `f32` depth precise), and `w` is the view-space depth. Computed in `f64` from the camera's
+/// basis and eye relative to `center`, then rounded once.
+pub fn view_matrix(camera: &Camera, center: [f32; 3]) -> [f32; 16] {
+    let eye = camera.eye();
+    let e = [
+        eye[0] - f64::from(center[0]),
+        eye[1] - f64::from(center[1]),
+        eye[2] - f64::from(center[2]),
+    ];
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    // Pixels per unit of x / w over half the image: 1 / tan(fov / 2).
+    let k = 1.0 / (camera.fov_deg().to_radians() * 0.5).tan();
+    let (r, u, f) = (camera.right(), camera.up(), camera.forward());
+    let rows: [[f64; 4]; 4] = [
+        [k * r[0], k * r[1], k * r[2], -k * dot(e, r)],
+        [k * u[0], k * u[1], k * u[2], -k * dot(e, u)],
+        [0.0, 0.0, 0.0, camera.near()],
+        [f[0], f[1], f[2], -dot(e, f)],
+    ];
+    let mut out = [0.0f32; 16];
+    for (i, value) in rows.iter().flatten().enumerate() {
+        out[i] = *value as f32;
+    }
+    out
+}
+
+/// `words` as little-endian bytes, for buffer uploads.
+fn u32s_to_bytes(words: &[u32]) -> Vec<u8> {
+    words.iter().flat_map(|w| w.to_le_bytes()).collect()
+}
+
+/// `name (type, backend)` of an adapter.
+fn describe(info: &wgpu::AdapterInfo) -> String {
+    format!("{} ({:?}, {:?})", info.name, info.device_type, info.backend)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The clip matrix puts every point where the CPU camera does: pixel
+    /// `((x/w + 1) · res/2, (1 − y/w) · res/2)` equals [`Camera::project`], and the depth
+    /// `near / w` is 1 on the near plane.
+    #[test]
+    fn view_matrix_projects_like_the_cpu_camera() {
+        let params = SamplingParams {
+            level: 2,
+            resolution: 512,
+            fov_deg: 45.0,
+            center: [1000.0, -20.0, 3.5],
+            radius: 2.0,
+        };
+        let half = f64::from(params.resolution) / 2.0;
+        for view in 0..view_count(params.level) {
+            let camera = Camera::sampling_view(&params, view);
+            let m = view_matrix(&camera, params.center).map(f64::from);
+            for k in 0..50 {
+                let t = f64::from(k) * 0.37;
+                let offset = [t.sin() * 1.5, (2.0 * t).cos() * 1.5, (3.0 * t).sin() * 1.2];
+                let p: [f32; 3] = std::array::from_fn(|i| params.center[i] + offset[i] as f32);
+                let rel: [f64; 3] =
+                    std::array::from_fn(|i| f64::from(p[i]) - f64::from(params.center[i]));
+                let row = |r: usize| {
+                    m[4 * r] * rel[0] + m[4 * r + 1] * rel[1] + m[4 * r + 2] * rel[2] + m[4 * r + 3]
+                };
+                let (x, y, w) = (row(0), row(1), row(3));
+                let [px, py] = camera.project(p).expect("in front of the camera");
+                let (gx, gy) = ((x / w + 1.0) * half, (1.0 - y / w) * half);
+                // f32 matrix entries: agreement to a few thousandths of a pixel.
+                assert!(
+                    (gx - px).abs() < 2e-3 && (gy - py).abs() < 2e-3,
+                    "view {view}: GPU ({gx}, {gy}), CPU ({px}, {py})"
+                );
+            }
+            // On the near plane the depth is 1.
+            let f = camera.forward();
+            let e = camera.eye();
+            let on_near: [f64; 3] =
+                std::array::from_fn(|i| e[i] + f[i] * camera.near() - f64::from(params.center[i]));
+            let w = m[12] * on_near[0] + m[13] * on_near[1] + m[14] * on_near[2] + m[15];
+            assert!(
+                (m[11] / w - 1.0).abs() < 1e-3,
+                "view {view}: depth {}",
+                m[11] / w
+            );
+        }
+    }
+}
