@@ -6,7 +6,9 @@
 //! usage errors.
 
 use patchvis::runtime::Pvis;
-use patchvis::sampler::{VisibilityMatrix, fold_into, supersample_rows};
+use patchvis::sampler::{
+    FoldCorners, VisibilityMatrix, fold_into, fold_into_with, supersample_rows,
+};
 use patchvis::sphere::view_count;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -75,6 +77,8 @@ fn supersampled_rows_contain_the_plain_rows_and_fold_the_finer_bake() {
             "1",
             "--fold-min-pixels",
             "0",
+            "--fold-corners",
+            "all",
             "--stats",
             stats.to_str().unwrap(),
         ],
@@ -133,6 +137,8 @@ fn a_fold_threshold_folds_the_thresholded_finer_rows_into_the_plain_stored_rows(
             "1",
             "--fold-min-pixels",
             "6",
+            "--fold-corners",
+            "all",
             "--stats",
             stats.to_str().unwrap(),
         ],
@@ -164,6 +170,8 @@ fn a_fold_threshold_folds_the_thresholded_finer_rows_into_the_plain_stored_rows(
             "1",
             "--fold-min-pixels",
             "0",
+            "--fold-corners",
+            "all",
         ],
     );
     let (_, ss_rows) = rows(&ss);
@@ -190,10 +198,47 @@ fn a_fold_threshold_folds_the_thresholded_finer_rows_into_the_plain_stored_rows(
 }
 
 #[test]
+fn one_fold_corner_folds_each_finer_row_into_one_stored_view() {
+    let dir = tempfile::tempdir().unwrap();
+    let one = bake(
+        dir.path(),
+        "one.pvis",
+        &[
+            "--level",
+            "1",
+            "--view-supersample",
+            "1",
+            "--fold-min-pixels",
+            "0",
+        ]
+        .into_iter()
+        .chain(["--fold-corners", "one"])
+        .collect::<Vec<_>>(),
+    );
+    let fine = bake(
+        dir.path(),
+        "fine.pvis",
+        &["--level", "2", "--view-supersample", "0"],
+    );
+    let (_, one_rows) = rows(&one);
+    let (fine_level, fine_rows) = rows(&fine);
+    let mut prefix = VisibilityMatrix::new(view_count(1), fine_rows.patches());
+    for v in 0..view_count(1) {
+        prefix.row_mut(v).copy_from_slice(fine_rows.row(v));
+    }
+    let all = fold_into(prefix.clone(), &fine_rows, fine_level, 1);
+    assert_eq!(
+        fold_into_with(prefix, &fine_rows, fine_level, 1, FoldCorners::One),
+        one_rows
+    );
+    assert_ne!(all, one_rows, "one corner folded as much as all corners");
+}
+
+#[test]
 fn defaults_and_conservative_are_the_documented_flag_combinations() {
     let dir = tempfile::tempdir().unwrap();
     let bytes = |p: PathBuf| std::fs::read(p).unwrap();
-    // Default: one level of view supersampling with an 8-pixel fold threshold.
+    // Default: one level of view supersampling, a 4-pixel fold threshold, one fold corner.
     let default = bake(dir.path(), "default.pvis", &["--level", "1"]);
     let spelled = bake(
         dir.path(),
@@ -204,7 +249,9 @@ fn defaults_and_conservative_are_the_documented_flag_combinations() {
             "--view-supersample",
             "1",
             "--fold-min-pixels",
-            "8",
+            "4",
+            "--fold-corners",
+            "one",
         ],
     );
     assert_eq!(bytes(default), bytes(spelled));
@@ -224,6 +271,8 @@ fn defaults_and_conservative_are_the_documented_flag_combinations() {
             "1",
             "--fold-min-pixels",
             "0",
+            "--fold-corners",
+            "all",
         ],
     );
     let conservative = bytes(conservative);

@@ -80,9 +80,10 @@ pub struct BakeArgs {
     #[arg(long, value_name = "IDS|FILE")]
     pub always_visible: Option<String>,
     /// Conservative mode: ID buffers at twice --resolution (the file records that ID-buffer
-    /// side) and every finer view's patches folded, however small (--fold-min-pixels 0); on
+    /// side) and every finer view's patches folded, however small, into all the stored views
+    /// around it (--fold-min-pixels 0 --fold-corners all); on
     /// the bunny ≥ 99% of random views are pixel-identical at --resolution and at twice it
-    /// (BENCHMARKS.md, "Quality (issue 6)"), for ~3.5 points of culling and ~1.6× the
+    /// (BENCHMARKS.md, "Quality (issue 6)"), for ~4 points of culling and ~1.6× the
     /// sampling time of the default.
     #[arg(long)]
     pub conservative: bool,
@@ -99,9 +100,15 @@ pub struct BakeArgs {
     /// With view supersampling: a finer view's patch is folded into the stored views only if
     /// it covers at least T pixels there (the stored views themselves keep every pixel, at the
     /// cost of sampling the stored level once more); trades a few small misses for culling
-    /// (0 or 1: every pixel). [default: 8; 0 with --conservative]
+    /// (0 or 1: every pixel). [default: 4; 0 with --conservative]
     #[arg(long, value_name = "T")]
     pub fold_min_pixels: Option<u32>,
+    /// With view supersampling: a finer view's patches go to all the stored views around it
+    /// that every sphere face holding it shares (all), or to just one of them (one: still
+    /// covers every finer sample of a face, culls more). [default: one; all with
+    /// --conservative]
+    #[arg(long, value_enum, value_name = "WHICH")]
+    pub fold_corners: Option<FoldCornersArg>,
     /// Continue an interrupted bake from its checkpoint (OUT.pvis.ckpt, written after every
     /// sphere level); a checkpoint of other inputs or settings is refused.
     #[arg(long)]
@@ -124,6 +131,15 @@ pub enum BackendArg {
     Gpu,
     /// A hardware GPU if one is found, else the CPU (saying why on stderr).
     Auto,
+}
+
+/// `--fold-corners`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum FoldCornersArg {
+    /// Every stored view shared by the faces holding the finer view.
+    All,
+    /// One of them.
+    One,
 }
 
 /// `--tiling`.

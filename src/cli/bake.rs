@@ -1,7 +1,7 @@
 //! `patchvis bake`: checked settings, then tile → sample → encode, with a timing and peak-heap
 //! record per stage, and outputs that appear only once everything succeeded.
 
-use super::args::{BackendArg, BakeArgs, TilingArg};
+use super::args::{BackendArg, BakeArgs, FoldCornersArg, TilingArg};
 use super::progress::Bars;
 use super::{UsageError, alloc};
 use anyhow::{Context, Result};
@@ -23,8 +23,11 @@ const MAX_RESOLUTION: u32 = 8192;
 pub const DEFAULT_VIEW_SUPERSAMPLE: u32 = 1;
 /// `--fold-min-pixels` unless given (and without `--conservative`): finer views fold only
 /// patches of at least this many pixels, which buys back culling for misses of a few pixels;
-/// chosen on the bunny sweep of BENCHMARKS.md, "Quality (issue 6)".
-pub const DEFAULT_FOLD_MIN_PIXELS: u32 = 8;
+/// chosen on the bunny measurements of BENCHMARKS.md, "Quality (issue 6)".
+pub const DEFAULT_FOLD_MIN_PIXELS: u32 = 4;
+/// `--fold-corners` unless given (and without `--conservative`, which folds into all): one
+/// stored view per finer view, chosen on the same measurements.
+pub const DEFAULT_FOLD_CORNERS: sampler::FoldCorners = sampler::FoldCorners::One;
 /// `--conservative` samples ID buffers this many times finer than `--resolution`, so that a
 /// renderer at up to this multiple of `--resolution` finds no sub-pixel sliver the sampler
 /// skipped (measured, not proven: BENCHMARKS.md, "Quality (issue 6)").
@@ -50,6 +53,8 @@ pub struct Settings {
     /// Pixel threshold of the folded fine views (`--fold-min-pixels`); above 1 (and above
     /// `--min-pixels`) the stored level is sampled separately with every pixel.
     fold_min_pixels: u32,
+    /// `--fold-corners`.
+    fold_corners: sampler::FoldCorners,
     /// The plain pass's checkpoint when the fold has a threshold (the supersampled pass's is
     /// `options.checkpoint`).
     coarse_checkpoint: Option<PathBuf>,
@@ -213,6 +218,12 @@ impl Settings {
             conservative: args.conservative,
             fold_min_pixels: if thresholded { fold_min_pixels } else { 0 },
             coarse_checkpoint,
+            fold_corners: match args.fold_corners {
+                Some(FoldCornersArg::All) => sampler::FoldCorners::All,
+                Some(FoldCornersArg::One) => sampler::FoldCorners::One,
+                None if args.conservative => sampler::FoldCorners::All,
+                None => DEFAULT_FOLD_CORNERS,
+            },
             quiet: args.quiet,
             memory_budget,
             backend: args.backend,
@@ -427,11 +438,23 @@ pub fn run(args: BakeArgs) -> Result<()> {
                 ..s.options.clone()
             };
             let rows = sample(&fine, &thresholded)?;
-            return Ok(sampler::fold_into(coarse, &rows, fine.level, s.level));
+            return Ok(sampler::fold_into_with(
+                coarse,
+                &rows,
+                fine.level,
+                s.level,
+                s.fold_corners,
+            ));
         }
-        sample(&fine, &s.options).map(|rows| match s.view_supersample {
-            0 => rows,
-            _ => sampler::supersample_rows(&rows, fine.level, s.level),
+        sample(&fine, &s.options).map(|rows| {
+            if s.view_supersample == 0 {
+                return rows;
+            }
+            let mut coarse = sampler::VisibilityMatrix::new(view_count(s.level), rows.patches());
+            for v in 0..view_count(s.level) {
+                coarse.row_mut(v).copy_from_slice(rows.row(v));
+            }
+            sampler::fold_into_with(coarse, &rows, fine.level, s.level, s.fold_corners)
         })
     })?;
     let contents = BakeContents {
@@ -527,6 +550,7 @@ pub fn run(args: BakeArgs) -> Result<()> {
             "view_supersample": s.view_supersample,
             "fold_min_pixels": s.fold_min_pixels,
             "backend": backend.describe(),
+            "fold_corners": format!("{:?}", s.fold_corners).to_lowercase(),
             "sampled_views": sampled_views,
             "always_visible": s.options.always_visible.len(),
             "visible_fraction_mean": visible_fraction,
@@ -660,6 +684,7 @@ mod tests {
             (s.view_supersample, s.fold_min_pixels, s.resolution),
             (DEFAULT_VIEW_SUPERSAMPLE, DEFAULT_FOLD_MIN_PIXELS, 512)
         );
+        assert_eq!(s.fold_corners, sampler::FoldCorners::One);
         // The finest level has nothing finer to sample: the default turns itself off there,
         // while asking for it explicitly is a usage error.
         let s = settings(&["--level", "7"]).unwrap();
@@ -676,10 +701,11 @@ mod tests {
             )
         );
         assert!(s.conservative && !s.options.conservative);
+        assert_eq!(s.fold_corners, sampler::FoldCorners::All);
         let err = settings(&["--conservative", "--resolution", "8000"]).unwrap_err();
         assert!(err.0.contains("--conservative"), "{}", err.0);
         // A threshold at or below --min-pixels changes nothing: no extra plain pass.
-        let s = settings(&["--min-pixels", "8"]).unwrap();
+        let s = settings(&["--min-pixels", "4"]).unwrap();
         assert_eq!((s.fold_min_pixels, s.coarse_checkpoint), (0, None));
         let s = settings(&["--view-supersample", "0", "--fold-min-pixels", "9"]).unwrap();
         assert_eq!((s.view_supersample, s.fold_min_pixels), (0, 0));

@@ -31,7 +31,8 @@ pub use camera::{Camera, MAX_RESOLUTION, NEAR_FRACTION};
 pub use id_buffer::{IdBuffer, NO_PATCH};
 pub use raster::{Rasterizer, SUBPIXEL_BITS, render_ids, render_ids_filtered};
 pub use supersample::{
-    FoldTargets, MAX_VIEW_SUPERSAMPLE, fold_into, fold_targets, supersample_rows,
+    FoldCorners, FoldTargets, MAX_VIEW_SUPERSAMPLE, fold_into, fold_into_with, fold_targets,
+    supersample_rows,
 };
 pub use tiled::{SamplingError, SamplingOptions, sample_tiled};
 

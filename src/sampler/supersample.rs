@@ -135,6 +135,19 @@ pub fn supersample_rows(fine: &VisibilityMatrix, fine_level: u32, level: u32) ->
     fold_into(coarse, fine, fine_level, level)
 }
 
+/// Which coarse views receive a fine view's row in the fold.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FoldCorners {
+    /// All of its [`fold_targets`]: the corners shared by every face holding it.
+    #[default]
+    All,
+    /// Only the first of them (the smaller endpoint of an edge, `locate`'s first corner of a
+    /// face): the coverage argument needs just one shared corner, and each one left out is a
+    /// row that stays smaller (more culling, fewer patches for queries near the view from
+    /// faces that do not hold it).
+    One,
+}
+
 /// [`supersample_rows`] with the coarse views' rows given separately: returns `coarse` with
 /// the row of every fine view that is not a coarse view OR'd into its [`fold_targets`]. The
 /// coarse rows of `fine` are not used, so the fine pass may be sampled with a pixel threshold
@@ -143,10 +156,23 @@ pub fn supersample_rows(fine: &VisibilityMatrix, fine_level: u32, level: u32) ->
 /// Panics (caller contract) if `fine_level < level`, `fine` does not have one row per view of
 /// `fine_level`, `coarse` not one per view of `level`, or their patch counts differ.
 pub fn fold_into(
+    coarse: VisibilityMatrix,
+    fine: &VisibilityMatrix,
+    fine_level: u32,
+    level: u32,
+) -> VisibilityMatrix {
+    fold_into_with(coarse, fine, fine_level, level, FoldCorners::All)
+}
+
+/// [`fold_into`] sending each fine view's row to the coarse views `corners` picks.
+///
+/// Panics under the same caller contracts as [`fold_into`].
+pub fn fold_into_with(
     mut coarse: VisibilityMatrix,
     fine: &VisibilityMatrix,
     fine_level: u32,
     level: u32,
+    corners: FoldCorners,
 ) -> VisibilityMatrix {
     assert!(
         fine_level >= level,
@@ -165,7 +191,12 @@ pub fn fold_into(
     assert_eq!(coarse.patches(), fine.patches(), "patch counts differ");
     for u in view_count(level)..fine.views() {
         let row = fine.row(u);
-        for &corner in fold_targets(u, level).views() {
+        let targets = fold_targets(u, level);
+        let chosen = match corners {
+            FoldCorners::All => targets.views(),
+            FoldCorners::One => &targets.views()[..1],
+        };
+        for &corner in chosen {
             for (dst, &src) in coarse.row_mut(corner).iter_mut().zip(row) {
                 *dst |= src;
             }
@@ -314,6 +345,48 @@ mod tests {
                     FoldTargets::Edge(parents),
                     "view {u}"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn folding_into_one_corner_still_covers_every_fine_view_of_a_closed_face() {
+        for (level, fine_level) in [(1, 2), (2, 3), (2, 4)] {
+            let fine = random_matrix(view_count(fine_level), 70, 11 + u64::from(fine_level));
+            let prefix = {
+                let mut m = VisibilityMatrix::new(view_count(level), 70);
+                for v in 0..view_count(level) {
+                    m.row_mut(v).copy_from_slice(fine.row(v));
+                }
+                m
+            };
+            let one = fold_into_with(prefix.clone(), &fine, fine_level, level, FoldCorners::One);
+            let all = fold_into(prefix, &fine, fine_level, level);
+            let (mut smaller, mut bits_one, mut bits_all) = (0, 0u32, 0u32);
+            for v in 0..view_count(level) {
+                // One corner's rows are subsets of all corners' rows.
+                assert!(row_contains(all.row(v), one.row(v)), "view {v}");
+                smaller += usize::from(all.row(v) != one.row(v));
+                bits_one += one.row(v).iter().map(|w| w.count_ones()).sum::<u32>();
+                bits_all += all.row(v).iter().map(|w| w.count_ones()).sum::<u32>();
+            }
+            assert!(smaller > 0 && bits_one < bits_all);
+            for face in leaves(level) {
+                let mut answer = vec![0u64; 2];
+                for c in face.views {
+                    for (a, &w) in answer.iter_mut().zip(one.row(c)) {
+                        *a |= w;
+                    }
+                }
+                for u in 0..view_count(fine_level) {
+                    if in_closed_face(&face, direction(u), 1e-5) {
+                        assert!(
+                            row_contains(&answer, fine.row(u)),
+                            "face {:?} view {u}",
+                            face.views
+                        );
+                    }
+                }
             }
         }
     }
