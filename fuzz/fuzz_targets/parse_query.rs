@@ -1,5 +1,6 @@
 //! Fuzz target: arbitrary bytes → `Pvis::parse` → if accepted, every accessor, every view's
-//! row and queries from fixed and fuzzed eye positions, checked against the reader's own
+//! row and queries from fixed and fuzzed eye positions in all three modes (stateless,
+//! streaming, expanded; the latter two must agree with the first), checked against the reader's own
 //! promises (spec § Query: the answer is the OR of the leaf's three rows; ranges are
 //! contiguous; padding bits are zero). Any panic or failed check is a reader bug.
 //!
@@ -102,5 +103,17 @@ fn exercise(file: &[u8], eyes: &[[f32; 3]]) {
             .sum();
         let ranged: u64 = pvis.ranges(&visible).map(|(_, c)| u64::from(c)).sum();
         assert_eq!(triangles, ranged);
+    }
+
+    // The streaming and expanded modes give the stateless answer for every eye. The table
+    // starts as all ones: `expand` must not depend on what it held.
+    let mut stream_scratch = vec![0u64; pvis.scratch_bound()];
+    let mut table = vec![!0u64; pvis.expanded_bound()];
+    let mut streaming = pvis.streaming(&mut stream_scratch);
+    let mut expanded = pvis.expand(&mut table);
+    for &eye in eyes.iter().chain(eyes) {
+        let expected = pvis.query(eye, &mut scratch);
+        assert_eq!(streaming.query(eye), expected, "streaming, eye {eye:?}");
+        assert_eq!(expanded.query(eye), expected, "expanded, eye {eye:?}");
     }
 }

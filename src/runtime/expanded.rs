@@ -1,6 +1,7 @@
 //! Expanded queries (spec § Query, expanded): every view decoded once into a caller-provided
-//! table, plus the split planes and midpoints of every inner face of the sphere hierarchy, so a
-//! query is `level` steps of at most 3 dot products and an OR of 3 rows.
+//! table, plus the split planes of every inner face of the sphere hierarchy and the corner views
+//! of every leaf, so a query is `level` steps of 3 dot products (only the face index travels
+//! down the levels), one leaf lookup and an OR of 3 rows.
 //!
 //! Cost: [`super::Pvis::expand`] decodes each view once from its parents' rows (views are
 //! numbered coarse to fine, so parents come first) and builds the face table by walking the
@@ -8,42 +9,36 @@
 //! leaf as the previous one skips the OR. Memory: [`super::Pvis::expanded_bound`] words.
 
 use super::query::{Eye, classify, everything, visible};
-use super::streaming::{CHILD_CORNERS, choose, mids, octant, planes};
+use super::streaming::{choose, octant, planes};
 use super::{Pvis, Visible};
 use crate::sphere::{Face, children, parents, root_faces};
 
-/// Corner views of the 8 root faces by octant (spec § Faces): `(X, Y, Z)` for octants of
-/// positive orientation, else `(X, Z, Y)`, with `±X = 0/1, ±Y = 2/3, ±Z = 4/5`. Equal to
-/// `root_faces()[o].views` (tested), without computing the faces on every query.
-const ROOT_VIEWS: [[u32; 3]; 8] = {
-    let mut out = [[0; 3]; 8];
-    let mut o = 0;
-    while o < 8 {
-        let (x, y, z) = ((o & 1) as u32, (o >> 1 & 1) as u32, (o >> 2 & 1) as u32);
-        out[o] = if (x + y + z) % 2 == 0 {
-            [x, 2 + y, 4 + z]
-        } else {
-            [x, 4 + z, 2 + y]
-        };
-        o += 1;
-    }
-    out
-};
-
-/// `u32`s per inner-face record: 3 planes of 3 `f32` (as bits), then the 3 midpoint views.
-const FACE_U32S: usize = 12;
+/// `u32`s per inner-face record: its 3 split planes of 3 `f32` (as bits), and one of padding
+/// so a record is a whole number of words.
+const FACE_U32S: usize = 10;
 
 /// Words per inner-face record.
 const FACE_WORDS: usize = FACE_U32S / 2;
 
-/// Inner faces (levels `0..level`) before level `k`: `8·(4^k − 1)/3`.
-const fn faces_before(k: u32) -> usize {
-    8 * ((1usize << (2 * k)) - 1) / 3
+/// Faces of level `k`: `8·4^k`.
+const fn faces_at(k: u32) -> usize {
+    8 << (2 * k)
 }
 
-/// Table words for a file: the answer row, every view's row, the inner-face records.
+/// Inner faces (levels `0..level`) before level `k`: `8·(4^k − 1)/3`.
+const fn faces_before(k: u32) -> usize {
+    (faces_at(k) - 8) / 3
+}
+
+/// Words of the leaf table: the 3 corner views of each of the `8·4^level` leaves.
+const fn leaf_words(level: u32) -> usize {
+    (3 * faces_at(level)).div_ceil(2)
+}
+
+/// Table words for a file: the answer row, every view's row, the inner-face records, the leaf
+/// corners.
 pub(super) const fn words(level: u32, views: u32, row_words: usize) -> usize {
-    (1 + views as usize) * row_words + FACE_WORDS * faces_before(level)
+    (1 + views as usize) * row_words + FACE_WORDS * faces_before(level) + leaf_words(level)
 }
 
 /// A file with every view decoded: see the module documentation. Made by [`Pvis::expand`].
@@ -75,9 +70,12 @@ impl<'a, 't> Expanded<'a, 't> {
             let parent_rows = parents(v as u32).map(|[a, b]| (row(a), row(b)));
             pvis.decode_row(v as u32, parent_rows, &mut rest[..words]);
         }
-        let faces = &mut table[(1 + views) * words..need];
+        let level = pvis.sampling.level;
+        let (faces, leaves) =
+            table[(1 + views) * words..need].split_at_mut(FACE_WORDS * faces_before(level));
+        leaves.fill(0);
         for (octant, face) in root_faces().iter().enumerate() {
-            build(face, 0, octant, pvis.sampling.level, faces);
+            build(face, 0, octant, level, faces, leaves);
         }
         Expanded {
             pvis,
@@ -106,27 +104,40 @@ impl<'a, 't> Expanded<'a, 't> {
             return everything(&pvis, &mut self.table[..words]);
         };
         let level = pvis.sampling.level;
-        let oct = octant(d);
-        let mut corners = ROOT_VIEWS[oct];
-        let mut index = oct;
-        let face_table = (1 + pvis.sampling.views as usize) * words;
+        let rows_end = (1 + pvis.sampling.views as usize) * words;
+        let (faces, leaves) = self.table[rows_end..].split_at(FACE_WORDS * faces_before(level));
+        // Only the face index is carried down the levels (the corners are looked up once, at
+        // the leaf), so each level is one record load, three dot products and a table lookup.
+        let mut index = octant(d);
+        let mut level_start = 0;
         for k in 0..level {
-            let at = face_table + FACE_WORDS * (faces_before(k) + index);
-            let record = &self.table[at..at + FACE_WORDS];
-            let u = |i: usize| (record[i / 2] >> (32 * (i % 2))) as u32;
-            let f = |i: usize| f32::from_bits(u(i));
+            let at = level_start + FACE_WORDS * index;
+            // One bounds check for the record rather than one per field.
+            let Some(record) = faces
+                .get(at..at + FACE_WORDS)
+                .and_then(|r| <&[u64; FACE_WORDS]>::try_from(r).ok())
+            else {
+                break;
+            };
+            let f = |i: usize| f32::from_bits((record[i / 2] >> (32 * (i % 2))) as u32);
             let planes = [[f(0), f(1), f(2)], [f(3), f(4), f(5)], [f(6), f(7), f(8)]];
-            let which = choose(d, &planes);
-            let all = [corners[0], corners[1], corners[2], u(9), u(10), u(11)];
-            corners = CHILD_CORNERS[which].map(|c| all[c]);
-            index = 4 * index + which;
+            index = 4 * index + choose(d, &planes);
+            level_start += FACE_WORDS * faces_at(k);
         }
+        let corner = |i: usize| {
+            let u = 3 * index + i;
+            leaves
+                .get(u / 2)
+                .map_or(0, |w| (w >> (32 * (u % 2))) as u32)
+        };
+        let corners = [corner(0), corner(1), corner(2)];
         if self.answered != Some(corners) {
             let (answer, rows) = self.table.split_at_mut(words);
             let row = |v: u32| &rows[v as usize * words..(v as usize + 1) * words];
             let (a, b, c) = (row(corners[0]), row(corners[1]), row(corners[2]));
-            for (i, w) in answer.iter_mut().enumerate() {
-                *w = a[i] | b[i] | c[i];
+            // Zipped, so the loop has no bounds checks and vectorises.
+            for (w, ((a, b), c)) in answer.iter_mut().zip(a.iter().zip(b).zip(c)) {
+                *w = a | b | c;
             }
             self.answered = Some(corners);
         }
@@ -135,36 +146,26 @@ impl<'a, 't> Expanded<'a, 't> {
 }
 
 /// Writes the records of `face` (at level `k`, index `index` within its level) and of its
-/// descendants above `level`. Recursion depth is at most `MAX_LEVEL`.
-fn build(face: &Face, k: u32, index: usize, level: u32, faces: &mut [u64]) {
+/// descendants above `level` into `faces`, and the corners of the leaves below it into
+/// `leaves`. Recursion depth is at most `MAX_LEVEL`.
+fn build(face: &Face, k: u32, index: usize, level: u32, faces: &mut [u64], leaves: &mut [u64]) {
     if k >= level {
+        for (i, &v) in face.views.iter().enumerate() {
+            let u = 3 * index + i;
+            leaves[u / 2] |= u64::from(v) << (32 * (u % 2));
+        }
         return;
     }
     let kids = children(face);
-    let p = planes(&kids);
-    let m = mids(&kids);
     let mut u = [0u32; FACE_U32S];
-    for (i, x) in p.iter().flatten().enumerate() {
+    for (i, x) in planes(&kids).iter().flatten().enumerate() {
         u[i] = x.to_bits();
     }
-    u[9..].copy_from_slice(&m);
     let at = FACE_WORDS * (faces_before(k) + index);
     for (i, word) in faces[at..at + FACE_WORDS].iter_mut().enumerate() {
         *word = u64::from(u[2 * i]) | u64::from(u[2 * i + 1]) << 32;
     }
     for (c, kid) in kids.iter().enumerate() {
-        build(kid, k + 1, 4 * index + c, level, faces);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn root_views_are_the_root_faces() {
-        for (o, face) in root_faces().iter().enumerate() {
-            assert_eq!(ROOT_VIEWS[o], face.views, "octant {o}");
-        }
+        build(kid, k + 1, 4 * index + c, level, faces, leaves);
     }
 }

@@ -243,8 +243,9 @@ impl<'a> Pvis<'a> {
         streaming::slots(self.sampling.level) * self.row_words()
     }
 
-    /// `u64` words of the table [`Pvis::expand`] fills: every view's row, the answer row, and
-    /// 6 words per inner face of the sphere hierarchy (its 3 split planes and 3 midpoints).
+    /// `u64` words of the table [`Pvis::expand`] fills: every view's row, the answer row,
+    /// 6 words per inner face of the sphere hierarchy (its 3 split planes) and 1.5 words per
+    /// leaf face (its 3 corner views).
     pub fn expanded_bound(&self) -> usize {
         expanded::words(self.sampling.level, self.sampling.views, self.row_words())
     }

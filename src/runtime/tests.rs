@@ -553,3 +553,57 @@ proptest! {
         }
     }
 }
+
+/// The expanded point location (face indices only, corners from the leaf table) finds the same
+/// leaf as `sphere::locate` for seeded directions at levels 0 to 4, including directions on
+/// the octant planes, and does not depend on what the table held before `expand`.
+#[test]
+fn expanded_leaves_are_sphere_locate() {
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 40) as f32 / (1u64 << 23) as f32 - 1.0
+    };
+    for level in 0..=4 {
+        let views = 4 * 4u32.pow(level) + 2;
+        let file = assemble(&[
+            (*b"CAMR", camr(level)),
+            (*b"PTCH", ptch(&[1; 7])),
+            (*b"VISB", visb(views, 7)),
+        ]);
+        let pvis = Pvis::parse(&file).unwrap();
+        let mut table = vec![!0u64; pvis.expanded_bound()];
+        let mut expanded = pvis.expand(&mut table);
+        let distance = pvis.sampling().distance;
+        for i in 0..4000 {
+            let mut dir = [next(), next(), next()];
+            // Every 8th direction lies on one or two of the octant planes.
+            if i % 8 == 0 {
+                dir[i / 8 % 3] = 0.0;
+            }
+            if i % 16 == 0 {
+                dir[(i / 8 + 1) % 3] = 0.0;
+            }
+            if dir == [0.0; 3] {
+                continue;
+            }
+            let e = eye(dir, 2.0 * distance);
+            let d = [e[0] - 1.0, e[1] - 2.0, e[2] - 3.0];
+            let vis = expanded.query(e);
+            assert_eq!(
+                vis.leaf,
+                crate::sphere::locate(d, level).views,
+                "level {level}, {dir:?}"
+            );
+            let mut row = vec![0u64; pvis.row_words()];
+            let mut expected = vec![0u64; pvis.row_words()];
+            for view in vis.leaf {
+                pvis.view_row(view, &mut row);
+                expected.iter_mut().zip(&row).for_each(|(e, r)| *e |= r);
+            }
+            assert_eq!(vis.bits(), expected);
+        }
+    }
+}
