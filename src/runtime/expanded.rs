@@ -7,6 +7,16 @@
 //! numbered coarse to fine, so parents come first) and builds the face table by walking the
 //! hierarchy; a query is `O(level + P/64)` with no decoding, and a query landing in the same
 //! leaf as the previous one skips the OR. Memory: [`super::Pvis::expanded_bound`] words.
+//!
+//! Start grid: every split plane passes through the origin, so in an octant's central
+//! (gnomonic) projection onto `|x| + |y| + |z| = 1` every face boundary is a straight line.
+//! A `GRID × GRID` grid over `(u, v) = (|x|, |y|) / (|x| + |y| + |z|)` per octant stores, for
+//! each cell, the deepest face whose walk decisions are the same for every direction in the
+//! cell widened by more than the rounding of `(u, v)`, with a margin larger than the rounding
+//! of the walk's dot products; a query starts the walk there. The answer is therefore the
+//! walk's answer bit for bit (cells touching a boundary just start higher up), and a random
+//! eye mostly walks no level at all. Cost: 8·`GRID`² cells of 2 bytes (256 KiB), built
+//! in `expand` by evaluating the planes at each cell's 4 corners.
 
 use super::query::{Eye, classify, everything, visible};
 use super::streaming::{choose, octant, planes};
@@ -35,10 +45,46 @@ const fn leaf_words(level: u32) -> usize {
     (3 * faces_at(level)).div_ceil(2)
 }
 
+/// Cells per side of each octant's start grid: 128 leaves a level-4 leaf ~32 cells, so most
+/// cells skip the whole walk, at 256 KiB for the grid (64² `u32` cells were 104 ns per random
+/// query at 2000 patches, 128² `u16` cells are 91 ns; BENCHMARKS.md).
+const GRID: usize = 128;
+
+/// Grid entries (`u16`) per table word.
+const ENTRIES_PER_WORD: usize = 4;
+
+/// Words of the start grid: one `u16` per cell of each octant.
+const GRID_WORDS: usize = 8 * GRID * GRID / ENTRIES_PER_WORD;
+
+/// Bit position of the level in a grid entry; the face index within that level is below it.
+const ENTRY_LEVEL_SHIFT: u32 = 13;
+
+/// The deepest level a grid entry names: its `8·4^5 = 2^13` face indices fill the bits below
+/// [`ENTRY_LEVEL_SHIFT`]; deeper starts are stored as their level-5 ancestor.
+const MAX_GRID_LEVEL: u32 = 5;
+
+/// How far (in `u`, `v`) a cell is widened before it is classified: more than the rounding
+/// of the query's `(u, v)` (`|x|·(GRID/s)` with `s` a sum of 3 non-negative terms: under 4
+/// ulp of a value ≤ 1, i.e. < 2.4·10⁻⁷).
+const WIDEN: f64 = 1.0 / (1u32 << 20) as f64;
+
+/// The least `|d̂ · p| / max|pᵢ|` (`d̂` on `|x| + |y| + |z| = 1`) a cell must keep from a
+/// plane for the walk's binary32 sign to be exact: the walk's dot product rounds by at most
+/// `γ₃·Σ|dᵢ pᵢ| ≤ 1.8·10⁻⁷·s·max|pᵢ|`.
+const MARGIN: f64 = 1.0 / (1u32 << 20) as f64;
+
+/// The range of `s = |x| + |y| + |z|` where the grid is used: inside it neither the query's
+/// `(u, v)` nor the walk's products overflow or go subnormal; outside it the walk starts at
+/// the root.
+const GRID_S_RANGE: (f32, f32) = (1e-18, 1e18);
+
 /// Table words for a file: the answer row, every view's row, the inner-face records, the leaf
-/// corners.
+/// corners, the start grid.
 pub(super) const fn words(level: u32, views: u32, row_words: usize) -> usize {
-    (1 + views as usize) * row_words + FACE_WORDS * faces_before(level) + leaf_words(level)
+    (1 + views as usize) * row_words
+        + FACE_WORDS * faces_before(level)
+        + leaf_words(level)
+        + GRID_WORDS
 }
 
 /// A file with every view decoded: see the module documentation. Made by [`Pvis::expand`].
@@ -71,12 +117,14 @@ impl<'a, 't> Expanded<'a, 't> {
             pvis.decode_row(v as u32, parent_rows, &mut rest[..words]);
         }
         let level = pvis.sampling.level;
-        let (faces, leaves) =
+        let (faces, rest) =
             table[(1 + views) * words..need].split_at_mut(FACE_WORDS * faces_before(level));
+        let (leaves, grid) = rest.split_at_mut(leaf_words(level));
         leaves.fill(0);
         for (octant, face) in root_faces().iter().enumerate() {
             build(face, 0, octant, level, faces, leaves);
         }
+        build_grid(faces, level, grid);
         Expanded {
             pvis,
             table,
@@ -105,25 +153,10 @@ impl<'a, 't> Expanded<'a, 't> {
         };
         let level = pvis.sampling.level;
         let rows_end = (1 + pvis.sampling.views as usize) * words;
-        let (faces, leaves) = self.table[rows_end..].split_at(FACE_WORDS * faces_before(level));
-        // Only the face index is carried down the levels (the corners are looked up once, at
-        // the leaf), so each level is one record load, three dot products and a table lookup.
-        let mut index = octant(d);
-        let mut level_start = 0;
-        for k in 0..level {
-            let at = level_start + FACE_WORDS * index;
-            // One bounds check for the record rather than one per field.
-            let Some(record) = faces
-                .get(at..at + FACE_WORDS)
-                .and_then(|r| <&[u64; FACE_WORDS]>::try_from(r).ok())
-            else {
-                break;
-            };
-            let f = |i: usize| f32::from_bits((record[i / 2] >> (32 * (i % 2))) as u32);
-            let planes = [[f(0), f(1), f(2)], [f(3), f(4), f(5)], [f(6), f(7), f(8)]];
-            index = 4 * index + choose(d, &planes);
-            level_start += FACE_WORDS * faces_at(k);
-        }
+        let (faces, rest) = self.table[rows_end..].split_at(FACE_WORDS * faces_before(level));
+        let (leaves, grid) = rest.split_at(leaf_words(level));
+        let (start, index) = grid_start(d, grid);
+        let index = walk(d, faces, level, start, index);
         let corner = |i: usize| {
             let u = 3 * index + i;
             leaves
@@ -167,5 +200,217 @@ fn build(face: &Face, k: u32, index: usize, level: u32, faces: &mut [u64], leave
     }
     for (c, kid) in kids.iter().enumerate() {
         build(kid, k + 1, 4 * index + c, level, faces, leaves);
+    }
+}
+
+/// The leaf index the walk reaches for `d` from face `index` at level `start`.
+#[inline(always)]
+fn walk(d: [f32; 3], faces: &[u64], level: u32, start: u32, mut index: usize) -> usize {
+    // Only the face index is carried down the levels (the corners are looked up once, at the
+    // leaf), so each level is one record load, three dot products and a table lookup.
+    let mut level_start = FACE_WORDS * faces_before(start);
+    for k in start..level {
+        let at = level_start + FACE_WORDS * index;
+        // One bounds check for the record rather than one per field.
+        let Some(record) = faces
+            .get(at..at + FACE_WORDS)
+            .and_then(|r| <&[u64; FACE_WORDS]>::try_from(r).ok())
+        else {
+            break;
+        };
+        let f = |i: usize| f32::from_bits((record[i / 2] >> (32 * (i % 2))) as u32);
+        let planes = [[f(0), f(1), f(2)], [f(3), f(4), f(5)], [f(6), f(7), f(8)]];
+        index = 4 * index + choose(d, &planes);
+        level_start += FACE_WORDS * faces_at(k);
+    }
+    index
+}
+
+/// Grid cell of `d` (octant and `(u, v)` cell, see the module documentation), or `None` where
+/// `s = |x| + |y| + |z|` is outside [`GRID_S_RANGE`].
+#[inline(always)]
+fn cell(d: [f32; 3]) -> Option<usize> {
+    let (ax, ay) = (d[0].abs(), d[1].abs());
+    let s = (ax + ay) + d[2].abs();
+    if !(s > GRID_S_RANGE.0 && s < GRID_S_RANGE.1) {
+        return None;
+    }
+    let r = GRID as f32 / s;
+    // `as` saturates; u, v ≤ 1 but may round up to exactly 1.
+    let i = ((ax * r) as usize).min(GRID - 1);
+    let j = ((ay * r) as usize).min(GRID - 1);
+    Some((octant(d) * GRID + i) * GRID + j)
+}
+
+/// Where the walk for `d` starts: the level and the face index within it.
+#[inline(always)]
+fn grid_start(d: [f32; 3], grid: &[u64]) -> (u32, usize) {
+    let entry = cell(d).and_then(|c| {
+        grid.get(c / ENTRIES_PER_WORD)
+            .map(|w| (w >> (16 * (c % ENTRIES_PER_WORD))) as u16)
+    });
+    match entry {
+        Some(e) => (
+            u32::from(e >> ENTRY_LEVEL_SHIFT),
+            usize::from(e & ((1 << ENTRY_LEVEL_SHIFT) - 1)),
+        ),
+        None => (0, octant(d)),
+    }
+}
+
+/// Fills the start grid (see the module documentation) from the face records: for each cell
+/// the walk is followed while every plane it tests has the same sign, with [`MARGIN`], at all
+/// 4 corners of the cell widened by [`WIDEN`] — the plane's dot product is affine in `(u, v)`,
+/// so the corners bound it over the cell.
+fn build_grid(faces: &[u64], level: u32, grid: &mut [u64]) {
+    grid.fill(0);
+    let step = 1.0 / GRID as f64;
+    for oct in 0..8 {
+        let sign = |bit: usize| if oct >> bit & 1 == 0 { 1.0 } else { -1.0 };
+        let signs = [sign(0), sign(1), sign(2)];
+        for i in 0..GRID {
+            for j in 0..GRID {
+                let (u0, v0) = (i as f64 * step - WIDEN, j as f64 * step - WIDEN);
+                let (u1, v1) = (u0 + step + 2.0 * WIDEN, v0 + step + 2.0 * WIDEN);
+                let corners = [(u0, v0), (u1, v0), (u0, v1), (u1, v1)]
+                    .map(|(u, v)| [signs[0] * u, signs[1] * v, signs[2] * (1.0 - u - v)]);
+                let (mut k, mut index) = walk_cell(faces, level, oct, &corners);
+                if k > MAX_GRID_LEVEL {
+                    index >>= 2 * (k - MAX_GRID_LEVEL);
+                    k = MAX_GRID_LEVEL;
+                }
+                let c = (oct * GRID + i) * GRID + j;
+                let entry = (k << ENTRY_LEVEL_SHIFT) as u16 | index as u16;
+                grid[c / ENTRIES_PER_WORD] |= u64::from(entry) << (16 * (c % ENTRIES_PER_WORD));
+            }
+        }
+    }
+}
+
+/// The walk of [`Expanded::query`] from root `oct` as far as it is the same for every point
+/// in the convex hull of `corners`: the level reached and the face index there.
+fn walk_cell(faces: &[u64], level: u32, oct: usize, corners: &[[f64; 3]; 4]) -> (u32, usize) {
+    let mut index = oct;
+    for k in 0..level {
+        let at = FACE_WORDS * (faces_before(k) + index);
+        let f = |i: usize| f64::from(f32::from_bits((faces[at + i / 2] >> (32 * (i % 2))) as u32));
+        let mut which = 3;
+        for t in 0..3 {
+            let p = [f(3 * t), f(3 * t + 1), f(3 * t + 2)];
+            let margin = MARGIN * p[0].abs().max(p[1].abs()).max(p[2].abs());
+            let dots = corners.map(|q| q[0] * p[0] + q[1] * p[1] + q[2] * p[2]);
+            if dots.iter().all(|&x| x > margin) {
+                which = t;
+                break;
+            }
+            if !dots.iter().all(|&x| x < -margin) {
+                return (k, index);
+            }
+        }
+        index = 4 * index + which;
+    }
+    (level, index)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sphere::{direction, locate, normalize};
+
+    /// The walk started from the grid reaches the same leaf as the walk from the root and as
+    /// `sphere::locate`, at levels 0 to 5, for every vertex of the next level (so every face
+    /// corner and edge midpoint), points along every leaf edge, those nudged by a few ulp and
+    /// by 10⁻⁷–10⁻⁴, scaled by 2⁻⁴⁰–2⁴⁰, and seeded random directions.
+    #[test]
+    fn grid_start_is_exact_on_and_near_boundaries() {
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 23) as f32 - 1.0
+        };
+        let ulps = |x: f32, n: i32| {
+            if x == 0.0 {
+                x
+            } else {
+                f32::from_bits((x.to_bits() as i32 + n) as u32)
+            }
+        };
+        for level in 0..=6u32 {
+            let mut faces = vec![0u64; FACE_WORDS * faces_before(level)];
+            let mut leaves = vec![0u64; leaf_words(level)];
+            for (oct, face) in root_faces().iter().enumerate() {
+                build(face, 0, oct, level, &mut faces, &mut leaves);
+            }
+            let mut grid = vec![!0u64; GRID_WORDS];
+            build_grid(&faces, level, &mut grid);
+            let corners = |index: usize| {
+                [0, 1, 2].map(|i| {
+                    let u = 3 * index + i;
+                    (leaves[u / 2] >> (32 * (u % 2))) as u32
+                })
+            };
+            let mut base: Vec<[f32; 3]> = (0..4 * 4u32.pow((level + 1).min(6)) + 2)
+                .map(direction)
+                .collect();
+            let mut leaf_faces = root_faces().to_vec();
+            for _ in 0..level {
+                leaf_faces = leaf_faces.iter().flat_map(children).collect();
+            }
+            for f in &leaf_faces {
+                for e in 0..3 {
+                    let (a, b) = (f.directions[e], f.directions[(e + 1) % 3]);
+                    for t in [0.125f32, 0.3, 0.71] {
+                        base.push([0, 1, 2].map(|i| a[i] * (1.0 - t) + b[i] * t));
+                    }
+                }
+            }
+            for _ in 0..4000 {
+                base.push([next(), next(), next()]);
+            }
+            let (mut pure, mut checked) = (0usize, 0usize);
+            for &b in &base {
+                let mut dirs = vec![b];
+                for n in [-3, -1, 1, 3] {
+                    for i in 0..3 {
+                        let mut d = b;
+                        d[i] = ulps(d[i], n);
+                        dirs.push(d);
+                    }
+                }
+                for eps in [1e-7f32, 1e-6, 1e-5, 1e-4] {
+                    dirs.push(normalize([
+                        b[0] + eps * next(),
+                        b[1] + eps * next(),
+                        b[2] + eps * next(),
+                    ]));
+                }
+                for scale in [2f32.powi(-40), 0.5, 3.0, 2f32.powi(40)] {
+                    dirs.push(b.map(|x| x * scale));
+                }
+                for d in dirs {
+                    let (start, index) = grid_start(d, &grid);
+                    let from_grid = walk(d, &faces, level, start, index);
+                    let from_root = walk(d, &faces, level, 0, octant(d));
+                    assert_eq!(from_grid, from_root, "level {level}, {d:?}");
+                    assert_eq!(
+                        corners(from_grid),
+                        locate(d, level).views,
+                        "level {level}, {d:?}"
+                    );
+                    pure += usize::from(start == level);
+                    checked += 1;
+                }
+            }
+            // The grid must also pay: most random-ish directions skip the whole walk at low
+            // levels.
+            if level <= 2 {
+                assert!(
+                    pure * 2 > checked,
+                    "level {level}: {pure}/{checked} start at the leaf"
+                );
+            }
+        }
     }
 }

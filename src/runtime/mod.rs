@@ -244,8 +244,9 @@ impl<'a> Pvis<'a> {
     }
 
     /// `u64` words of the table [`Pvis::expand`] fills: every view's row, the answer row,
-    /// 6 words per inner face of the sphere hierarchy (its 3 split planes) and 1.5 words per
-    /// leaf face (its 3 corner views).
+    /// 5 words per inner face of the sphere hierarchy (its 3 split planes), 1.5 words per
+    /// leaf face (its 3 corner views) and a 32,768-word (256 KiB) grid of where point location
+    /// starts (8 octants × 128² cells × 2 bytes).
     pub fn expanded_bound(&self) -> usize {
         expanded::words(self.sampling.level, self.sampling.views, self.row_words())
     }
