@@ -24,7 +24,8 @@ fn patchvis(args: &[&str]) -> Output {
 }
 
 /// Bakes the bunny in 100 patches at 64 px (unless `extra` sets `--resolution`) with `extra`
-/// flags; returns the output path.
+/// flags; returns the output path. Patches keep the tiling's numbering, so that rows of
+/// bakes with different options compare patch for patch.
 fn bake(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
     let pvis = dir.join(name);
     let mut args = vec![
@@ -34,6 +35,8 @@ fn bake(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
         pvis.to_str().unwrap(),
         "--patches",
         "100",
+        "--patch-order",
+        "spatial",
         "-q",
     ];
     if !extra.contains(&"--resolution") {

@@ -76,7 +76,8 @@ pub struct BakeArgs {
     #[arg(long)]
     pub dilate: bool,
     /// Patches seen from every view: comma-separated ids, or a file of ids separated by
-    /// whitespace or commas (`#` starts a comment).
+    /// whitespace or commas (`#` starts a comment). Ids are the tiling's (spatial) numbering,
+    /// which a bake with `--patch-order spatial --mesh-out M.ply` shows.
     #[arg(long, value_name = "IDS|FILE")]
     pub always_visible: Option<String>,
     /// Conservative mode: ID buffers at twice --resolution (the file records that ID-buffer
@@ -120,6 +121,21 @@ pub struct BakeArgs {
     /// adapter), auto (a hardware GPU if there is one, else the CPU).
     #[arg(long, value_enum, default_value_t = BackendArg::Cpu, value_name = "BACKEND")]
     pub backend: BackendArg,
+    /// How the file numbers its patches: covisibility (patches seen from the same views get
+    /// neighbouring ids, which the visibility coder turns into a smaller file) or spatial (the
+    /// tiling's Z-order numbering, the same for every bake of a mesh at a patch count; the
+    /// numbering --always-visible ids refer to).
+    #[arg(long, value_enum, default_value_t = PatchOrderArg::Covisibility, value_name = "ORDER")]
+    pub patch_order: PatchOrderArg,
+}
+
+/// `--patch-order`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum PatchOrderArg {
+    /// A greedy tour of the patches' visibility signatures (`format::covisibility_order`).
+    Covisibility,
+    /// The tiling's numbering along a Z-order curve.
+    Spatial,
 }
 
 /// `--backend`.

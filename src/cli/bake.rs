@@ -1,7 +1,7 @@
 //! `patchvis bake`: checked settings, then tile → sample → encode, with a timing and peak-heap
 //! record per stage, and outputs that appear only once everything succeeded.
 
-use super::args::{BackendArg, BakeArgs, FoldCornersArg, TilingArg};
+use super::args::{BackendArg, BakeArgs, FoldCornersArg, PatchOrderArg, TilingArg};
 use super::progress::Bars;
 use super::{UsageError, alloc};
 use anyhow::{Context, Result};
@@ -64,6 +64,8 @@ pub struct Settings {
     memory_budget: u64,
     /// `--backend`.
     backend: BackendArg,
+    /// `--patch-order`.
+    patch_order: PatchOrderArg,
 }
 
 /// Smallest default budget: below this the machine is too small to bake anything large
@@ -227,6 +229,7 @@ impl Settings {
             quiet: args.quiet,
             memory_budget,
             backend: args.backend,
+            patch_order: args.patch_order,
             tiling: tiling::TilingOptions {
                 mode: match args.tiling {
                     TilingArg::Auto => tiling::TilingMode::Auto,
@@ -457,6 +460,24 @@ pub fn run(args: BakeArgs) -> Result<()> {
             sampler::fold_into_with(coarse, &rows, fine.level, s.level, s.fold_corners)
         })
     })?;
+    // Numbering by co-visibility happens after sampling (it needs the rows) and moves the
+    // tiling with it, so the file, `--mesh-out` and the stats all use the final ids.
+    let mut renumbered = false;
+    let (tiling, visibility) = match s.patch_order {
+        PatchOrderArg::Spatial => (tiling, visibility),
+        PatchOrderArg::Covisibility => stage(&mut stages, "patch-order", || -> Result<_> {
+            match format::covisibility_order(&visibility) {
+                Some(order) => {
+                    renumbered = true;
+                    let tiling = tiling
+                        .renumbered(&order)
+                        .context("cannot write a temporary file for the renumbered tiling")?;
+                    Ok((tiling, visibility.with_patch_order(&order)))
+                }
+                None => Ok((tiling, visibility)),
+            }
+        })?,
+    };
     let contents = BakeContents {
         sampling: &params,
         triangle_count: u64::from(mesh.triangle_count()),
@@ -551,6 +572,7 @@ pub fn run(args: BakeArgs) -> Result<()> {
             "fold_min_pixels": s.fold_min_pixels,
             "backend": backend.describe(),
             "fold_corners": format!("{:?}", s.fold_corners).to_lowercase(),
+            "patch_order": if renumbered { "covisibility" } else { "spatial" },
             "sampled_views": sampled_views,
             "always_visible": s.options.always_visible.len(),
             "visible_fraction_mean": visible_fraction,

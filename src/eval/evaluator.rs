@@ -19,6 +19,7 @@ use crate::runtime::Pvis;
 use crate::sampler::{Camera, IdBuffer, NO_PATCH, Rasterizer, SamplingParams};
 use crate::tiling::{self, PatchId, Tiling};
 use rayon::prelude::*;
+use std::collections::{HashMap, VecDeque};
 use std::time::Instant;
 
 /// Why a `.pvis` cannot be evaluated against a mesh.
@@ -53,6 +54,9 @@ pub enum EvalError {
     /// Tiling the mesh failed.
     #[error("tiling the mesh failed: {0}")]
     Tiling(#[from] tiling::TilingError),
+    /// A temporary file for the renumbered tiling could not be written.
+    #[error("cannot write a temporary file for the tiling: {0}")]
+    TempFile(String),
 }
 
 /// What one view shows: the full render against the render of the query's answer.
@@ -111,8 +115,9 @@ pub struct Evaluator<'m> {
 
 impl<'m> Evaluator<'m> {
     /// Re-derives the triangle → patch map of `pvis` by tiling `mesh` again (tiling is
-    /// deterministic) and checks that every patch record — range, bounding sphere, normal
-    /// cone — equals the file's, bit for bit.
+    /// deterministic) and matching every patch record of the file — triangle count, bounding
+    /// sphere, normal cone, bit for bit — to one of the tiling's, in whatever numbering the
+    /// file uses (see `match_tiling`).
     pub fn new(mesh: &'m Mesh, pvis: &Pvis<'_>) -> Result<Evaluator<'m>, EvalError> {
         if pvis.triangle_count() != u64::from(mesh.triangle_count()) {
             return Err(EvalError::TriangleCount {
@@ -121,7 +126,10 @@ impl<'m> Evaluator<'m> {
             });
         }
         let tiling = tiling::tile(mesh, pvis.patch_count())?;
-        check_tiling(&tiling, pvis)?;
+        let order = match_tiling(&tiling, pvis)?;
+        let tiling = tiling
+            .renumbered(&order)
+            .map_err(|e| EvalError::TempFile(e.to_string()))?;
         Ok(Evaluator::from_tiling(mesh, &tiling))
     }
 
@@ -334,32 +342,67 @@ impl Scratch {
     }
 }
 
-fn check_tiling(tiling: &Tiling, pvis: &Pvis<'_>) -> Result<(), EvalError> {
-    let count = pvis.patch_count() as usize;
-    for p in 0..count.max(tiling.patches.len()) {
-        let file = (p < count).then(|| pvis.patch(p as u32));
-        let mesh = tiling.patches.get(p);
-        let same = match (file, mesh) {
-            (Some(f), Some(m)) => {
-                (f.first_triangle, f.triangle_count) == (m.first, m.count)
-                    && f.center.map(f32::to_bits) == m.center.map(f32::to_bits)
-                    && f.radius.to_bits() == m.radius.to_bits()
-                    && f.cone_axis.map(f32::to_bits) == m.cone_axis.map(f32::to_bits)
-                    && f.cone_cos.to_bits() == m.cone_cos.to_bits()
+/// The file's numbering of the patches of `tiling`: `order[i]` is the tiling patch that the
+/// file calls `i`. Patches are matched by their records (triangle count, bounding sphere and
+/// normal cone, bit for bit), so files that renumber their patches (`bake --patch-order
+/// covisibility`, the default) match as well as files in the tiling's own numbering; equal
+/// records are matched in id order. Fails on the first file patch nothing matches.
+fn match_tiling(tiling: &Tiling, pvis: &Pvis<'_>) -> Result<Vec<PatchId>, EvalError> {
+    type Key = (u32, [u32; 3], u32, [u32; 3], u32);
+    let key = |count: u32, center: [f32; 3], radius: f32, axis: [f32; 3], cos: f32| -> Key {
+        (
+            count,
+            center.map(f32::to_bits),
+            radius.to_bits(),
+            axis.map(f32::to_bits),
+            cos.to_bits(),
+        )
+    };
+    let mut unmatched: HashMap<Key, VecDeque<PatchId>> = HashMap::new();
+    for (id, m) in tiling.patches.iter().enumerate() {
+        unmatched
+            .entry(key(m.count, m.center, m.radius, m.cone_axis, m.cone_cos))
+            .or_default()
+            .push_back(id as PatchId);
+    }
+    let count = pvis.patch_count();
+    let mut order = Vec::with_capacity(count as usize);
+    for p in 0..count {
+        let f = pvis.patch(p);
+        let found = unmatched
+            .get_mut(&key(
+                f.triangle_count,
+                f.center,
+                f.radius,
+                f.cone_axis,
+                f.cone_cos,
+            ))
+            .and_then(VecDeque::pop_front);
+        match found {
+            Some(id) => order.push(id),
+            None => {
+                let mesh = tiling.patches.get(p as usize);
+                return Err(EvalError::PatchMismatch {
+                    patch: p,
+                    file_first: f.first_triangle,
+                    file_count: f.triangle_count,
+                    mesh_first: mesh.map_or(0, |m| m.first),
+                    mesh_count: mesh.map_or(0, |m| m.count),
+                });
             }
-            _ => false,
-        };
-        if !same {
-            return Err(EvalError::PatchMismatch {
-                patch: p as u32,
-                file_first: file.map_or(0, |f| f.first_triangle),
-                file_count: file.map_or(0, |f| f.triangle_count),
-                mesh_first: mesh.map_or(0, |m| m.first),
-                mesh_count: mesh.map_or(0, |m| m.count),
-            });
         }
     }
-    Ok(())
+    if order.len() != tiling.patches.len() {
+        let mesh = tiling.patches.get(order.len());
+        return Err(EvalError::PatchMismatch {
+            patch: count,
+            file_first: 0,
+            file_count: 0,
+            mesh_first: mesh.map_or(0, |m| m.first),
+            mesh_count: mesh.map_or(0, |m| m.count),
+        });
+    }
+    Ok(order)
 }
 
 /// The sampling parameters stored in `pvis`, rendered at `resolution` with the cameras

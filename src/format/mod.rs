@@ -8,11 +8,13 @@
 //! matrix plus one CRC and one validation pass over the output.
 
 mod atomic;
+mod patch_order;
 #[cfg(test)]
 mod tests;
 mod visb;
 
 pub use atomic::write_atomic;
+pub use patch_order::{MAX_TOUR_WORK, covisibility_order};
 pub use visb::{encode_hierarchical, probabilities};
 
 use crate::runtime::Pvis;

@@ -113,6 +113,30 @@ impl VisibilityMatrix {
     pub fn set(&mut self, view: u32, patch: PatchId) {
         self.row_mut(view)[patch as usize / 64] |= 1 << (patch % 64);
     }
+
+    /// The same visibility with the patches renumbered: patch `i` of the result is patch
+    /// `order[i]` of `self` (see [`crate::tiling::Tiling::renumbered`]). O(views × patches).
+    ///
+    /// Panics (caller contract) if `order` does not have one entry per patch or names a
+    /// patch that does not exist.
+    pub fn with_patch_order(&self, order: &[PatchId]) -> VisibilityMatrix {
+        assert_eq!(order.len(), self.patches as usize, "one entry per patch");
+        let mut out = VisibilityMatrix::new(self.views, self.patches);
+        let words = self.words_per_row;
+        if words == 0 {
+            return out;
+        }
+        out.bits
+            .par_chunks_mut(words)
+            .zip(self.bits.par_chunks(words))
+            .for_each(|(to, from)| {
+                for (i, &old) in order.iter().enumerate() {
+                    let bit = from[old as usize / 64] >> (old % 64) & 1;
+                    to[i / 64] |= bit << (i % 64);
+                }
+            });
+        out
+    }
 }
 
 /// Renders every view of `params` and returns which patches each one shows.

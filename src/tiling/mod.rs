@@ -33,6 +33,7 @@ mod morton;
 mod out_of_core;
 mod quality;
 mod queue;
+mod renumber;
 mod reorder;
 mod triangle_map;
 

@@ -1,0 +1,153 @@
+//! Numbering patches by co-visibility, so that the VISB coder's neighbour contexts work.
+//!
+//! Encoding 1 codes bit `p` of a view with the bits of patch `p − 1` in the view and its
+//! parents as context (spec "VISB — visibility", Context), so it gains when neighbouring ids
+//! are seen from the same views. The tiling numbers patches along a Z-order curve, which
+//! puts spatial neighbours together but also joins the two sides of thin parts and jumps
+//! between curve cells. This orders them instead along a greedy nearest-neighbour tour of
+//! their *signatures* (the column of the view × patch matrix: which views see the patch),
+//! under Hamming distance: start at patch 0, repeatedly step to the unvisited patch whose
+//! signature differs from the current one in the fewest views, ties to the lower id. On the
+//! bunny (2000 patches, 1026 views) it shrinks the payload by ~13 % (spec, Rationale).
+//!
+//! Cost: O(p² · v / 64) word operations for p patches and v views, parallel over the
+//! candidates (deterministic: the minimum of (distance, id) does not depend on the split),
+//! and p · v / 8 bytes of signatures. Above [`MAX_TOUR_WORK`] word operations the tour is
+//! skipped and the tiling's numbering kept.
+
+use rayon::prelude::*;
+
+use crate::sampler::VisibilityMatrix;
+use crate::tiling::PatchId;
+
+/// Largest `p² · ceil(v / 64)` for which the tour is computed: 2^33 word operations, a few
+/// seconds on two cores (e.g. 8,000 patches at 4,098 views, 20,000 at 1,026). Beyond it the
+/// quadratic search would outgrow the rest of the bake.
+pub const MAX_TOUR_WORK: u64 = 1 << 33;
+
+/// A co-visibility numbering of the patches of `matrix`: `order[i]` is the patch that gets
+/// id `i` (pass it to `Tiling::renumbered` and `VisibilityMatrix::with_patch_order`).
+/// `None` when the tour would cost more than [`MAX_TOUR_WORK`]: keep the current numbering.
+/// Deterministic: depends on the matrix alone.
+pub fn covisibility_order(matrix: &VisibilityMatrix) -> Option<Vec<PatchId>> {
+    let patches = matrix.patches() as usize;
+    let views = matrix.views() as usize;
+    let words = views.div_ceil(64).max(1);
+    let work = (patches as u64)
+        .saturating_mul(patches as u64)
+        .saturating_mul(words as u64);
+    if work > MAX_TOUR_WORK {
+        return None;
+    }
+    // Signature of patch p: bit v of words[p·words ..] is "view v sees p".
+    let mut signatures = vec![0u64; patches * words];
+    for v in 0..views {
+        for (w, &bits) in matrix.row(v as u32).iter().enumerate() {
+            let mut bits = bits;
+            while bits != 0 {
+                let p = w * 64 + bits.trailing_zeros() as usize;
+                signatures[p * words + v / 64] |= 1 << (v % 64);
+                bits &= bits - 1;
+            }
+        }
+    }
+    let signature = |p: u32| &signatures[p as usize * words..][..words];
+    let mut order = Vec::with_capacity(patches);
+    if patches == 0 {
+        return Some(order);
+    }
+    // Unvisited patches in increasing id order (kept sorted: `remove` shifts, which costs
+    // less than the distance scan it follows).
+    let mut unvisited: Vec<PatchId> = (1..patches as PatchId).collect();
+    let mut current: PatchId = 0;
+    order.push(current);
+    while !unvisited.is_empty() {
+        let here = signature(current);
+        let (_, _, at) = unvisited
+            .par_iter()
+            .enumerate()
+            .map(|(at, &q)| {
+                let distance: u32 = here
+                    .iter()
+                    .zip(signature(q))
+                    .map(|(a, b)| (a ^ b).count_ones())
+                    .sum();
+                (distance, q, at)
+            })
+            .min()
+            .expect("unvisited is not empty");
+        current = unvisited.remove(at);
+        order.push(current);
+    }
+    Some(order)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn matrix(views: u32, patches: u32, bits: &[bool]) -> VisibilityMatrix {
+        let mut m = VisibilityMatrix::new(views, patches);
+        for v in 0..views {
+            for p in 0..patches {
+                if bits[(v * patches + p) as usize % bits.len().max(1)] {
+                    m.set(v, p);
+                }
+            }
+        }
+        m
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// The tour names every patch once, starts at 0, and renumbering by it keeps each
+        /// view's set of patches (as old ids).
+        #[test]
+        fn the_tour_is_a_permutation_that_keeps_every_row(
+            views in 1u32..80, patches in 1u32..150,
+            bits in proptest::collection::vec(any::<bool>(), 1..500),
+        ) {
+            let m = matrix(views, patches, &bits);
+            let order = covisibility_order(&m).unwrap();
+            prop_assert_eq!(order[0], 0);
+            let mut sorted = order.clone();
+            sorted.sort_unstable();
+            prop_assert_eq!(sorted, (0..patches).collect::<Vec<_>>());
+            let renumbered = m.with_patch_order(&order);
+            for v in 0..views {
+                for (i, &old) in order.iter().enumerate() {
+                    prop_assert_eq!(renumbered.get(v, i as u32), m.get(v, old));
+                }
+                // No stray bits past the last patch.
+                let last = renumbered.row(v).last().copied().unwrap_or(0);
+                if patches % 64 != 0 {
+                    prop_assert_eq!(last >> (patches % 64), 0);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_tour_steps_to_the_nearest_signature() {
+        // Patches 0 and 2 are seen from the same views, 1 and 3 from the others: the tour
+        // must pair them (0, 2, then 1 or 3 — 1 by the lower id — then 3).
+        let mut m = VisibilityMatrix::new(4, 4);
+        for v in 0..4 {
+            for p in 0..4 {
+                if (v < 2) == (p % 2 == 0) {
+                    m.set(v, p);
+                }
+            }
+        }
+        assert_eq!(covisibility_order(&m).unwrap(), vec![0, 2, 1, 3]);
+    }
+
+    #[test]
+    fn too_much_work_keeps_the_numbering() {
+        // 2^17 patches × 1 word: 2^34 > MAX_TOUR_WORK.
+        let m = VisibilityMatrix::new(1, 1 << 17);
+        assert!(covisibility_order(&m).is_none());
+    }
+}
