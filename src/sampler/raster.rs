@@ -13,11 +13,8 @@
 //!
 //! Cost per view: one `f64` transform per vertex, ~20 integer operations of setup per
 //! triangle, and per covered bounding-box pixel three adds and a compare. Bounding boxes up
-//! to 4 pixels wide (of triangles up to 64 pixels across, where `i32` is exact) are scanned
-//! a row of four samples at a time in SIMD lanes (`raster/lanes.rs`), most triangles of a
-//! scanned mesh; other boxes up to `SPAN_MIN_WIDTH` pixels wide are walked pixel by pixel;
-//! wider ones solve each row's covered span directly so large triangles cost their area, not
-//! their bounding box.
+//! to `SPAN_MIN_WIDTH` pixels wide are walked pixel by pixel; wider ones solve each row's
+//! covered span directly so large triangles cost their area, not their bounding box.
 
 use super::camera::Camera;
 use super::clip::{self, PLANE_COUNT, Plane};
@@ -26,9 +23,7 @@ use crate::ooc::Mesh;
 use crate::tiling::PatchId;
 
 mod batch;
-mod lanes;
 pub(crate) use batch::{ScreenBatch, covers_no_centre};
-use lanes::{DepthPlane, LaneEdge, NARROW_MAX_EXTENT, NARROW_MAX_WIDTH, scan_narrow, scan_quad};
 
 /// Fractional bits of snapped screen coordinates (1/256 pixel, as on D3D11-class hardware).
 pub const SUBPIXEL_BITS: u32 = 8;
@@ -340,12 +335,8 @@ impl Edge {
 /// Which pixel loop [`scan_triangle`] uses for a bounding box; tests force each one.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ScanPaths {
-    /// Bounding boxes of at most 2 × 2 pixels (of triangles at most 64 pixels across) take
-    /// one 4-lane register (`raster/lanes.rs`).
+    /// Bounding boxes of at most 2 × 2 pixels take the unrolled, branch-free path.
     pub(crate) tiny: bool,
-    /// Other bounding boxes at most 4 pixels wide (of triangles at most 64 pixels across)
-    /// are scanned a row of 4 lanes at a time (`raster/lanes.rs`).
-    pub(crate) narrow: bool,
     /// Bounding boxes at least this wide solve each row's span instead of testing pixels.
     pub(crate) span_min_width: i64,
 }
@@ -353,15 +344,14 @@ pub(crate) struct ScanPaths {
 /// The paths used in production.
 pub(crate) const DEFAULT_PATHS: ScanPaths = ScanPaths {
     tiny: true,
-    narrow: true,
     span_min_width: SPAN_MIN_WIDTH,
 };
 
 /// Calls `plot(pixel_index, depth, covered)` for the pixels of a `resolution`² image whose
 /// centre the triangle may cover, in row-major order; `covered` says whether it does under the
-/// top-left rule. Every covered pixel is passed exactly once; the pixel walk also passes the
-/// uncovered pixels of its boxes, once each, with `covered == false`, so that it and the
-/// caller stay branch-free. Either winding; zero area draws nothing.
+/// top-left rule. Every covered pixel is passed exactly once; uncovered pixels of small
+/// bounding boxes are passed with `covered == false` (possibly repeating a pixel) so that the
+/// caller can stay branch-free. Either winding; zero area draws nothing.
 #[inline(always)]
 pub(crate) fn scan_triangle(
     tri: [ScreenVertex; 3],
@@ -406,30 +396,31 @@ pub(crate) fn scan_triangle(
     let stride = resolution as usize;
 
     let (dx, dy) = (x1 - x0, y1 - y0);
-    let first = y0 as usize * stride + x0 as usize;
-    if (paths.tiny || paths.narrow)
-        && dx < NARROW_MAX_WIDTH
-        && max_x - min_x <= NARROW_MAX_EXTENT
-        && max_y - min_y <= NARROW_MAX_EXTENT
-    {
-        // Exact in `i32` for triangles this small (see `NARROW_MAX_EXTENT`).
-        let lane = |e: &Edge| LaneEdge {
-            start: e.start as i32,
-            step_x: e.step_x as i32,
-            step_y: e.step_y as i32,
+    if paths.tiny && dx <= 1 && dy <= 1 {
+        // Most triangles of a dense mesh: four samples, no loops, no data-dependent
+        // branches. A sample beyond a 1-pixel-wide box is outside the triangle or the image;
+        // it is plotted as uncovered onto an in-box pixel.
+        let (has_x, has_y) = (dx == 1, dy == 1);
+        let i00 = y0 as usize * stride + x0 as usize;
+        let i10 = i00 + dx as usize;
+        let i01 = i00 + dy as usize * stride;
+        let i11 = i01 + dx as usize;
+        let mut sample = |w: [i64; 3], index: usize, valid: bool| {
+            plot(
+                index,
+                depth(w[1], w[2]),
+                ((w[0] | w[1] | w[2]) >= 0) & valid,
+            );
         };
-        let edges = [lane(&e0), lane(&e1), lane(&e2)];
-        let depth = DepthPlane { aq: a.q, kb, kc };
-        if paths.tiny && dx <= 1 && dy <= 1 {
-            // Most triangles of a dense mesh: one register, no loop over rows.
-            scan_quad(edges, depth, dx == 1, dy == 1, first, stride, &mut plot);
-            return;
-        }
-        if paths.narrow {
-            let (width, height) = (dx as usize + 1, dy as usize + 1);
-            scan_narrow(edges, depth, width, height, first, stride, &mut plot);
-            return;
-        }
+        let w00 = [e0.start, e1.start, e2.start];
+        let w10 = [w00[0] + e0.step_x, w00[1] + e1.step_x, w00[2] + e2.step_x];
+        let w01 = [w00[0] + e0.step_y, w00[1] + e1.step_y, w00[2] + e2.step_y];
+        let w11 = [w01[0] + e0.step_x, w01[1] + e1.step_x, w01[2] + e2.step_x];
+        sample(w00, i00, true);
+        sample(w10, i10, has_x);
+        sample(w01, i01, has_y);
+        sample(w11, i11, has_x & has_y);
+        return;
     }
 
     let width = dx + 1;
