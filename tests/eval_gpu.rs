@@ -121,7 +121,10 @@ fn gpu_frame_cost_reports_positive_timings() {
     let per_view = report["per_view"].as_array().unwrap();
     assert_eq!(per_view.len(), 4);
     for view in per_view {
-        assert!(f(view, "gpu_full_ms") > 0.0 && f(view, "gpu_culled_ms") > 0.0, "{view}");
+        assert!(
+            f(view, "gpu_full_ms") > 0.0 && f(view, "gpu_culled_ms") > 0.0,
+            "{view}"
+        );
         assert!(f(view, "full_ms") > 0.0, "{view}");
     }
 }
@@ -149,7 +152,10 @@ fn cpu_frame_backend_reports_no_gpu_figure_and_gpu_sweeps_are_refused() {
     let out = patchvis(&["eval", BUNNY, "--sweep", "--frame-backend", "gpu"]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("--frame-backend") && err.contains("--sweep"), "{err}");
+    assert!(
+        err.contains("--frame-backend") && err.contains("--sweep"),
+        "{err}"
+    );
 }
 
 /// The sweep's point for the bunny at 200 patches, level 2, 128 px, 6 views, seed 5, sampled
@@ -198,7 +204,11 @@ fn eval_file(pvis: &Path) -> Value {
 fn sweep_bakes_what_bake_writes_in_each_mode() {
     let dir = tempfile::tempdir().unwrap();
     let default = eval_file(&bake(dir.path(), "default.pvis", &[]));
-    let plain = eval_file(&bake(dir.path(), "plain.pvis", &["--view-supersample", "0"]));
+    let plain = eval_file(&bake(
+        dir.path(),
+        "plain.pvis",
+        &["--view-supersample", "0"],
+    ));
     for (mode, file) in [("default", &default), ("plain", &plain)] {
         let point = sweep_point(mode);
         // Same bytes in the file (the rows compress to the same size only when they are the

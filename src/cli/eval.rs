@@ -3,8 +3,8 @@
 //! the worst views and SVG plots.
 
 use super::UsageError;
-use super::bake;
 use super::args::{EvalArgs, SweepModeArg};
+use super::bake;
 use super::eval_frame::{FrameBackend, frame_json, print_frame};
 use super::progress::Bars;
 use anyhow::{Context, Result, anyhow};

@@ -319,7 +319,8 @@ impl GpuFrameTimer {
             .iter()
             .map(|c| c.first_triangle..c.first_triangle + c.index_count / 3)
             .collect();
-        let all = chunk_ranges.first().map_or(0, |r| r.start)..chunk_ranges.last().map_or(0, |r| r.end);
+        let all =
+            chunk_ranges.first().map_or(0, |r| r.start)..chunk_ranges.last().map_or(0, |r| r.end);
         let full_draws = chunk_draws(&chunk_ranges, &[all]);
 
         let target = |label, format| {
@@ -389,7 +390,10 @@ impl GpuFrameTimer {
         let mut culled_draws_of = |camera: &Camera| {
             let eye = camera.eye().map(|c| c as f32);
             let visible = pvis.query(eye, &mut scratch);
-            chunk_draws(&chunk_ranges, &visible_runs(visible.bits(), &tiling.patches))
+            chunk_draws(
+                &chunk_ranges,
+                &visible_runs(visible.bits(), &tiling.patches),
+            )
         };
         let set_camera = |camera: &Camera| {
             let mut bytes = Vec::with_capacity(UNIFORM_BYTES as usize);
@@ -606,6 +610,8 @@ pub fn chunk_draws(chunks: &[Range<u32>], runs: &[Range<u32>]) -> Vec<(usize, Ra
 }
 
 #[cfg(test)]
+// The expectations are lists of ranges, some of one range; not `Vec`s made from a range.
+#[allow(clippy::single_range_in_vec_init)]
 mod tests {
     use super::*;
 

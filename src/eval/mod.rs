@@ -29,8 +29,7 @@ pub mod views;
 pub use evaluator::{EvalError, Evaluator, Pictures, ViewMetrics, sampling_params};
 #[cfg(feature = "gpu")]
 pub use gpu_frame::{
-    FrameClock, GpuFrameCost, GpuFrameTimer, GpuViewCost, WARMUP_FRAMES, chunk_draws,
-    visible_runs,
+    FrameClock, GpuFrameCost, GpuFrameTimer, GpuViewCost, WARMUP_FRAMES, chunk_draws, visible_runs,
 };
 pub use summary::{EvalSummary, FrameCost};
 pub use sweep::{SweepMode, SweepPoint, SweepSettings, sweep};

@@ -204,7 +204,10 @@ impl Rows {
         if fine_level == level {
             return coarse;
         }
-        let fine = prefix(self.fine.as_ref().unwrap_or(&self.plain), view_count(fine_level));
+        let fine = prefix(
+            self.fine.as_ref().unwrap_or(&self.plain),
+            view_count(fine_level),
+        );
         sampler::fold_into_with(coarse, &fine, fine_level, level, fold_corners)
     }
 }
