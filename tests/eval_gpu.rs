@@ -158,6 +158,53 @@ fn cpu_frame_backend_reports_no_gpu_figure_and_gpu_sweeps_are_refused() {
     );
 }
 
+/// Environment under which the Vulkan loader finds no driver, so wgpu finds no adapter (as in
+/// tests/gpu.rs).
+const NO_VULKAN: [(&str, &str); 3] = [
+    ("WGPU_BACKEND", "vulkan"),
+    ("VK_ICD_FILENAMES", "/nonexistent.json"),
+    ("VK_DRIVER_FILES", "/nonexistent.json"),
+];
+
+#[test]
+fn frame_backend_gpu_without_an_adapter_fails_in_one_line_and_auto_falls_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let pvis = bake(dir.path(), "bunny.pvis", &[]);
+    let eval = |backend: &str| {
+        Command::new(env!("CARGO_BIN_EXE_patchvis"))
+            .args([
+                "eval",
+                BUNNY,
+                pvis.to_str().unwrap(),
+                "--frame-backend",
+                backend,
+                "--views",
+                "2",
+                "--json",
+                "-q",
+            ])
+            .envs(NO_VULKAN)
+            .output()
+            .expect("run patchvis")
+    };
+    let out = eval("gpu");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "stderr: {stderr}");
+    assert!(
+        stderr.starts_with("error: --frame-backend gpu: no GPU adapter found"),
+        "stderr: {stderr}"
+    );
+    let report = json(&eval("auto"));
+    assert_eq!(report["frame_backend"], "cpu");
+    let why = report["frame_backend_reason"].as_str().unwrap();
+    assert!(
+        why.starts_with("--frame-backend auto: no GPU adapter found"),
+        "{why}"
+    );
+    assert!(report.get("frame_cost_gpu").is_none());
+}
+
 /// The sweep's point for the bunny at 200 patches, level 2, 128 px, 6 views, seed 5, sampled
 /// in `mode`.
 fn sweep_point(mode: &str) -> Value {

@@ -109,8 +109,6 @@ pub fn run(args: EvalArgs) -> Result<()> {
         .file
         .clone()
         .ok_or_else(|| UsageError("expected FILE.pvis (or --sweep)".into()))?;
-    // Before any work, so that a missing GPU fails at once.
-    let frame_backend = FrameBackend::open(args.frame_backend)?;
 
     let bars = Bars::new(!args.quiet && !args.json);
     let start = Instant::now();
@@ -124,6 +122,10 @@ pub fn run(args: EvalArgs) -> Result<()> {
             args.mesh.display()
         )
     })?;
+    // After the inputs are checked, so that their errors come first and alone (probing for
+    // an adapter can make the driver write to stderr), before the long evaluation, so that a
+    // missing GPU fails soon.
+    let frame_backend = FrameBackend::open(args.frame_backend)?;
     let sampling = pvis.sampling();
     let resolution = args.resolution.unwrap_or(sampling.resolution);
     let params = sampling_params(&pvis, resolution, args.distance_scale);
