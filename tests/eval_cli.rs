@@ -64,8 +64,9 @@ fn views_without_timings(report: &Value) -> Vec<Value> {
         .map(|v| {
             let mut v = v.clone();
             let o = v.as_object_mut().unwrap();
-            o.remove("full_ms");
-            o.remove("culled_ms");
+            for key in ["full_ms", "culled_ms", "gpu_full_ms", "gpu_culled_ms"] {
+                o.remove(key);
+            }
             v
         })
         .collect()

@@ -311,12 +311,48 @@ pub struct EvalArgs {
     /// Field of view of the sweep's bakes, degrees.
     #[arg(long, default_value_t = 45.0, value_name = "DEG")]
     pub fov: f32,
+    /// How the sweep samples its bakes: as a default `bake` does (view supersampling and
+    /// fold; about 5× the sampling time of plain), or plain (--view-supersample 0).
+    #[arg(long, value_enum, default_value_t = SweepModeArg::Default, value_name = "MODE")]
+    pub sweep_mode: SweepModeArg,
+    /// Where to time the frame cost (full mesh vs culled set): the CPU rasterizer; the GPU
+    /// through wgpu, software adapters (lavapipe) included, an error without one; or auto
+    /// (a hardware GPU if there is one, else the CPU, saying why). The CPU figure is always
+    /// reported too.
+    #[arg(
+        long,
+        value_enum,
+        default_value_t = FrameBackendArg::Auto,
+        value_name = "BACKEND",
+        conflicts_with = "sweep"
+    )]
+    pub frame_backend: FrameBackendArg,
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
     /// Print nothing but the report and errors; no progress.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// `eval --sweep-mode`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum SweepModeArg {
+    /// What a default `patchvis bake` writes: view supersampling with its default fold.
+    Default,
+    /// The stored views' own patches only (`bake --view-supersample 0`).
+    Plain,
+}
+
+/// `eval --frame-backend`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum FrameBackendArg {
+    /// The CPU rasterizer only.
+    Cpu,
+    /// The GPU through wgpu, any adapter (software ones too); an error if there is none.
+    Gpu,
+    /// A hardware GPU if one is found, else the CPU (saying why).
+    Auto,
 }
 
 fn parse_point(s: &str) -> Result<[f32; 3], String> {

@@ -3,14 +3,16 @@
 //! the worst views and SVG plots.
 
 use super::UsageError;
-use super::args::EvalArgs;
+use super::args::{EvalArgs, SweepModeArg};
+use super::bake;
+use super::eval_frame::{FrameBackend, frame_json, print_frame};
 use super::progress::Bars;
 use anyhow::{Context, Result, anyhow};
 use patchvis::eval::plot::{self, Axis, Chart, Series};
 use patchvis::eval::shade::RgbImage;
 use patchvis::eval::views::{self, PathCamera};
 use patchvis::eval::{
-    EvalSummary, Evaluator, SweepPoint, SweepSettings, ViewMetrics, metrics::Summary,
+    EvalSummary, Evaluator, SweepMode, SweepPoint, SweepSettings, ViewMetrics, metrics::Summary,
     sampling_params,
 };
 use patchvis::format::write_atomic;
@@ -120,6 +122,10 @@ pub fn run(args: EvalArgs) -> Result<()> {
             args.mesh.display()
         )
     })?;
+    // After the inputs are checked, so that their errors come first and alone (probing for
+    // an adapter can make the driver write to stderr), before the long evaluation, so that a
+    // missing GPU fails soon.
+    let frame_backend = FrameBackend::open(args.frame_backend)?;
     let sampling = pvis.sampling();
     let resolution = args.resolution.unwrap_or(sampling.resolution);
     let params = sampling_params(&pvis, resolution, args.distance_scale);
@@ -149,6 +155,8 @@ pub fn run(args: EvalArgs) -> Result<()> {
     };
     let metrics = evaluator.evaluate(&pvis, &cameras, &bars);
     let summary = EvalSummary::of(&metrics);
+    // After the CPU evaluation, never beside it: a software GPU shares its cores.
+    let gpu = frame_backend.measure(&evaluator, &pvis, &cameras, &bars)?;
     let seconds = start.elapsed().as_secs_f64();
     let is_path = matches!(views, Views::Orbit { .. } | Views::PathFile(_));
 
@@ -196,9 +204,17 @@ pub fn run(args: EvalArgs) -> Result<()> {
             "file_bytes": pvis.total_bytes(),
             "seconds": seconds,
             "pictures": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
-            "per_view": metrics.iter().enumerate().map(|(i, m)| view_json(i, m)).collect::<Vec<_>>(),
+            "per_view": metrics.iter().enumerate().map(|(i, m)| {
+                let mut view = view_json(i, m);
+                if let Some(g) = &gpu {
+                    let (full, culled) = g.per_view_ms[i];
+                    merge(&mut view, json!({"gpu_full_ms": full, "gpu_culled_ms": culled}));
+                }
+                view
+            }).collect::<Vec<_>>(),
         });
         merge(&mut report, extra);
+        merge(&mut report, frame_json(&frame_backend, gpu.as_ref()));
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         println!(
@@ -221,6 +237,7 @@ pub fn run(args: EvalArgs) -> Result<()> {
             args.distance_scale
         );
         print_summary(&summary, is_path);
+        print_frame(&frame_backend, gpu.as_ref());
         for path in &written {
             println!("wrote {}", path.display());
         }
@@ -474,6 +491,30 @@ fn run_sweep(args: &EvalArgs) -> Result<()> {
         views: args.views,
         seed: args.seed,
         distance_scale: args.distance_scale,
+        mode: match args.sweep_mode {
+            SweepModeArg::Plain => SweepMode::Plain,
+            // A default `patchvis bake`, at every level (the fold's extra levels capped at
+            // MAX_LEVEL by the sweep, as by `bake`).
+            SweepModeArg::Default => SweepMode::Supersampled {
+                extra_levels: bake::DEFAULT_VIEW_SUPERSAMPLE,
+                fold_min_pixels: bake::DEFAULT_FOLD_MIN_PIXELS,
+                fold_corners: bake::DEFAULT_FOLD_CORNERS,
+            },
+        },
+    };
+    let mode_name = match settings.mode {
+        SweepMode::Plain => "plain".to_string(),
+        SweepMode::Supersampled {
+            extra_levels,
+            fold_min_pixels,
+            fold_corners,
+        } => format!(
+            "as bake's default (--view-supersample {extra_levels} --fold-min-pixels {fold_min_pixels} --fold-corners {})",
+            match fold_corners {
+                patchvis::sampler::FoldCorners::All => "all",
+                patchvis::sampler::FoldCorners::One => "one",
+            }
+        ),
     };
     let mesh = Mesh::open(&args.mesh)?;
     let bars = Bars::new(!args.quiet && !args.json);
@@ -528,6 +569,7 @@ fn run_sweep(args: &EvalArgs) -> Result<()> {
             "views": settings.views,
             "seed": settings.seed,
             "distance_scale": settings.distance_scale,
+            "sweep_mode": mode_name,
             "seconds": start.elapsed().as_secs_f64(),
             "points": rows,
             "pictures": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
@@ -535,7 +577,7 @@ fn run_sweep(args: &EvalArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         println!(
-            "{}: {} triangles; {} random views (seed {}) at {} px",
+            "{}: {} triangles; {} random views (seed {}) at {} px; bakes sampled {mode_name}",
             args.mesh.display(),
             mesh.triangle_count(),
             settings.views,

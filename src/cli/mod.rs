@@ -4,6 +4,7 @@ pub mod alloc;
 pub mod args;
 pub mod bake;
 pub mod eval;
+pub mod eval_frame;
 pub mod generate;
 pub mod inspect;
 pub mod progress;

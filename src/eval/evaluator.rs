@@ -57,6 +57,11 @@ pub enum EvalError {
     /// A temporary file for the renumbered tiling could not be written.
     #[error("cannot write a temporary file for the tiling: {0}")]
     TempFile(String),
+    /// Sampling the mesh (`eval --sweep`'s bakes) failed; the sampler's error as text, so
+    /// that this error stays `Clone` and comparable. Only a checkpoint file makes sampling
+    /// fail, and the sweep writes none.
+    #[error("sampling the mesh failed: {0}")]
+    Sampling(String),
 }
 
 /// What one view shows: the full render against the render of the query's answer.
@@ -107,7 +112,7 @@ pub struct Pictures {
 /// the same patch count (`sweep`).
 pub struct Evaluator<'m> {
     mesh: &'m Mesh,
-    patch_of: Vec<PatchId>,
+    tiling: Tiling,
     patch_triangles: Vec<u32>,
     identity: Vec<u32>,
     normals: Vec<[f32; 3]>,
@@ -130,18 +135,28 @@ impl<'m> Evaluator<'m> {
         let tiling = tiling
             .renumbered(&order)
             .map_err(|e| EvalError::TempFile(e.to_string()))?;
-        Ok(Evaluator::from_tiling(mesh, &tiling))
+        Ok(Evaluator::from_tiling(mesh, tiling))
     }
 
     /// An evaluator for files baked from `mesh` with `tiling` (unchecked: the caller made both).
-    pub fn from_tiling(mesh: &'m Mesh, tiling: &Tiling) -> Evaluator<'m> {
+    pub fn from_tiling(mesh: &'m Mesh, tiling: Tiling) -> Evaluator<'m> {
         Evaluator {
             mesh,
-            patch_of: tiling.patch_of.to_vec(),
             patch_triangles: tiling.patches.iter().map(|p| p.count).collect(),
+            tiling,
             identity: (0..mesh.triangle_count()).collect(),
             normals: face_normals(mesh),
         }
+    }
+
+    /// The mesh.
+    pub fn mesh(&self) -> &'m Mesh {
+        self.mesh
+    }
+
+    /// The tiling the files were baked with: patch ranges into its reordered mesh.
+    pub fn tiling(&self) -> &Tiling {
+        &self.tiling
     }
 
     /// Number of patches.
@@ -235,7 +250,7 @@ impl<'m> Evaluator<'m> {
                 covered += 1;
                 if a != previous {
                     previous = a;
-                    let p = self.patch_of[a as usize];
+                    let p = self.tiling.patch_of[a as usize];
                     s.seen[p as usize / 64] |= 1 << (p % 64);
                 }
             }
@@ -291,7 +306,7 @@ impl<'m> Evaluator<'m> {
         remap.resize(mesh.vertex_count() as usize, u32::MAX);
         let (mut positions, mut triangles, mut ids) = (Vec::new(), Vec::new(), Vec::new());
         for t in 0..mesh.triangle_count() {
-            if !keep(self.patch_of[t as usize]) {
+            if !keep(self.tiling.patch_of[t as usize]) {
                 continue;
             }
             let corners = mesh.triangle(t).map(|v| {

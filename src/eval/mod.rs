@@ -7,7 +7,8 @@
 //! `summary.rs` aggregates views, `metrics.rs` holds the statistics (mean, nearest-rank p95,
 //! PSNR), `views.rs` the seeded random views and paths, `shade.rs` the pictures, `plot.rs` the
 //! SVG charts and `sweep.rs` the re-baking sweep over patch counts and levels (the seed paper's
-//! Figures 4–5). The last stage: it may use every other module.
+//! Figures 4–5); `gpu_frame.rs` (feature `gpu`) times the frame cost on a GPU through wgpu
+//! instead of the CPU rasterizer. The last stage: it may use every other module.
 //!
 //! The file stores triangle ranges of the *reordered* mesh; the evaluator takes the original
 //! mesh and re-derives the triangle → patch map by tiling it again, which is deterministic,
@@ -16,6 +17,8 @@
 //! Cost: two renders per view (the full mesh and the culled set), views in parallel.
 
 mod evaluator;
+#[cfg(feature = "gpu")]
+mod gpu_frame;
 pub mod metrics;
 pub mod plot;
 pub mod shade;
@@ -24,8 +27,12 @@ mod sweep;
 pub mod views;
 
 pub use evaluator::{EvalError, Evaluator, Pictures, ViewMetrics, sampling_params};
+#[cfg(feature = "gpu")]
+pub use gpu_frame::{
+    FrameClock, GpuFrameCost, GpuFrameTimer, GpuViewCost, WARMUP_FRAMES, chunk_draws, visible_runs,
+};
 pub use summary::{EvalSummary, FrameCost};
-pub use sweep::{SweepPoint, SweepSettings, sweep};
+pub use sweep::{SweepMode, SweepPoint, SweepSettings, sweep};
 
 #[cfg(test)]
 mod tests;

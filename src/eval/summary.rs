@@ -30,8 +30,9 @@ pub struct EvalSummary {
     pub frame_cost: FrameCost,
 }
 
-/// Time to draw the full model against the culled set over the views (the seed paper's Table 1,
-/// with the CPU rasterizer standing in for the GPU).
+/// Time to draw the full model against the culled set over the views (the seed paper's Table 1):
+/// in [`EvalSummary`] with the CPU rasterizer standing in for the GPU; the GPU's own figure
+/// (`eval --frame-backend gpu`) is made by the same [`FrameCost::of`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameCost {
     /// Median milliseconds per view to render everything.
@@ -41,6 +42,24 @@ pub struct FrameCost {
     /// Median full time over median culled time. Medians rather than totals, because on a
     /// loaded machine a few preempted renders would dominate the totals.
     pub speedup: f64,
+}
+
+impl FrameCost {
+    /// The medians of per-view seconds to draw everything (`full`) and the culled set
+    /// (`culled`), in milliseconds, and their ratio (infinite when the culled median is 0).
+    pub fn of(full: impl Iterator<Item = f64>, culled: impl Iterator<Item = f64>) -> FrameCost {
+        let full_ms = 1e3 * median(full);
+        let culled_ms = 1e3 * median(culled);
+        FrameCost {
+            full_ms_median: full_ms,
+            culled_ms_median: culled_ms,
+            speedup: if culled_ms > 0.0 {
+                full_ms / culled_ms
+            } else {
+                f64::INFINITY
+            },
+        }
+    }
 }
 
 impl EvalSummary {
@@ -56,8 +75,6 @@ impl EvalSummary {
             .filter(|v| v.missed_pixels > 0 && v.psnr_db.is_finite())
             .map(|v| v.psnr_db)
             .collect();
-        let full_ms = 1e3 * median(views.iter().map(|v| v.full_seconds));
-        let culled_ms = 1e3 * median(views.iter().map(|v| v.culled_seconds));
         EvalSummary {
             views: views.len() as u32,
             identical_views: count(|v| v.missed_pixels == 0),
@@ -68,15 +85,10 @@ impl EvalSummary {
             culling_rate: summary(|v| v.culling_rate),
             ideal_culling_rate: summary(|v| v.ideal_culling_rate),
             psnr_db_differing: (!differing.is_empty()).then(|| Summary::of(differing)),
-            frame_cost: FrameCost {
-                full_ms_median: full_ms,
-                culled_ms_median: culled_ms,
-                speedup: if culled_ms > 0.0 {
-                    full_ms / culled_ms
-                } else {
-                    f64::INFINITY
-                },
-            },
+            frame_cost: FrameCost::of(
+                views.iter().map(|v| v.full_seconds),
+                views.iter().map(|v| v.culled_seconds),
+            ),
         }
     }
 

@@ -27,7 +27,7 @@
 //! submission and `views × ⌈patches / 64⌉ × 8` bytes read back. GPU memory besides the mesh:
 //! `resolution² × 8` bytes per batched view, capped at [`BATCH_TARGET_BYTES`].
 
-mod upload;
+pub(crate) mod upload;
 
 use super::patch_graph::{PatchGraph, may_face};
 use super::{Camera, SamplingOptions, SamplingParams, VisibilityMatrix};
@@ -95,8 +95,38 @@ pub enum GpuError {
     Failed(String),
 }
 
+/// Opens the highest-performance adapter wgpu finds (honouring wgpu's `WGPU_BACKEND` and
+/// `WGPU_ADAPTER_NAME` environment variables) with all its limits and those of `optional`
+/// features it has: the device selection of the sampler, shared with the evaluator's GPU
+/// frame cost (`eval::gpu_frame`).
+pub(crate) fn open_device(
+    label: &str,
+    optional: wgpu::Features,
+) -> Result<(wgpu::Device, wgpu::Queue, wgpu::AdapterInfo), GpuError> {
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+        power_preference: wgpu::PowerPreference::HighPerformance,
+        ..Default::default()
+    }))
+    .map_err(|e| GpuError::NoAdapter(one_line(e)))?;
+    let info = adapter.get_info();
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some(label),
+        required_features: adapter.features() & optional,
+        // Everything the adapter offers: big meshes want its largest buffers.
+        required_limits: adapter.limits(),
+        ..Default::default()
+    }))
+    .map_err(|e| GpuError::Device {
+        adapter: describe(&info),
+        reason: one_line(e),
+    })?;
+    Ok((device, queue, info))
+}
+
 /// One line of an error text from wgpu, whose messages may span several lines.
-fn one_line(text: impl std::fmt::Display) -> String {
+pub(crate) fn one_line(text: impl std::fmt::Display) -> String {
     text.to_string()
         .lines()
         .map(str::trim)
@@ -123,24 +153,7 @@ impl GpuSampler {
     /// Opens the highest-performance adapter wgpu finds (honouring wgpu's `WGPU_BACKEND` and
     /// `WGPU_ADAPTER_NAME` environment variables) and compiles the pipelines.
     pub fn new() -> Result<GpuSampler, GpuError> {
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            ..Default::default()
-        }))
-        .map_err(|e| GpuError::NoAdapter(one_line(e)))?;
-        let info = adapter.get_info();
-        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("patchvis sampling"),
-            // Everything the adapter offers: big meshes want its largest buffers.
-            required_limits: adapter.limits(),
-            ..Default::default()
-        }))
-        .map_err(|e| GpuError::Device {
-            adapter: describe(&info),
-            reason: one_line(e),
-        })?;
+        let (device, queue, info) = open_device("patchvis sampling", wgpu::Features::empty())?;
         let pipelines = Pipelines::new(&device);
         Ok(GpuSampler {
             device,
@@ -784,7 +797,7 @@ fn u32s_to_bytes(words: &[u32]) -> Vec<u8> {
 }
 
 /// `name (type, backend)` of an adapter.
-fn describe(info: &wgpu::AdapterInfo) -> String {
+pub(crate) fn describe(info: &wgpu::AdapterInfo) -> String {
     format!("{} ({:?}, {:?})", info.name, info.device_type, info.backend)
 }
 

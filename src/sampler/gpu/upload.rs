@@ -35,17 +35,22 @@ const RUN_TRIANGLES: usize = 1 << 16;
 
 /// One draw's worth of the mesh.
 #[derive(Debug)]
-pub(super) struct MeshChunk {
+pub(crate) struct MeshChunk {
     /// Vertices, [`vertex_layout`].
-    pub(super) vertices: wgpu::Buffer,
+    pub(crate) vertices: wgpu::Buffer,
     /// Triangle corners as `u32` indices into `vertices`.
-    pub(super) indices: wgpu::Buffer,
+    pub(crate) indices: wgpu::Buffer,
     /// Number of indices (three per triangle).
-    pub(super) index_count: u32,
+    pub(crate) index_count: u32,
+    /// Position in the tiling's order (`Tiling::order`) of the chunk's first triangle: the
+    /// chunk holds triangles `first_triangle..first_triangle + index_count / 3` of the
+    /// reordered mesh, so a patch's triangles are a range of its indices (the evaluator's
+    /// frame cost draws patch ranges).
+    pub(crate) first_triangle: u32,
 }
 
 /// The vertex layout of [`MeshChunk::vertices`]: location 0 the position, location 1 the id.
-pub(super) fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
+pub(crate) fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     const ATTRIBUTES: [wgpu::VertexAttribute; 2] =
         wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32];
     wgpu::VertexBufferLayout {
@@ -64,7 +69,7 @@ struct HostChunk {
 
 /// Uploads `mesh`'s triangles patch by patch (`tiling.order`), each vertex tagged with its
 /// patch, positions relative to `center`.
-pub(super) fn upload_mesh(
+pub(crate) fn upload_mesh(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     mesh: &Mesh,
@@ -87,6 +92,8 @@ pub(super) fn upload_mesh(
     let mut host = HostChunk::default();
     let mut corners: Vec<u32> = Vec::new();
     let mut distinct: Vec<u32> = Vec::new();
+    // Triangles in the chunks before `host`.
+    let mut uploaded = 0u32;
     for (p, patch) in tiling.patches.iter().enumerate() {
         let patch_id = p as u32;
         let range = patch.first as usize..(patch.first + patch.count) as usize;
@@ -102,7 +109,7 @@ pub(super) fn upload_mesh(
             if host.vertices.len() as u64 + vertex_bytes > max_bytes
                 || host.indices.len() as u64 + index_bytes > max_bytes
             {
-                chunks.push(flush(device, queue, &mut host));
+                chunks.push(flush(device, queue, &mut host, &mut uploaded));
             }
             let base = (host.vertices.len() as u64 / VERTEX_BYTES) as u32;
             for &v in &distinct {
@@ -122,13 +129,18 @@ pub(super) fn upload_mesh(
         }
     }
     if !host.indices.is_empty() {
-        chunks.push(flush(device, queue, &mut host));
+        chunks.push(flush(device, queue, &mut host, &mut uploaded));
     }
     Ok(chunks)
 }
 
-/// Uploads `host` as one chunk and empties it.
-fn flush(device: &wgpu::Device, queue: &wgpu::Queue, host: &mut HostChunk) -> MeshChunk {
+/// Uploads `host` as one chunk and empties it; `uploaded` counts the triangles uploaded so far.
+fn flush(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    host: &mut HostChunk,
+    uploaded: &mut u32,
+) -> MeshChunk {
     let buffer = |label, bytes: &[u8], usage| {
         let buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
@@ -143,7 +155,9 @@ fn flush(device: &wgpu::Device, queue: &wgpu::Queue, host: &mut HostChunk) -> Me
         vertices: buffer("mesh vertices", &host.vertices, wgpu::BufferUsages::VERTEX),
         indices: buffer("mesh indices", &host.indices, wgpu::BufferUsages::INDEX),
         index_count: (host.indices.len() as u64 / 4) as u32,
+        first_triangle: *uploaded,
     };
+    *uploaded += chunk.index_count / 3;
     // Hand the staged copies to the GPU now, so host memory stays one chunk whatever the mesh.
     queue.submit([]);
     host.vertices.clear();
