@@ -474,3 +474,81 @@ fn info_and_query_refuse_files_that_are_not_pvis() {
     let out = patchvis(&["query", BUNNY, "--from", "0,0,1"]);
     assert_eq!(out.status.code(), Some(1));
 }
+
+/// Decoded rows of a `.pvis` file, one `Vec<bool>` per view.
+fn rows(bytes: &[u8]) -> Vec<Vec<bool>> {
+    let pvis = patchvis::runtime::Pvis::parse(bytes).expect("valid file");
+    let mut row = vec![0u64; pvis.row_words()];
+    (0..pvis.sampling().views)
+        .map(|v| {
+            pvis.view_row(v, &mut row);
+            (0..pvis.patch_count())
+                .map(|p| row[p as usize / 64] >> (p % 64) & 1 == 1)
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn covisibility_numbering_renames_patches_and_keeps_always_visible_ids_spatial() {
+    let dir = tempfile::tempdir().unwrap();
+    let bake = |name: &str, order: &str| -> Vec<u8> {
+        let pvis = dir.path().join(name);
+        let out = patchvis(&[
+            "bake",
+            BUNNY,
+            "-o",
+            pvis.to_str().unwrap(),
+            "--patches",
+            "120",
+            "--level",
+            "2",
+            "--resolution",
+            "64",
+            "--view-supersample",
+            "0",
+            "--always-visible",
+            "7",
+            "--patch-order",
+            order,
+            "-q",
+        ]);
+        assert!(out.status.success(), "bake failed: {}", stderr(&out));
+        std::fs::read(pvis).unwrap()
+    };
+    let spatial = bake("spatial.pvis", "spatial");
+    let covisible = bake("covisible.pvis", "covisibility");
+    assert_ne!(spatial, covisible);
+    let (a, b) = (
+        patchvis::runtime::Pvis::parse(&spatial).unwrap(),
+        patchvis::runtime::Pvis::parse(&covisible).unwrap(),
+    );
+    // Each renumbered patch is one spatial patch (same record), and its column is that
+    // patch's column.
+    let record = |p: patchvis::runtime::PatchInfo| {
+        (
+            p.triangle_count,
+            p.center.map(f32::to_bits),
+            p.radius.to_bits(),
+        )
+    };
+    let spatial_id = |q: u32| {
+        (0..a.patch_count())
+            .find(|&p| record(a.patch(p)) == record(b.patch(q)))
+            .expect("every renumbered patch is a spatial patch")
+    };
+    let (rows_a, rows_b) = (rows(&spatial), rows(&covisible));
+    let mut renamed = 0;
+    for q in 0..b.patch_count() {
+        let p = spatial_id(q);
+        renamed += usize::from(p != q);
+        for (ra, rb) in rows_a.iter().zip(&rows_b) {
+            assert_eq!(ra[p as usize], rb[q as usize], "patch {q} (spatial {p})");
+        }
+    }
+    assert!(renamed > 0, "the tour kept every id");
+    // `--always-visible 7` means spatial patch 7, in every view of both files.
+    assert!(rows_a.iter().all(|r| r[7]));
+    let moved = (0..b.patch_count()).find(|&q| spatial_id(q) == 7).unwrap();
+    assert!(rows_b.iter().all(|r| r[moved as usize]));
+}
