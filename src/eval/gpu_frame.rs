@@ -30,7 +30,9 @@ use super::summary::FrameCost;
 use crate::runtime::Pvis;
 use crate::sampler::Camera;
 use crate::sampler::gpu::upload::{self, MeshChunk};
-use crate::sampler::gpu::{GpuError, describe, one_line, open_device, view_matrix};
+use crate::sampler::gpu::{
+    GpuError, depth_tested_pipeline, describe, one_line, open_device, view_matrix,
+};
 use crate::tiling::Patch;
 use std::ops::Range;
 use std::sync::mpsc;
@@ -172,44 +174,14 @@ impl GpuFrameTimer {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &POSITION,
         };
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("frame"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(vertices)],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                // Both windings, as the CPU renders: scanned meshes do not keep a consistent
-                // winding, and open meshes show back faces.
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(true),
-                // Reversed Z: larger is nearer.
-                depth_compare: Some(wgpu::CompareFunction::Greater),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: COLOUR_FORMAT,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = depth_tested_pipeline(
+            &device,
+            "frame",
+            &pipeline_layout,
+            &module,
+            vertices,
+            COLOUR_FORMAT,
+        );
         Ok(GpuFrameTimer {
             device,
             queue,
