@@ -4,27 +4,13 @@
 //! Möller–Trumbore against the reordered mesh written by `--mesh-out` — and asserts that
 //! every patch it shows from a sampling position is in `patchvis query`'s answer there.
 
+mod common;
+
+use common::{BUNNY, json, patchvis, stderr};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
-const BUNNY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/bunny.ply");
 const RESOLUTION: u32 = 128;
-
-fn patchvis(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_patchvis"))
-        .args(args)
-        .output()
-        .expect("run patchvis")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-fn json(out: &Output) -> serde_json::Value {
-    assert!(out.status.success(), "failed: {}", stderr(out));
-    serde_json::from_slice(&out.stdout).expect("JSON on stdout")
-}
 
 fn bake_small(dir: &Path, threads: &str) -> (PathBuf, PathBuf) {
     let pvis = dir.join("bunny.pvis");

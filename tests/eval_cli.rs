@@ -2,28 +2,13 @@
 //! and ranges, determinism for a seed, zero missed pixels at the sampling positions, pictures,
 //! paths, the sweep, and refusal of a file baked from another mesh.
 
+mod common;
+
+use common::{BUNNY, json, patchvis};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-const BUNNY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/bunny.ply");
 const CUBE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/ply/cube.ply");
-
-fn patchvis(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_patchvis"))
-        .args(args)
-        .output()
-        .expect("run patchvis")
-}
-
-fn json(out: &Output) -> Value {
-    assert!(
-        out.status.success(),
-        "failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("JSON on stdout")
-}
 
 /// The bunny in 200 patches, sphere level 2 (66 views), 128 px.
 fn bake(dir: &Path) -> PathBuf {

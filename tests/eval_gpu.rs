@@ -6,28 +6,13 @@
 //! tests/gpu.rs.
 #![cfg(feature = "cli")]
 
+mod common;
+
+use common::{BUNNY, json, patchvis};
 use serde_json::Value;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-const BUNNY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/bunny.ply");
-
-fn patchvis(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_patchvis"))
-        .args(args)
-        .output()
-        .expect("run patchvis")
-}
-
-fn json(out: &Output) -> Value {
-    assert!(
-        out.status.success(),
-        "failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("JSON on stdout")
-}
+use std::process::Command;
 
 fn f(v: &Value, key: &str) -> f64 {
     v[key]

@@ -5,6 +5,9 @@
 //! flag combinations they are documented as, the stats record it, and out-of-range values are
 //! usage errors.
 
+mod common;
+
+use common::{BUNNY, patchvis};
 use patchvis::runtime::Pvis;
 use patchvis::sampler::{
     FoldCorners, VisibilityMatrix, fold_into, fold_into_with, supersample_rows,
@@ -12,16 +15,6 @@ use patchvis::sampler::{
 use patchvis::sphere::view_count;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-const BUNNY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/bunny.ply");
-
-fn patchvis(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_patchvis"))
-        .args(args)
-        .output()
-        .expect("run patchvis")
-}
 
 /// Bakes the bunny in 100 patches at 64 px (unless `extra` sets `--resolution`) with `extra`
 /// flags; returns the output path. Patches keep the tiling's numbering, so that rows of
