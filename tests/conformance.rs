@@ -17,7 +17,7 @@
 //! PATCHVIS_REGENERATE=1 cargo test --test conformance   # rewrite vectors and expectations
 //! ```
 //!
-//! Cost: 45 small vectors; each valid one is parsed once per prefix length (a few thousand
+//! Cost: 56 small vectors; each valid one is parsed once per prefix length (a few thousand
 //! parses, each stopping at the length check), well under a second.
 #![cfg(feature = "bake")]
 
@@ -239,8 +239,11 @@ struct ValidSpec {
     seed: u64,
     /// Insert an unknown section (tag `XTRA`) between CAMR and PTCH.
     unknown_section: bool,
-    /// Store raw rows (VISB encoding 0) instead of the context-coded payload (encoding 1).
-    raw: bool,
+    /// The VISB encoding: the writer's default (2, context tree), or 0 / 1.
+    encoding: VisibilityEncoding,
+    /// Give patches spread cone axes and let views see the patches facing them (plus a little
+    /// noise), so the rows have the structure real bakes have and encoding 2 grows a real tree.
+    facing: bool,
 }
 
 fn valid_specs() -> Vec<ValidSpec> {
@@ -254,7 +257,8 @@ fn valid_specs() -> Vec<ValidSpec> {
         resolution: 256,
         seed,
         unknown_section: false,
-        raw: false,
+        encoding: VisibilityEncoding::Tree,
+        facing: false,
     };
     vec![
         ValidSpec {
@@ -289,7 +293,7 @@ fn valid_specs() -> Vec<ValidSpec> {
             ..base("006-level3-nine-patches-offcentre", 3, vec![7; 9], 6)
         },
         ValidSpec {
-            raw: true,
+            encoding: VisibilityEncoding::Raw,
             ..base(
                 "007-level1-seven-patches-raw",
                 1,
@@ -298,12 +302,30 @@ fn valid_specs() -> Vec<ValidSpec> {
             )
         },
         ValidSpec {
-            raw: true,
+            encoding: VisibilityEncoding::Raw,
             ..base(
                 "008-level2-65-patches-raw",
                 2,
                 (1..=65).map(|i| i % 3 + 1).collect(),
                 4,
+            )
+        },
+        ValidSpec {
+            encoding: VisibilityEncoding::Hierarchical,
+            ..base(
+                "009-level2-65-patches-table",
+                2,
+                (1..=65).map(|i| i % 3 + 1).collect(),
+                4,
+            )
+        },
+        ValidSpec {
+            facing: true,
+            ..base(
+                "010-level3-300-patches-facing",
+                3,
+                (1..=300).map(|i| i % 4 + 1).collect(),
+                11,
             )
         },
     ]
@@ -331,8 +353,15 @@ fn build_valid(spec: &ValidSpec) -> Vec<u8> {
         .iter()
         .enumerate()
         .map(|(i, &count)| {
+            let axis = spec.facing.then(|| {
+                let h = mix(spec.seed ^ (i as u64) << 8);
+                let c = |k: u32| ((h >> (16 * k)) & 0xFFFF) as f32 / 32768.0 - 1.0;
+                let v = [c(0), c(1), c(2)];
+                let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt().max(1e-3);
+                v.map(|x| x / n)
+            });
             let i = i as f32;
-            let patch = Patch {
+            let mut patch = Patch {
                 first,
                 count,
                 area: count as f64,
@@ -342,6 +371,9 @@ fn build_valid(spec: &ValidSpec) -> Vec<u8> {
                     [i as usize % 4],
                 cone_cos: [-1.0, 0.5, 1.0, 0.0][i as usize % 4],
             };
+            if let Some(axis) = axis {
+                (patch.cone_axis, patch.cone_cos) = (axis, 0.5);
+            }
             first += count;
             patch
         })
@@ -353,10 +385,16 @@ fn build_valid(spec: &ValidSpec) -> Vec<u8> {
         for patch in 0..patch_count {
             // View 0 sees everything and view 1 nothing, so both extremes are covered;
             // the rest see about a third of the patches.
-            let seen = match view {
-                0 => true,
-                1 => false,
-                _ => mix(spec.seed << 40 ^ (view as u64) << 20 ^ patch as u64).is_multiple_of(3),
+            let noise = mix(spec.seed << 40 ^ (view as u64) << 20 ^ patch as u64);
+            let seen = if spec.facing {
+                let (a, d) = (patches[patch as usize].cone_axis, sphere::direction(view));
+                (a[0] * d[0] + a[1] * d[1] + a[2] * d[2] > -0.2) != noise.is_multiple_of(20)
+            } else {
+                match view {
+                    0 => true,
+                    1 => false,
+                    _ => noise.is_multiple_of(3),
+                }
             };
             if seen {
                 matrix.set(view, patch);
@@ -369,12 +407,7 @@ fn build_valid(spec: &ValidSpec) -> Vec<u8> {
         patches: &patches,
         visibility: &matrix,
     };
-    let encoding = if spec.raw {
-        VisibilityEncoding::Raw
-    } else {
-        VisibilityEncoding::Hierarchical
-    };
-    let bytes = encode_with(&contents, encoding);
+    let bytes = encode_with(&contents, spec.encoding);
     if !spec.unknown_section {
         return bytes;
     }
@@ -442,6 +475,25 @@ fn u32_at(bytes: &[u8], at: usize) -> u32 {
 
 fn u64_at(bytes: &[u8], at: usize) -> u64 {
     u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap())
+}
+
+fn put_u16(bytes: &mut [u8], at: usize, v: u16) {
+    bytes[at..at + 2].copy_from_slice(&v.to_le_bytes());
+}
+
+/// Applies `mutate(bytes, visb_offset)` to a file whose VISB uses encoding 2, fixing the CRC;
+/// `None` for other encodings.
+fn tree_corruption(
+    mut bytes: Vec<u8>,
+    mutate: impl FnOnce(&mut Vec<u8>, usize),
+) -> Option<Vec<u8>> {
+    let (_, visb, _) = find(&bytes, b"VISB");
+    if u32_at(&bytes, visb) != 2 {
+        return None;
+    }
+    mutate(&mut bytes, visb);
+    fix_crc(&mut bytes);
+    Some(bytes)
 }
 
 fn put_u32(bytes: &mut [u8], at: usize, v: u32) {
@@ -694,6 +746,28 @@ fn invalid_specs() -> Vec<(&'static str, Corruption)> {
         }),
         ("138-truncated-header", |b| Some(b[..20].to_vec())),
         ("139-truncated-body", |b| Some(b[..b.len() / 2].to_vec())),
+        // Encoding 2 (the base vector's): the context tree's rules.
+        ("140-tree-node-count-zero", |b| {
+            tree_corruption(b, |b, visb| put_u32(b, visb + 8, 0))
+        }),
+        ("141-tree-node-count-1025", |b| {
+            tree_corruption(b, |b, visb| put_u32(b, visb + 8, 1025))
+        }),
+        ("142-tree-leaf-probability-zero", |b| {
+            tree_corruption(b, |b, visb| put_u16(b, visb + 12, 0x8000))
+        }),
+        ("143-tree-leaf-probability-4096", |b| {
+            tree_corruption(b, |b, visb| put_u16(b, visb + 12, 0x9000))
+        }),
+        ("144-tree-feature-23", |b| {
+            tree_corruption(b, |b, visb| put_u16(b, visb + 12, 23 << 10 | 1))
+        }),
+        ("145-tree-child-not-after-parent", |b| {
+            tree_corruption(b, |b, visb| put_u16(b, visb + 12, 3 << 10))
+        }),
+        ("146-encoding-2-in-version-2", |b| {
+            tree_corruption(b, |b, _| put_u32(b, 8, 2))
+        }),
     ]
 }
 

@@ -42,8 +42,14 @@ fn valid_vectors_pass() {
         assert_eq!(out.status.code(), Some(0), "{file}: {}", stdout(&out));
         let text = stdout(&out);
         assert_eq!(text.lines().count(), 1, "{text}");
+        // Raw and table-coded vectors are version 2 (the oldest that holds them).
+        let version = if file.contains("-raw") || file.contains("-table") {
+            2
+        } else {
+            VERSION
+        };
         assert!(
-            text.starts_with(&format!("{file}: OK (version {VERSION}, ")),
+            text.starts_with(&format!("{file}: OK (version {version}, ")),
             "{text}"
         );
     }

@@ -127,6 +127,22 @@ pub struct BakeArgs {
     /// numbering --always-visible ids refer to).
     #[arg(long, value_enum, default_value_t = PatchOrderArg::Covisibility, value_name = "ORDER")]
     pub patch_order: PatchOrderArg,
+    /// How the file stores the visibility rows (spec/FORMAT.md § VISB): tree (encoding 2, the
+    /// smallest; format version 3), table (encoding 1, version 2: for readers that predate
+    /// version 3) or raw (encoding 0, one bit per view and patch, no decoding).
+    #[arg(long, value_enum, default_value_t = EncodingArg::Tree, value_name = "ENCODING")]
+    pub encoding: EncodingArg,
+}
+
+/// `--encoding`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum EncodingArg {
+    /// VISB encoding 2: range-coded rows, context-tree probabilities.
+    Tree,
+    /// VISB encoding 1: range-coded rows, a 32-context table per level.
+    Table,
+    /// VISB encoding 0: raw rows.
+    Raw,
 }
 
 /// `--patch-order`.

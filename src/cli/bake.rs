@@ -1,7 +1,7 @@
 //! `patchvis bake`: checked settings, then tile → sample → encode, with a timing and peak-heap
 //! record per stage, and outputs that appear only once everything succeeded.
 
-use super::args::{BackendArg, BakeArgs, FoldCornersArg, PatchOrderArg, TilingArg};
+use super::args::{BackendArg, BakeArgs, EncodingArg, FoldCornersArg, PatchOrderArg, TilingArg};
 use super::progress::Bars;
 use super::{UsageError, alloc};
 use anyhow::{Context, Result};
@@ -66,6 +66,8 @@ pub struct Settings {
     backend: BackendArg,
     /// `--patch-order`.
     patch_order: PatchOrderArg,
+    /// `--encoding`.
+    encoding: EncodingArg,
 }
 
 /// Smallest default budget: below this the machine is too small to bake anything large
@@ -230,6 +232,7 @@ impl Settings {
             memory_budget,
             backend: args.backend,
             patch_order: args.patch_order,
+            encoding: args.encoding,
             tiling: tiling::TilingOptions {
                 mode: match args.tiling {
                     TilingArg::Auto => tiling::TilingMode::Auto,
@@ -485,7 +488,12 @@ pub fn run(args: BakeArgs) -> Result<()> {
         visibility: &visibility,
     };
     let bytes = stage(&mut stages, "encoding", || {
-        bars.spin("encoding", || format::encode(&contents))
+        let encoding = match s.encoding {
+            EncodingArg::Tree => format::VisibilityEncoding::Tree,
+            EncodingArg::Table => format::VisibilityEncoding::Hierarchical,
+            EncodingArg::Raw => format::VisibilityEncoding::Raw,
+        };
+        bars.spin("encoding", || format::encode_with(&contents, encoding))
     });
     let visibility_bytes = patchvis::runtime::Pvis::parse(&bytes)
         .map(|p| p.visibility_bytes())
@@ -573,6 +581,7 @@ pub fn run(args: BakeArgs) -> Result<()> {
             "backend": backend.describe(),
             "fold_corners": format!("{:?}", s.fold_corners).to_lowercase(),
             "patch_order": if renumbered { "covisibility" } else { "spatial" },
+            "encoding": format!("{:?}", s.encoding).to_lowercase(),
             "sampled_views": sampled_views,
             "always_visible": s.options.always_visible.len(),
             "visible_fraction_mean": visible_fraction,

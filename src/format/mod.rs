@@ -3,18 +3,21 @@
 //!
 //! Every offset, length and limit comes from [`crate::runtime::consts`], so writer and reader
 //! cannot drift apart; `encode` also runs the reader over its own output. Output is
-//! byte-deterministic: the same contents give the same bytes. VISB is written with encoding 1
-//! (`visb`: rows range-coded given their parent views). Cost: two passes over the visibility
-//! matrix plus one CRC and one validation pass over the output.
+//! byte-deterministic: the same contents give the same bytes. VISB is written with encoding 2
+//! (`tree`: rows range-coded given their parent views, probabilities from a context tree);
+//! encodings 0 and 1 on request (`visb`). Cost: a few passes over the visibility matrix plus
+//! one CRC and one validation pass over the output.
 
 mod atomic;
 mod patch_order;
 #[cfg(test)]
 mod tests;
+mod tree;
 mod visb;
 
 pub use atomic::write_atomic;
 pub use patch_order::{MAX_TOUR_WORK, covisibility_order};
+pub use tree::encode_tree;
 pub use visb::{encode_hierarchical, probabilities};
 
 use crate::runtime::Pvis;
@@ -45,8 +48,12 @@ const SECTIONS: [[u8; 4]; 3] = [TAG_CAMR, TAG_PTCH, TAG_VISB];
 pub enum VisibilityEncoding {
     /// Encoding 0: every row whole, one bit per patch. For comparisons and simple readers.
     Raw,
-    /// Encoding 1: each view range-coded given its two parent views. The default.
+    /// Encoding 1: each view range-coded given its two parent views, with a 32-context table
+    /// per level. Readable by version-2 readers.
     Hierarchical,
+    /// Encoding 2: as encoding 1, with probabilities from a context tree over wider features
+    /// of the parents' rows (8–10% smaller on the bunny). The default.
+    Tree,
 }
 
 /// Encodes `contents` as a `.pvis` file with the default, context-coded payload.
@@ -54,7 +61,7 @@ pub enum VisibilityEncoding {
 /// # Panics
 /// As [`encode_with`].
 pub fn encode(contents: &BakeContents) -> Vec<u8> {
-    encode_with(contents, VisibilityEncoding::Hierarchical)
+    encode_with(contents, VisibilityEncoding::Tree)
 }
 
 /// Encodes `contents` as a `.pvis` file whose payload uses `encoding`.
@@ -84,6 +91,7 @@ pub fn encode_with(contents: &BakeContents, encoding: VisibilityEncoding) -> Vec
         VisibilityEncoding::Hierarchical => {
             encode_hierarchical(contents.visibility, params.level.min(MAX_LEVEL))
         }
+        VisibilityEncoding::Tree => encode_tree(contents.visibility, contents.patches),
     };
 
     let table_end = HEADER_LEN + SECTION_ENTRY_LEN * SECTIONS.len() as u64;
@@ -97,7 +105,12 @@ pub fn encode_with(contents: &BakeContents, encoding: VisibilityEncoding) -> Vec
 
     let mut out = Vec::with_capacity(file_length as usize);
     out.extend_from_slice(&MAGIC);
-    out.extend_from_slice(&VERSION.to_le_bytes());
+    // The oldest version that has the encoding, so older readers take what they can read.
+    let version = match encoding {
+        VisibilityEncoding::Raw | VisibilityEncoding::Hierarchical => 2,
+        VisibilityEncoding::Tree => VERSION,
+    };
+    out.extend_from_slice(&version.to_le_bytes());
     out.extend_from_slice(&KNOWN_FLAGS.to_le_bytes());
     out.extend_from_slice(&file_length.to_le_bytes());
     out.extend_from_slice(&(SECTIONS.len() as u32).to_le_bytes());

@@ -17,7 +17,13 @@ fn patches(counts: &[u32]) -> Vec<Patch> {
                 area: 1.0,
                 center: [i as f32, -(i as f32), 0.5],
                 radius: 0.125 * i as f32,
-                cone_axis: [0.0, 0.0, 1.0],
+                // Varied axes, so encoding 2's facing features take every value.
+                cone_axis: [
+                    [0.0, 0.0, 1.0],
+                    [1.0, 0.0, 0.0],
+                    [0.0, -1.0, 0.0],
+                    [0.6, 0.8, 0.0],
+                ][i % 4],
                 cone_cos: if i % 2 == 0 { -1.0 } else { 0.75 },
             };
             first += count;
@@ -36,18 +42,38 @@ fn params(level: u32) -> SamplingParams {
     }
 }
 
-/// Encodes, parses and checks every field and row against the inputs.
+/// Encodes with the default encoding, parses and checks every field and row against the inputs.
 fn round_trip(level: u32, counts: &[u32], matrix: &VisibilityMatrix) -> Vec<u8> {
+    round_trip_with(level, counts, matrix, VisibilityEncoding::Tree)
+}
+
+/// Encodes with `encoding`, parses and checks every field and row against the inputs.
+fn round_trip_with(
+    level: u32,
+    counts: &[u32],
+    matrix: &VisibilityMatrix,
+    encoding: VisibilityEncoding,
+) -> Vec<u8> {
     let params = params(level);
     let patches = patches(counts);
     let triangle_count = counts.iter().map(|&c| c as u64).sum();
-    let bytes = encode(&BakeContents {
+    let contents = BakeContents {
         sampling: &params,
         triangle_count,
         patches: &patches,
         visibility: matrix,
-    });
+    };
+    let bytes = encode_with(&contents, encoding);
+    if encoding == VisibilityEncoding::Tree {
+        assert_eq!(bytes, encode(&contents), "encoding 2 is the default");
+    }
     let pvis = Pvis::parse(&bytes).expect("the writer's output parses");
+    let expected_encoding = match encoding {
+        VisibilityEncoding::Raw => ENCODING_RAW,
+        VisibilityEncoding::Hierarchical => ENCODING_HIERARCHICAL,
+        VisibilityEncoding::Tree => ENCODING_TREE,
+    };
+    assert_eq!(pvis.encoding(), expected_encoding);
     assert_eq!(
         pvis.sampling(),
         Sampling {
@@ -157,21 +183,23 @@ fn layout_of_a_small_file() {
     matrix.set(0, 2);
     matrix.set(5, 0);
     let bytes = round_trip(0, &[2, 1, 4], &matrix);
-    // Header 32 + table 72 = 104; CAMR 104..148; PTCH 152..288; VISB 288..372; CRC 372..376.
-    assert_eq!(bytes.len(), 376);
+    // Header 32 + table 72 = 104; CAMR 104..148; PTCH 152..288; VISB 288..314; CRC 314..318.
+    assert_eq!(bytes.len(), 318);
     assert_eq!(&bytes[..8], b"PVIS\r\n\x1a\n");
     assert_eq!(&bytes[32..36], b"CAMR");
     assert_eq!(bytes[40], 104);
     assert_eq!(&bytes[32 + 24 + 8..32 + 24 + 9], [152]);
     assert_eq!(&bytes[32 + 48 + 8..32 + 48 + 10], 288u16.to_le_bytes());
     assert_eq!(bytes[148..152], [0; 4], "alignment padding");
-    assert_eq!(bytes[8], 2, "version 2");
-    // VISB: encoding 1, reserved, 32 level-0 probabilities, one checkpoint, then the records.
-    assert_eq!(bytes[288..296], [1, 0, 0, 0, 0, 0, 0, 0]);
-    assert_eq!(bytes[360..364], [0; 4], "checkpoint of view 0");
-    // Views 1–4 see nothing: the all-zero context codes zeros from an empty code. Views 0 and
-    // 5 each need one byte; so records are 6 length bytes and 2 code bytes.
-    let records = &bytes[364..372];
+    assert_eq!(bytes[8], 3, "version 3");
+    // VISB: encoding 2, reserved, a one-node tree: a leaf with P(0) = 16/18 (2 of the 18 bits
+    // are set) = 3641/4096; one checkpoint; then the records.
+    assert_eq!(bytes[288..300], [2, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0]);
+    assert_eq!(u16::from_le_bytes([bytes[300], bytes[301]]), 0x8000 | 3641);
+    assert_eq!(bytes[302..306], [0; 4], "checkpoint of view 0");
+    // Views 1–4 see nothing: zeros code to an empty code. Views 0 and 5 each need one byte;
+    // so records are 6 length bytes and 2 code bytes.
+    let records = &bytes[306..314];
     assert_eq!(records[0], 1);
     assert_eq!(records[2..6], [0, 0, 0, 0]);
     assert_eq!(records[6], 1);
@@ -226,6 +254,11 @@ proptest! {
         counts in proptest::sample::select(vec![1usize, 2, 63, 64, 65, 130])
             .prop_flat_map(|n| proptest::collection::vec(1u32..5, n)),
         seed in any::<u64>(),
+        encoding in proptest::sample::select(vec![
+            VisibilityEncoding::Raw,
+            VisibilityEncoding::Hierarchical,
+            VisibilityEncoding::Tree,
+        ]),
     ) {
         let views = sphere::view_count(level);
         let mut matrix = VisibilityMatrix::new(views, counts.len() as u32);
@@ -243,12 +276,12 @@ proptest! {
                 }
             }
         }
-        round_trip(level, &counts, &matrix);
+        round_trip_with(level, &counts, &matrix, encoding);
     }
 }
 
-/// A level-1 file with encoding 1 and a correlated matrix.
-fn coded_file() -> Vec<u8> {
+/// A level-1 file with `encoding` and a correlated matrix.
+fn coded_file(encoding: VisibilityEncoding) -> Vec<u8> {
     let mut matrix = VisibilityMatrix::new(18, 70);
     for v in 0..18 {
         for p in 0..70 {
@@ -257,16 +290,17 @@ fn coded_file() -> Vec<u8> {
             }
         }
     }
-    round_trip(1, &[1; 70], &matrix)
+    round_trip_with(1, &[1; 70], &matrix, encoding)
 }
 
 #[test]
 fn every_truncated_prefix_trailing_byte_and_bit_flip_of_a_coded_file_is_refused() {
-    let bytes = coded_file();
-    assert_eq!(
-        Pvis::parse(&bytes).unwrap().encoding(),
-        ENCODING_HIERARCHICAL
-    );
+    for encoding in [VisibilityEncoding::Hierarchical, VisibilityEncoding::Tree] {
+        every_change_is_refused(coded_file(encoding));
+    }
+}
+
+fn every_change_is_refused(bytes: Vec<u8>) {
     for len in 0..bytes.len() {
         assert!(Pvis::parse(&bytes[..len]).is_err(), "prefix of {len} bytes");
     }
@@ -291,7 +325,7 @@ fn with_crc(mut bytes: Vec<u8>) -> Vec<u8> {
 
 #[test]
 fn coded_visb_structure_errors() {
-    let bytes = coded_file();
+    let bytes = coded_file(VisibilityEncoding::Hierarchical);
     let visb = u64::from_le_bytes(bytes[32 + 48 + 8..32 + 48 + 16].try_into().unwrap()) as usize;
     // A zero probability would collapse the range.
     let mut zero_prob = bytes.clone();
@@ -336,4 +370,84 @@ fn version_1_files_with_raw_rows_still_parse() {
     let pvis = Pvis::parse(&v1).unwrap();
     assert_eq!((pvis.version(), pvis.encoding()), (1, ENCODING_RAW));
     check_queries(&pvis, &matrix, 7);
+}
+
+/// Replaces the VISB section (the last one) of `file` with `body` and fixes the lengths and CRC.
+fn with_visb(file: &[u8], body: &[u8]) -> Vec<u8> {
+    let visb = u64::from_le_bytes(file[32 + 48 + 8..32 + 48 + 16].try_into().unwrap()) as usize;
+    let mut out = file[..visb].to_vec();
+    out[32 + 48 + 16..32 + 48 + 24].copy_from_slice(&(body.len() as u64).to_le_bytes());
+    out.extend_from_slice(body);
+    let len = out.len() as u64 + 4;
+    out[16..24].copy_from_slice(&len.to_le_bytes());
+    out.extend_from_slice(&[0; 4]);
+    with_crc(out)
+}
+
+/// An encoding-2 VISB body for 18 views whose tree is a chain `depth` internal nodes deep
+/// (node `2i` tests feature `i % 23` and leads to `2i + 1`, a leaf, or `2i + 2`) and whose
+/// codes are all empty.
+fn chain_tree_visb(depth: u16) -> Vec<u8> {
+    let mut body = Vec::new();
+    body.extend_from_slice(&ENCODING_TREE.to_le_bytes());
+    body.extend_from_slice(&0u32.to_le_bytes());
+    body.extend_from_slice(&(2 * depth as u32 + 1).to_le_bytes());
+    for i in 0..depth {
+        body.extend_from_slice(&((i % 23) << 10 | (2 * i + 1)).to_le_bytes());
+        body.extend_from_slice(&(0x8000u16 | 4000).to_le_bytes());
+    }
+    body.extend_from_slice(&(0x8000u16 | 4000).to_le_bytes());
+    body.extend_from_slice(&0u32.to_le_bytes());
+    body.extend_from_slice(&[0; 18]);
+    body
+}
+
+#[test]
+fn tree_depth_is_limited_and_deep_trees_decode() {
+    use crate::runtime::model::MAX_TREE_DEPTH;
+    let file = coded_file(VisibilityEncoding::Tree);
+    // Children at 2i + 1 (a leaf) and 2i + 2 (the next internal node).
+    let ok = with_visb(&file, &chain_tree_visb(MAX_TREE_DEPTH as u16));
+    let pvis = Pvis::parse(&ok).expect("a tree exactly MAX_TREE_DEPTH deep is valid");
+    let mut row = vec![!0u64; pvis.row_words()];
+    pvis.view_row(17, &mut row);
+    assert!(row.iter().all(|&w| w == 0), "empty codes decode to zeros");
+    let deep = with_visb(&file, &chain_tree_visb(MAX_TREE_DEPTH as u16 + 1));
+    assert!(matches!(
+        Pvis::parse(&deep),
+        Err(crate::runtime::Error::LimitExceeded { what, .. }) if what.contains("depth")
+    ));
+}
+
+/// Encoding 2 shrinks real-looking rows below encoding 1: views see the patches facing them.
+#[test]
+fn tree_coding_beats_the_table_on_structured_rows() {
+    let level = 3;
+    let views = sphere::view_count(level);
+    let counts = vec![1u32; 400];
+    let patches = patches(&counts);
+    let mut matrix = VisibilityMatrix::new(views, 400);
+    for v in 0..views {
+        let d = sphere::direction(v);
+        for p in 0..400u32 {
+            let t = p as f32 * 0.7;
+            let axis = [
+                t.cos() * 0.8,
+                t.sin() * 0.8,
+                0.6 * if p % 2 == 0 { 1.0 } else { -1.0 },
+            ];
+            let _ = &patches;
+            if axis[0] * d[0] + axis[1] * d[1] + axis[2] * d[2] > -0.1 {
+                matrix.set(v, p);
+            }
+        }
+    }
+    let table = round_trip_with(level, &counts, &matrix, VisibilityEncoding::Hierarchical);
+    let tree = round_trip_with(level, &counts, &matrix, VisibilityEncoding::Tree);
+    assert!(
+        tree.len() < table.len(),
+        "tree {} B, table {} B",
+        tree.len(),
+        table.len()
+    );
 }

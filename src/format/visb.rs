@@ -91,7 +91,7 @@ fn encode_view(matrix: &VisibilityMatrix, view: u32, probs: &[u16; CONTEXTS], ou
 
 /// The encoder matching [`crate::runtime::RangeDecoder`]: `low` is a 32-bit window (plus a
 /// carry bit) onto the code, whose earlier bytes are already in `out`.
-struct RangeEncoder<'o> {
+pub(crate) struct RangeEncoder<'o> {
     out: &'o mut Vec<u8>,
     start: usize,
     low: u64,
@@ -99,7 +99,7 @@ struct RangeEncoder<'o> {
 }
 
 impl<'o> RangeEncoder<'o> {
-    fn new(out: &'o mut Vec<u8>) -> Self {
+    pub(crate) fn new(out: &'o mut Vec<u8>) -> Self {
         let start = out.len();
         RangeEncoder {
             out,
@@ -121,7 +121,7 @@ impl<'o> RangeEncoder<'o> {
         unreachable!("range coder carry past the start of the code");
     }
 
-    fn bit(&mut self, bit: u64, p0: u32) {
+    pub(crate) fn bit(&mut self, bit: u64, p0: u32) {
         let bound = (self.range >> PROB_BITS) * p0;
         if bit == 0 {
             self.range = bound;
@@ -143,7 +143,7 @@ impl<'o> RangeEncoder<'o> {
     /// Ends the code: picks the value in `[low, low + range)` with the most trailing zero
     /// bits, writes its 4 bytes and drops every trailing zero byte (the decoder reads zeros
     /// past the end).
-    fn finish(mut self) {
+    pub(crate) fn finish(mut self) {
         let high = self.low + self.range as u64 - 1;
         let mut value = self.low;
         for k in (0..=32).rev() {
@@ -166,7 +166,7 @@ impl<'o> RangeEncoder<'o> {
 }
 
 /// Appends `value` as an unsigned LEB128.
-fn write_varint(out: &mut Vec<u8>, mut value: u32) {
+pub(crate) fn write_varint(out: &mut Vec<u8>, mut value: u32) {
     while value >= 0x80 {
         out.push((value as u8 & 0x7F) | 0x80);
         value >>= 7;

@@ -54,16 +54,14 @@ impl<'a> RangeDecoder<'a> {
     #[inline(always)]
     pub fn bit(&mut self, p0: u32) -> u64 {
         let bound = (self.range >> PROB_BITS) * p0;
-        let bit = if self.value < bound {
-            self.range = bound;
-            0
-        } else {
-            // On a corrupt-but-checksummed code `value` may exceed `range`; the subtraction
-            // still cannot underflow and the output is merely arbitrary bits.
-            self.value -= bound;
-            self.range -= bound;
-            1
-        };
+        // Branch-free: a bit near probability ½ would mispredict half the time. On a
+        // corrupt-but-checksummed code `value` may exceed `range`; the subtraction still cannot
+        // underflow and the output is merely arbitrary bits.
+        let bit = u32::from(self.value >= bound);
+        let mask = 0u32.wrapping_sub(bit);
+        self.value -= bound & mask;
+        self.range = bound ^ ((bound ^ (self.range - bound)) & mask);
+        let bit = u64::from(bit);
         while self.range < RANGE_TOP {
             self.range <<= 8;
             self.value = self.value << 8 | self.next_byte();

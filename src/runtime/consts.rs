@@ -8,7 +8,7 @@
 pub const MAGIC: [u8; 8] = *b"PVIS\r\n\x1a\n";
 
 /// The format version this reader understands and the writer writes (§ Versioning).
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 
 /// The oldest version this reader still reads (§ Versioning): version 1 is version 2 restricted
 /// to VISB encoding 0.
@@ -63,6 +63,10 @@ pub const ENCODING_RAW: u32 = 0;
 /// VISB encoding 1: every view's row coded by a binary range coder conditioned on its two
 /// parent views (§ VISB, encoding 1). Version 2 only.
 pub const ENCODING_HIERARCHICAL: u32 = 1;
+
+/// VISB encoding 2: every view's row coded by a binary range coder whose probabilities come
+/// from a context tree over the bit's features (§ VISB, encoding 2). Version 3 only.
+pub const ENCODING_TREE: u32 = 2;
 
 /// Contexts per level of encoding 1 (§ Context): 5 bits — the two parents' bits at the patch
 /// and at the patch before it, and the view's own previous bit. Measured on the bunny (spec §

@@ -106,6 +106,8 @@ impl<'a, 't> Expanded<'a, 't> {
         );
         let words = pvis.row_words();
         let views = pvis.sampling.views as usize;
+        let mut slots = [0u64; super::model::TREE_CACHE_WORDS];
+        let mut cache = super::model::TreeCache::new(&mut slots);
         for v in 0..views {
             let at = (1 + v) * words;
             let (done, rest) = table.split_at_mut(at);
@@ -114,7 +116,7 @@ impl<'a, 't> Expanded<'a, 't> {
                 &done[s..s + words]
             };
             let parent_rows = parents(v as u32).map(|[a, b]| (row(a), row(b)));
-            pvis.decode_row(v as u32, parent_rows, &mut rest[..words]);
+            pvis.decode_row(v as u32, parent_rows, &mut rest[..words], &mut cache);
         }
         let level = pvis.sampling.level;
         let (faces, rest) =

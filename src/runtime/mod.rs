@@ -22,6 +22,7 @@ pub mod consts;
 pub mod crc32c;
 mod error;
 mod expanded;
+pub mod model;
 mod parse;
 mod query;
 mod stream;
@@ -38,7 +39,7 @@ pub use query::{Patches, TriangleRanges, Visible, ranges};
 pub use streaming::Streaming;
 
 use stream::Stream;
-use visb::Visb;
+use visb::{Model, Visb};
 
 /// Sampling parameters stored in the file (spec § CAMR).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -162,12 +163,19 @@ impl<'a> Pvis<'a> {
         (self.patch_count as usize).div_ceil(64)
     }
 
-    /// The VISB encoding of the file: [`consts::ENCODING_RAW`] or
-    /// [`consts::ENCODING_HIERARCHICAL`].
+    /// The VISB encoding of the file: [`consts::ENCODING_RAW`],
+    /// [`consts::ENCODING_HIERARCHICAL`] or [`consts::ENCODING_TREE`].
     pub fn encoding(&self) -> u32 {
         match self.visb {
             Visb::Raw { .. } => consts::ENCODING_RAW,
-            Visb::Hierarchical { .. } => consts::ENCODING_HIERARCHICAL,
+            Visb::Hierarchical {
+                model: Model::Table(_),
+                ..
+            } => consts::ENCODING_HIERARCHICAL,
+            Visb::Hierarchical {
+                model: Model::Tree { .. },
+                ..
+            } => consts::ENCODING_TREE,
         }
     }
 
@@ -219,7 +227,13 @@ impl<'a> Pvis<'a> {
 
     /// Decodes the row of `view` into `out` given its parents' decoded rows (`None` for a
     /// level-0 view; ignored for encoding 0, which reads the row directly).
-    fn decode_row(&self, view: u32, parent_rows: Option<(&[u64], &[u64])>, out: &mut [u64]) {
+    fn decode_row(
+        &self,
+        view: u32,
+        parent_rows: Option<(&[u64], &[u64])>,
+        out: &mut [u64],
+        cache: &mut model::TreeCache<'_>,
+    ) {
         match self.visb {
             Visb::Raw { .. } => {
                 out.fill(0);
@@ -227,7 +241,7 @@ impl<'a> Pvis<'a> {
             }
             Visb::Hierarchical { .. } => {
                 self.visb
-                    .decode_row(view, parent_rows, out, self.patch_count)
+                    .decode_row(view, parent_rows, out, self.patch_count, cache)
             }
         }
     }
@@ -238,9 +252,22 @@ impl<'a> Pvis<'a> {
     }
 
     /// `u64` words of scratch a [`Streaming`] query state needs: `4 + 3·level` rows (the
-    /// answer, the 3 corners of the root face and 3 edge midpoints per level of the path).
+    /// answer, the 3 corners of the root face and 3 edge midpoints per level of the path),
+    /// plus, for VISB encoding 2, a 32 KiB cache of context-tree lookups.
     pub fn scratch_bound(&self) -> usize {
-        streaming::slots(self.sampling.level) * self.row_words()
+        streaming::slots(self.sampling.level) * self.row_words() + self.tree_cache_words()
+    }
+
+    /// Words of tree cache the streaming state keeps: [`model::TREE_CACHE_WORDS`] for
+    /// encoding 2, none otherwise.
+    fn tree_cache_words(&self) -> usize {
+        match self.visb {
+            Visb::Hierarchical {
+                model: Model::Tree { .. },
+                ..
+            } => model::TREE_CACHE_WORDS,
+            _ => 0,
+        }
     }
 
     /// `u64` words of the table [`Pvis::expand`] fills: every view's row, the answer row,

@@ -9,8 +9,9 @@
 
 use super::consts::*;
 use super::crc32c::crc32c;
+use super::model::{FEATURES, LEAF, MAX_TREE_DEPTH, MAX_TREE_NODES};
 use super::stream::{FromData, Stream};
-use super::visb::{Visb, read_varint};
+use super::visb::{Model, Visb, read_varint};
 use super::{Error, Pvis, Sampling};
 
 /// Where a section lies, as checked against the table rules.
@@ -186,14 +187,15 @@ pub(super) fn parse(data: &[u8]) -> Result<Pvis<'_>, Error> {
 
     let sampling = parse_camr(data, camr)?;
     let (patch_count, triangle_count) = parse_ptch(data, ptch)?;
-    let payload = parse_visb(data, visb, version, sampling, patch_count)?;
+    let records = &data[at(ptch.offset + PTCH_HEADER_LEN)..at(ptch.offset + ptch.length)];
+    let payload = parse_visb(data, visb, version, sampling, patch_count, records)?;
 
     Ok(Pvis {
         bytes: data,
         sampling,
         patch_count,
         triangle_count,
-        records: &data[at(ptch.offset + PTCH_HEADER_LEN)..at(ptch.offset + ptch.length)],
+        records,
         visb: payload,
         visibility_bytes: visb.length,
     })
@@ -361,13 +363,14 @@ fn parse_ptch(data: &[u8], section: Section) -> Result<(u32, u64), Error> {
     Ok((patch_count, triangle_count))
 }
 
-/// § VISB: the fixed part, then encoding 0 or 1.
+/// § VISB: the fixed part, then encoding 0, 1 or 2.
 fn parse_visb<'a>(
     data: &'a [u8],
     section: Section,
     version: u32,
     sampling: Sampling,
     patch_count: u32,
+    patches: &'a [u8],
 ) -> Result<Visb<'a>, Error> {
     if section.length < VISB_HEADER_LEN {
         return Err(Error::BadSection { tag: TAG_VISB });
@@ -379,7 +382,12 @@ fn parse_visb<'a>(
     match encoding {
         ENCODING_RAW => parse_raw(data, section, sampling.views, patch_count),
         ENCODING_HIERARCHICAL if version >= 2 => {
-            parse_hierarchical(data, section, sampling, patch_count)
+            let (model, model_end) = parse_table(data, section, sampling)?;
+            parse_records(data, section, model, model_end, sampling, patch_count)
+        }
+        ENCODING_TREE if version >= 3 => {
+            let (model, model_end) = parse_tree(data, section, patches)?;
+            parse_records(data, section, model, model_end, sampling, patch_count)
         }
         found => Err(Error::UnsupportedEncoding { found }),
     }
@@ -424,26 +432,21 @@ fn parse_raw(
     })
 }
 
-/// § VISB, encoding 1: probability table, checkpoints, and every view record's length prefix
-/// and code bounds. The codes themselves need no check: every byte string decodes (§ Range
-/// coder), so after this no decode can fail.
-fn parse_hierarchical(
+/// § VISB, encoding 1: the probability table. Returns the model and where it ends.
+fn parse_table(
     data: &[u8],
     section: Section,
     sampling: Sampling,
-    patch_count: u32,
-) -> Result<Visb<'_>, Error> {
-    let have = data.len() as u64;
+) -> Result<(Model<'_>, u64), Error> {
     let end = section.offset + section.length;
     let probs_start = section.offset + VISB_HEADER_LEN;
-    // Cannot overflow: level ≤ 7, views ≤ 2^17.
+    // Cannot overflow: level ≤ 7.
     let probs_end = probs_start + (sampling.level as u64 + 1) * CONTEXTS as u64 * 2;
-    let checkpoints_end = probs_end + 4 * sampling.views.div_ceil(CHECKPOINT_INTERVAL) as u64;
-    if checkpoints_end > end {
+    if probs_end > end {
         return Err(Error::SectionLength {
             tag: TAG_VISB,
             length: section.length,
-            expected: checkpoints_end - section.offset,
+            expected: probs_end - section.offset,
         });
     }
     let probs = &data[at(probs_start)..at(probs_end)];
@@ -456,6 +459,122 @@ fn parse_hierarchical(
                 value: p0 as u64,
             });
         }
+    }
+    Ok((Model::Table(probs), probs_end))
+}
+
+/// § VISB, encoding 2: the context tree — node count, every node's fields, children after
+/// their parent, depth. Returns the model and where it ends.
+fn parse_tree<'a>(
+    data: &'a [u8],
+    section: Section,
+    patches: &'a [u8],
+) -> Result<(Model<'a>, u64), Error> {
+    let end = section.offset + section.length;
+    let count_at = section.offset + VISB_HEADER_LEN;
+    if count_at + 4 > end {
+        return Err(Error::SectionLength {
+            tag: TAG_VISB,
+            length: section.length,
+            expected: count_at + 4 - section.offset,
+        });
+    }
+    let count = read::<u32>(&mut Stream::new_at(data, at(count_at)), data.len())?;
+    if count == 0 || count > MAX_TREE_NODES {
+        return Err(Error::Invalid {
+            what: "VISB tree node count must be in 1..=1024",
+            offset: count_at,
+            value: count as u64,
+        });
+    }
+    let nodes_start = count_at + 4;
+    let nodes_end = nodes_start + 2 * count as u64;
+    if nodes_end > end {
+        return Err(Error::SectionLength {
+            tag: TAG_VISB,
+            length: section.length,
+            expected: nodes_end - section.offset,
+        });
+    }
+    let nodes = &data[at(nodes_start)..at(nodes_end)];
+    // Depth (internal nodes above) of every node reached so far; children follow parents, so
+    // one forward pass sees every parent before its children.
+    let mut depth = [0u8; MAX_TREE_NODES as usize];
+    let mut used = 0u32;
+    for (i, pair) in nodes.chunks_exact(2).enumerate() {
+        let node = u16::from_le_bytes([pair[0], pair[1]]);
+        let offset = nodes_start + 2 * i as u64;
+        if node & LEAF != 0 {
+            let p0 = node & !LEAF;
+            if p0 == 0 || u32::from(p0) >= 1 << PROB_BITS {
+                return Err(Error::Invalid {
+                    what: "VISB tree leaf must hold a probability in 1..4096",
+                    offset,
+                    value: node as u64,
+                });
+            }
+            continue;
+        }
+        let feature = u32::from(node >> 10);
+        if feature >= FEATURES {
+            return Err(Error::Invalid {
+                what: "VISB tree node must test a feature below 23",
+                offset,
+                value: node as u64,
+            });
+        }
+        used |= 1 << feature;
+        let child = usize::from(node & 0x3FF);
+        if child <= i || child + 1 >= count as usize {
+            return Err(Error::Invalid {
+                what: "VISB tree node's children must follow it inside the tree",
+                offset,
+                value: node as u64,
+            });
+        }
+        let d = depth[i] + 1;
+        if u32::from(d) > MAX_TREE_DEPTH {
+            return Err(Error::LimitExceeded {
+                what: "VISB tree depth",
+                value: d as u64,
+                limit: MAX_TREE_DEPTH as u64,
+            });
+        }
+        depth[child] = depth[child].max(d);
+        depth[child + 1] = depth[child + 1].max(d);
+    }
+    Ok((
+        Model::Tree {
+            nodes,
+            patches,
+            used,
+        },
+        nodes_end,
+    ))
+}
+
+/// § VISB, encodings 1 and 2: checkpoints, and every view record's length prefix and code
+/// bounds, after the model that ends at `model_end`. The codes themselves need no check:
+/// every byte string decodes (§ Range coder), so after this no decode can fail.
+fn parse_records<'a>(
+    data: &'a [u8],
+    section: Section,
+    model: Model<'a>,
+    model_end: u64,
+    sampling: Sampling,
+    patch_count: u32,
+) -> Result<Visb<'a>, Error> {
+    let have = data.len() as u64;
+    let end = section.offset + section.length;
+    let probs_end = model_end;
+    // Cannot overflow: views ≤ 2^17.
+    let checkpoints_end = probs_end + 4 * sampling.views.div_ceil(CHECKPOINT_INTERVAL) as u64;
+    if checkpoints_end > end {
+        return Err(Error::SectionLength {
+            tag: TAG_VISB,
+            length: section.length,
+            expected: checkpoints_end - section.offset,
+        });
     }
     let checkpoints = &data[at(probs_end)..at(checkpoints_end)];
     let records = &data[at(checkpoints_end)..at(end)];
@@ -517,7 +636,7 @@ fn parse_hierarchical(
         });
     }
     Ok(Visb::Hierarchical {
-        probs,
+        model,
         checkpoints,
         records,
     })

@@ -8,9 +8,11 @@
 //! are recomputed. A camera that stays in its leaf therefore costs `level` plane tests; moving
 //! to a neighbouring leaf decodes at most 3 rows per level changed (usually 0–3 in total: the
 //! midpoints of a face are kept while the eye moves among its children).
-//! Memory: `4 + 3·level` rows in the caller's scratch ([`super::Pvis::scratch_bound`]) plus a
-//! few KiB of path state in the struct itself; no allocation.
+//! Memory: `4 + 3·level` rows in the caller's scratch ([`super::Pvis::scratch_bound`]), for
+//! VISB encoding 2 a 32 KiB memo of context-tree lookups there too, plus a few KiB of path
+//! state in the struct itself; no allocation.
 
+use super::model::TreeCache;
 use super::query::{Eye, classify, everything, visible};
 use super::{Pvis, Visible};
 use crate::sphere::{Face, MAX_LEVEL, children, cross, dot, root_faces};
@@ -94,6 +96,8 @@ pub(super) fn mids(kids: &[Face; 4]) -> [u32; 3] {
 pub struct Streaming<'a, 's> {
     pvis: Pvis<'a>,
     rows: &'s mut [u64],
+    /// Memo of context-tree lookups (VISB encoding 2; empty otherwise).
+    cache: TreeCache<'s>,
     path: [PathLevel; MAX_LEVEL as usize + 1],
     /// Valid levels of `path` (0 before the first query).
     depth: usize,
@@ -112,6 +116,9 @@ impl<'a, 's> Streaming<'a, 's> {
             "scratch holds {} words, {need} needed (Pvis::scratch_bound)",
             rows.len()
         );
+        let (rows, cache) = rows[..need].split_at_mut(need - pvis.tree_cache_words());
+        cache.fill(0);
+        let cache = TreeCache::new(cache);
         let root = root_faces()[0];
         let level = PathLevel {
             face: root,
@@ -124,6 +131,7 @@ impl<'a, 's> Streaming<'a, 's> {
         Streaming {
             pvis,
             rows,
+            cache,
             path: [level; MAX_LEVEL as usize + 1],
             depth: 0,
             octant: 0,
@@ -180,7 +188,7 @@ impl<'a, 's> Streaming<'a, 's> {
         for (i, &v) in face.views.iter().enumerate() {
             let slot = (1 + i) * words;
             self.pvis
-                .decode_row(v, None, &mut self.rows[slot..slot + words]);
+                .decode_row(v, None, &mut self.rows[slot..slot + words], &mut self.cache);
         }
         self.decoded += 3;
         self.set_level(0, face, [1, 2, 3]);
@@ -230,6 +238,7 @@ impl<'a, 's> Streaming<'a, 's> {
                 mid,
                 Some((&lo[sa..sa + words], &lo[sb..sb + words])),
                 &mut hi[..words],
+                &mut self.cache,
             );
             self.decoded += 1;
             self.path[k].mid_ready[j] = true;

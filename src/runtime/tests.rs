@@ -223,8 +223,8 @@ fn header_errors() {
     assert_eq!(error_after(|f| f[0] = b'X'), Error::BadMagic);
     assert_eq!(Pvis::parse(b"PVIX").unwrap_err(), Error::BadMagic);
     assert_eq!(
-        error_after(|f| f[8] = 3),
-        Error::UnsupportedVersion { found: 3 }
+        error_after(|f| f[8] = 4),
+        Error::UnsupportedVersion { found: 4 }
     );
     assert_eq!(
         error_after(|f| f[8] = 0),

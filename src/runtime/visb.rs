@@ -11,9 +11,10 @@
 //! scratch beyond the output row. Cost: decoding one bit is one range-coder step; lock step
 //! decodes the `3 + 3·level` views of the closure.
 
-use super::coder::{RangeDecoder, context};
+use super::coder::RangeDecoder;
 use super::consts::{CHECKPOINT_INTERVAL, CONTEXTS, MAX_LANES, MAX_VARINT_LEN};
-use crate::sphere::{level_of, parents};
+use super::model::{TreeCache, ViewModel, ViewState};
+use crate::sphere::{lattice_point, level_of, parents};
 
 /// The VISB payload of a validated file.
 #[derive(Clone, Copy, Debug)]
@@ -25,15 +26,53 @@ pub(crate) enum Visb<'a> {
         /// Bytes per row.
         row_bytes: usize,
     },
-    /// Encoding 1.
+    /// Encodings 1 and 2: range-coded rows, each view given its parents.
     Hierarchical {
-        /// `(level + 1) × CONTEXTS` little-endian `u16` probabilities, each in `1..4096`.
-        probs: &'a [u8],
+        /// What predicts each bit.
+        model: Model<'a>,
         /// `ceil(views / CHECKPOINT_INTERVAL)` little-endian `u32` record offsets.
         checkpoints: &'a [u8],
         /// The view records: LEB128 length, then that many code bytes.
         records: &'a [u8],
     },
+}
+
+/// The probability model of a range-coded payload.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Model<'a> {
+    /// Encoding 1: `(level + 1) × CONTEXTS` little-endian `u16` probabilities, each in `1..4096`.
+    Table(&'a [u8]),
+    /// Encoding 2: the context tree's validated nodes (little-endian `u16`s), and the PTCH
+    /// records the facing features read.
+    Tree {
+        /// The nodes.
+        nodes: &'a [u8],
+        /// The PTCH records.
+        patches: &'a [u8],
+        /// The features the tree tests: other key bits cannot change a walk, so lookups mask
+        /// them off (which lets more keys share a cache entry).
+        used: u32,
+    },
+}
+
+impl<'a> Model<'a> {
+    /// The model a decoder of `view` uses.
+    fn for_view(&self, view: u32) -> ViewModel<'a> {
+        match *self {
+            Model::Table(probs) => ViewModel::Table(level_probs(probs, level_of(view))),
+            Model::Tree {
+                nodes,
+                patches,
+                used,
+            } => ViewModel::Tree {
+                nodes,
+                patches,
+                used,
+                lattice: lattice_point(view).map_or([0.0; 3], |l| l.coords.map(f64::from)),
+                level: level_of(view),
+            },
+        }
+    }
 }
 
 /// Reads an unsigned LEB128 of at most `MAX_VARINT_LEN` bytes at `pos`; returns the value and
@@ -91,57 +130,74 @@ impl<'a> Visb<'a> {
         }
     }
 
-    /// Decodes the row of `view` (encoding 1) into `out` (`ceil(patch_count / 64)` words),
-    /// given its parents' decoded rows (`None` for a level-0 view).
+    /// Decodes the row of `view` (encodings 1 and 2) into `out` (`ceil(patch_count / 64)`
+    /// words), given its parents' decoded rows (`None` for a level-0 view).
     pub(crate) fn decode_row(
         &self,
         view: u32,
         parent_rows: Option<(&[u64], &[u64])>,
         out: &mut [u64],
         patch_count: u32,
+        cache: &mut TreeCache<'_>,
     ) {
-        let Visb::Hierarchical { probs, .. } = *self else {
+        let Visb::Hierarchical { model, .. } = *self else {
             return;
         };
-        let probs = level_probs(probs, level_of(view));
+        let model = model.for_view(view);
+        let (ra, rb) = parent_rows.unwrap_or((&[], &[]));
         let mut d = RangeDecoder::new(self.code(view));
-        let (mut x_prev, mut a_prev, mut b_prev) = (0u64, 0u64, 0u64);
-        let mut left = patch_count;
-        for (w, word) in out.iter_mut().enumerate() {
-            let n = left.min(64);
-            left -= n;
-            let (aw, bw) = match parent_rows {
-                Some((a, b)) => (
-                    a.get(w).copied().unwrap_or(0),
-                    b.get(w).copied().unwrap_or(0),
-                ),
-                None => (0, 0),
-            };
+        let mut state = ViewState::default();
+        let word = |r: &[u64], i: usize| r.get(i).copied().unwrap_or(0);
+        // The parents' 5-bit windows around the patch (bit i: patch p − 2 + i), slid one patch
+        // per bit from a stream of each parent's bits two patches ahead. Decoded rows have no
+        // bits past the last patch, so the stream needs no end test.
+        let (mut wa, mut wb) = (
+            ((word(ra, 0) & 3) << 3) as u32,
+            ((word(rb, 0) & 3) << 3) as u32,
+        );
+        let mut first = 0u32;
+        for (w, out_word) in out.iter_mut().enumerate() {
+            let n = patch_count.saturating_sub(first).min(64);
+            let ahead_a = word(ra, w) >> 2 | word(ra, w + 1) << 62;
+            let ahead_b = word(rb, w) >> 2 | word(rb, w + 1) << 62;
+            let front = model.front_bits(first, n);
             let mut x = 0u64;
             for j in 0..n {
-                let (a, b) = (aw >> j & 1, bw >> j & 1);
-                let bit = d.bit(probs[context(a, b, x_prev, a_prev, b_prev)]);
-                x |= bit << j;
-                (x_prev, a_prev, b_prev) = (bit, a, b);
+                wa = wa >> 1 | ((ahead_a >> j & 1) as u32) << 4;
+                wb = wb >> 1 | ((ahead_b >> j & 1) as u32) << 4;
+                let f = (front >> j & 1) as u32;
+                let bit = d.bit(model.p0_facing(wa, wb, state, f, cache)) as u32;
+                x |= u64::from(bit) << j;
+                state.push(bit, wa >> 2 & 1, wb >> 2 & 1);
             }
-            *word = x;
+            *out_word = x;
+            first += n;
         }
     }
 
-    /// ORs the rows of `targets` (encoding 1) into `out`, decoding them and their ancestors in
-    /// lock step. `targets` must be views of the file (`< view_count(level)`) whose ancestor
-    /// closure has at most `MAX_LANES` views — true of a leaf's corners and of any single view.
+    /// ORs the rows of `targets` (encodings 1 and 2) into `out`, decoding them and their
+    /// ancestors in lock step. `targets` must be views of the file (`< view_count(level)`)
+    /// whose ancestor closure has at most `MAX_LANES` views — true of a leaf's corners and of
+    /// any single view.
+    ///
+    /// A bit's features reach two patches ahead in the parents' rows, so a view of level `l`
+    /// runs `2·l` patches behind the level-0 views: at step `t` it decodes patch `t − 2·l`,
+    /// when every ancestor (lower level, processed earlier in the step) is at least two
+    /// patches ahead. Each lane keeps its last 64 bits, enough for any window a child reads.
     pub(crate) fn or_rows_lockstep(&self, targets: &[u32], out: &mut [u64], patch_count: u32) {
-        let Visb::Hierarchical { probs, .. } = *self else {
+        let Visb::Hierarchical { model, .. } = *self else {
             return;
         };
         let mut views = [0u32; MAX_LANES];
         let n = ancestor_closure(targets, &mut views);
         let views = &views[..n];
         let mut lanes: [Lane<'a>; MAX_LANES] = core::array::from_fn(|_| Lane::default());
+        let mut max_lag = 0;
         for (lane, &v) in lanes.iter_mut().zip(views) {
             lane.decoder = RangeDecoder::new(self.code(v));
-            lane.probs = level_probs(probs, level_of(v));
+            lane.model = model.for_view(v);
+            lane.lag = 2 * level_of(v);
+            max_lag = max_lag.max(lane.lag);
             lane.parents = parents(v).map(|[a, b]| {
                 // Parents precede their children in ascending order, so they are found.
                 let find = |p| views.iter().position(|&x| x == p).unwrap_or(0) as u8;
@@ -150,27 +206,31 @@ impl<'a> Visb<'a> {
             lane.target = targets.contains(&v);
         }
         let lanes = &mut lanes[..n];
-        for p in 0..patch_count {
-            let mut acc = 0u64;
+        let mut slots = [0u64; 256];
+        let mut cache = TreeCache::new(&mut slots);
+        for t in 0..patch_count + max_lag {
             for i in 0..lanes.len() {
-                let (a, b, a_prev, b_prev) = match lanes[i].parents {
-                    Some((pa, pb)) => {
-                        let (pa, pb) = (&lanes[pa as usize], &lanes[pb as usize]);
-                        (pa.bit, pb.bit, pa.prev, pb.prev)
-                    }
-                    None => (0, 0, 0, 0),
+                let Some(p) = t.checked_sub(lanes[i].lag).filter(|&p| p < patch_count) else {
+                    continue;
+                };
+                let (wa, wb) = match lanes[i].parents {
+                    Some((pa, pb)) => (
+                        lanes[pa as usize].window(p, patch_count),
+                        lanes[pb as usize].window(p, patch_count),
+                    ),
+                    None => (0, 0),
                 };
                 let lane = &mut lanes[i];
-                let ctx = context(a, b, lane.bit, a_prev, b_prev);
-                // `lane.bit` still holds the bit at p − 1 until it is overwritten here.
-                lane.prev = lane.bit;
-                lane.bit = lane.decoder.bit(lane.probs[ctx]);
-                if lane.target {
-                    acc |= lane.bit;
+                let bit = lane
+                    .decoder
+                    .bit(lane.model.p0(p, wa, wb, lane.state, &mut cache))
+                    as u32;
+                lane.state.push(bit, wa >> 2 & 1, wb >> 2 & 1);
+                lane.history = lane.history << 1 | u64::from(bit);
+                lane.decoded = p + 1;
+                if let (true, Some(word)) = (lane.target, out.get_mut(p as usize / 64)) {
+                    *word |= u64::from(bit) << (p % 64);
                 }
-            }
-            if let Some(word) = out.get_mut(p as usize / 64) {
-                *word |= acc << (p % 64);
             }
         }
     }
@@ -180,24 +240,47 @@ impl<'a> Visb<'a> {
 #[derive(Clone, Copy, Debug)]
 struct Lane<'a> {
     decoder: RangeDecoder<'a>,
-    probs: [u32; CONTEXTS],
+    model: ViewModel<'a>,
     /// Lane indices of the parents (`None` at level 0).
     parents: Option<(u8, u8)>,
-    /// Bit at the current patch (after this lane's step) or the previous one (before it).
-    bit: u64,
-    /// Bit at the previous patch, valid after this lane's step.
-    prev: u64,
+    /// Steps this lane runs behind the level-0 lanes: twice its level.
+    lag: u32,
+    /// Patches decoded so far.
+    decoded: u32,
+    /// Bit `i`: the bit at patch `decoded − 1 − i`.
+    history: u64,
+    state: ViewState,
     target: bool,
+}
+
+impl Lane<'_> {
+    /// This lane's 5-bit window around patch `p` (bit `i`: patch `p − 2 + i`; 0 outside the
+    /// row). Every patch of the window below `patch_count` is already decoded.
+    #[inline(always)]
+    fn window(&self, p: u32, patch_count: u32) -> u32 {
+        (0..5).fold(0, |w, i| {
+            let q = p as i64 - 2 + i;
+            let back = self.decoded as i64 - 1 - q;
+            let bit = if q < 0 || q >= patch_count as i64 || !(0..64).contains(&back) {
+                0
+            } else {
+                (self.history >> back & 1) as u32
+            };
+            w | bit << i
+        })
+    }
 }
 
 impl Default for Lane<'_> {
     fn default() -> Self {
         Lane {
             decoder: RangeDecoder::new(&[]),
-            probs: [2048; CONTEXTS],
+            model: ViewModel::Table([2048; CONTEXTS]),
             parents: None,
-            bit: 0,
-            prev: 0,
+            lag: 0,
+            decoded: 0,
+            history: 0,
+            state: ViewState::default(),
             target: false,
         }
     }
