@@ -214,10 +214,7 @@ impl<'a> Visb<'a> {
                     continue;
                 };
                 let (wa, wb) = match lanes[i].parents {
-                    Some((pa, pb)) => (
-                        lanes[pa as usize].window(p, patch_count),
-                        lanes[pb as usize].window(p, patch_count),
-                    ),
+                    Some((pa, pb)) => (lanes[pa as usize].window(p), lanes[pb as usize].window(p)),
                     None => (0, 0),
                 };
                 let lane = &mut lanes[i];
@@ -255,21 +252,38 @@ struct Lane<'a> {
 
 impl Lane<'_> {
     /// This lane's 5-bit window around patch `p` (bit `i`: patch `p − 2 + i`; 0 outside the
-    /// row). Every patch of the window below `patch_count` is already decoded.
+    /// row). Every patch of the window below `patch_count` is already decoded: `history`
+    /// holds it, newest patch in bit 0, and zeros before patch 0; patches past the end are
+    /// shifted in as zeros.
     #[inline(always)]
-    fn window(&self, p: u32, patch_count: u32) -> u32 {
-        (0..5).fold(0, |w, i| {
-            let q = p as i64 - 2 + i;
-            let back = self.decoded as i64 - 1 - q;
-            let bit = if q < 0 || q >= patch_count as i64 || !(0..64).contains(&back) {
-                0
-            } else {
-                (self.history >> back & 1) as u32
-            };
-            w | bit << i
-        })
+    fn window(&self, p: u32) -> u32 {
+        // Bit 0 of `h` is patch p + 2, bit 4 patch p − 2: the window reversed.
+        let shift = i64::from(self.decoded) - 1 - (i64::from(p) + 2);
+        let h = if shift >= 0 {
+            self.history.checked_shr(shift as u32).unwrap_or(0)
+        } else {
+            self.history.checked_shl((-shift) as u32).unwrap_or(0)
+        };
+        REVERSE5[(h & 31) as usize] as u32
     }
 }
+
+/// `REVERSE5[x]` is the 5-bit `x` with its bits in reverse order.
+const REVERSE5: [u8; 32] = {
+    let mut table = [0u8; 32];
+    let mut x = 0;
+    while x < 32 {
+        let mut r = 0;
+        let mut i = 0;
+        while i < 5 {
+            r |= ((x >> i) & 1) << (4 - i);
+            i += 1;
+        }
+        table[x] = r as u8;
+        x += 1;
+    }
+    table
+};
 
 impl Default for Lane<'_> {
     fn default() -> Self {
