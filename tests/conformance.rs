@@ -17,7 +17,7 @@
 //! PATCHVIS_REGENERATE=1 cargo test --test conformance   # rewrite vectors and expectations
 //! ```
 //!
-//! Cost: 56 small vectors; each valid one is parsed once per prefix length (a few thousand
+//! Cost: 58 small vectors; each valid one is parsed once per prefix length (a few thousand
 //! parses, each stopping at the length check), well under a second.
 #![cfg(feature = "bake")]
 
@@ -794,7 +794,45 @@ fn generate() -> Vec<(String, Vec<u8>)> {
             out.push((format!("invalid/{name}.pvis"), bytes));
         }
     }
+    // The tree's depth limit, from both sides: 002's VISB replaced by a chain of internal
+    // nodes exactly MAX_TREE_DEPTH deep (valid; every walk of a set feature goes deep) and
+    // one deeper (refused).
+    for (name, depth) in [
+        ("valid/011-level1-tree-depth-32", 32),
+        ("invalid/147-tree-depth-33", 33),
+    ] {
+        let sections: Vec<_> = sections_of(&base)
+            .into_iter()
+            .map(|(tag, body)| {
+                let body = if &tag == b"VISB" {
+                    chain_tree_visb(&body, depth)
+                } else {
+                    body
+                };
+                (tag, body)
+            })
+            .collect();
+        out.push((format!("{name}.pvis"), assemble(&sections)));
+    }
+    out.sort_by(|a, b| a.0.cmp(&b.0));
     out
+}
+
+/// An encoding-2 VISB body with `original`'s records and a tree that is a chain `depth`
+/// internal nodes deep: node `2i` tests feature `i % 23` and leads to leaf `2i + 1` (when the
+/// feature is 0) or node `2i + 2`; the leaves hold increasing probabilities of a 0.
+fn chain_tree_visb(original: &[u8], depth: u16) -> Vec<u8> {
+    let nodes = u32_at(original, 8) as usize;
+    let records = &original[12 + 2 * nodes..];
+    let mut body = original[..8].to_vec();
+    body.extend_from_slice(&(2 * depth as u32 + 1).to_le_bytes());
+    for i in 0..depth {
+        body.extend_from_slice(&((i % 23) << 10 | (2 * i + 1)).to_le_bytes());
+        body.extend_from_slice(&(0x8000u16 | (100 + 100 * i)).to_le_bytes());
+    }
+    body.extend_from_slice(&(0x8000u16 | 4000).to_le_bytes());
+    body.extend_from_slice(records);
+    body
 }
 
 /// Rewrites every vector and expectation file (the directories are emptied first, so
