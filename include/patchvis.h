@@ -62,12 +62,24 @@ extern "C" {
 /* Size in bytes of a PatchvisFile. */
 #define PATCHVIS_FILE_SIZE 512
 
+/* Size in bytes of a PatchvisStream. */
+#define PATCHVIS_STREAM_SIZE 8192
+
 /* A parsed file, in memory the caller owns (8-byte aligned). Opaque: do not read or write
  * its contents; it holds pointers into the bytes given to patchvis_parse. It may be copied
  * with memcpy; the copy has the same lifetime rule. */
 typedef struct PatchvisFile {
     uint64_t opaque[PATCHVIS_FILE_SIZE / 8];
 } PatchvisFile;
+
+/* A streaming query state (spec/FORMAT.md, section Query, Streaming), in memory the caller
+ * owns (8-byte aligned). Opaque. It keeps the path of sphere faces to the last answer and their
+ * decoded rows (in the scratch given to patchvis_stream_init), so a camera that stays in its
+ * leaf costs a few plane tests and a move to a neighbouring leaf decodes only the rows it
+ * needs. Not to be copied or shared between threads while in use. */
+typedef struct PatchvisStream {
+    uint64_t opaque[PATCHVIS_STREAM_SIZE / 8];
+} PatchvisStream;
 
 /* What a file holds (spec/FORMAT.md, sections Header, CAMR, PTCH). */
 typedef struct PatchvisInfo {
@@ -140,6 +152,28 @@ int32_t patchvis_patch_range(const PatchvisFile *file, uint32_t patch, uint32_t 
  * layout as a query's answer. Returns PATCHVIS_OK, PATCHVIS_ERR_ARGUMENT,
  * PATCHVIS_ERR_NOT_PARSED or PATCHVIS_ERR_RANGE (view >= views, or words too small). */
 int32_t patchvis_view_row(const PatchvisFile *file, uint32_t view, uint64_t *out, size_t words);
+
+/* sizeof(PatchvisStream) as the library was built. */
+size_t patchvis_stream_size(void);
+
+/* uint64_t words of scratch a streaming state needs: the decoded rows of its path, plus for
+ * VISB encoding 2 a 32 KiB memo of tree walks. 0 for NULL or an unparsed file. */
+size_t patchvis_stream_scratch_words(const PatchvisFile *file);
+
+/* Starts a streaming state over file in *out, keeping its rows in scratch (at least
+ * patchvis_stream_scratch_words(file) words; need not be initialised). The state holds its own
+ * copy of the parsed reader, so *file may go, but the file's bytes and scratch must stay valid,
+ * and scratch otherwise unused, while *out is used. Returns PATCHVIS_OK, PATCHVIS_ERR_ARGUMENT,
+ * PATCHVIS_ERR_NOT_PARSED or PATCHVIS_ERR_SCRATCH; after a failure *out is unusable. */
+int32_t patchvis_stream_init(const PatchvisFile *file, uint64_t *scratch, size_t scratch_words,
+                             PatchvisStream *out);
+
+/* The same answer as patchvis_query for eye, from the streaming state. out->bits points into
+ * the state's scratch and stays valid until the next query on it. Returns PATCHVIS_OK,
+ * PATCHVIS_ERR_ARGUMENT or PATCHVIS_ERR_NOT_PARSED (not from a successful
+ * patchvis_stream_init). Cost (bunny, 2000 patches): 35 ns in a leaf, ~40 us on a leaf change,
+ * against ~0.7 ms for every patchvis_query. */
+int32_t patchvis_stream_query(PatchvisStream *stream, const float eye[3], PatchvisVisible *out);
 
 #ifdef __cplusplus
 }

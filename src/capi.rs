@@ -10,6 +10,11 @@
 //! **Lifetime rule:** the bytes passed to `patchvis_parse` must stay valid and unmodified for
 //! as long as the `PatchvisFile` is used; a query's answer lives in the caller's scratch.
 //!
+//! **Streaming:** a [`PatchvisStream`] ([`PATCHVIS_STREAM_SIZE`] bytes, caller memory) holds a
+//! `runtime::Streaming` over caller scratch (`patchvis_stream_init`), so engines get the
+//! cached-path queries (tens of nanoseconds while the camera stays in its leaf) through C too;
+//! `patchvis_query` stays the stateless, scratch-light call.
+//!
 //! **No panics across the boundary.** `catch_unwind` needs std, and the reader is `no_std`; so
 //! every function is panic-free by construction: each caller contract the Rust API `assert!`s
 //! (patch and view in range, scratch large enough) is checked here first and reported as an
@@ -28,7 +33,7 @@ use core::fmt::{self, Write as _};
 use core::mem::{MaybeUninit, align_of, size_of};
 use core::ptr::{addr_of, addr_of_mut};
 
-use crate::runtime::{Error, Pvis};
+use crate::runtime::{Error, Pvis, Streaming};
 
 /// Size in bytes of [`PatchvisFile`]; the header's `PATCHVIS_FILE_SIZE`.
 pub const PATCHVIS_FILE_SIZE: usize = 512;
@@ -43,6 +48,18 @@ const STATE_PARSED: u64 = 0x5056_4953_4F4B_0001;
 // `Pvis` past it (a later format version) fails here, at compile time, not in a C program.
 const _: () = assert!(size_of::<Pvis<'static>>() <= STORAGE_WORDS * size_of::<u64>());
 const _: () = assert!(align_of::<Pvis<'static>>() <= align_of::<u64>());
+
+/// Size in bytes of [`PatchvisStream`]; the header's `PATCHVIS_STREAM_SIZE`.
+pub const PATCHVIS_STREAM_SIZE: usize = 8192;
+
+/// Words of [`PatchvisStream::storage`].
+const STREAM_WORDS: usize = PATCHVIS_STREAM_SIZE / 8 - 1;
+
+/// Marker in [`PatchvisStream::state`] after a successful `patchvis_stream_init`.
+const STATE_STREAMING: u64 = 0x5056_4953_5354_0001;
+
+const _: () = assert!(size_of::<Streaming<'static, 'static>>() <= STREAM_WORDS * size_of::<u64>());
+const _: () = assert!(align_of::<Streaming<'static, 'static>>() <= align_of::<u64>());
 
 /// Success.
 pub const PATCHVIS_OK: i32 = 0;
@@ -486,6 +503,126 @@ pub unsafe extern "C" fn patchvis_view_row(
     // SAFETY: non-null and valid for `words` words of writes (caller contract).
     let out = unsafe { core::slice::from_raw_parts_mut(out, words) };
     pvis.view_row(view, out);
+    PATCHVIS_OK
+}
+
+/// A streaming query state (`runtime::Streaming`), in memory the caller provides. Opaque.
+#[repr(C)]
+pub struct PatchvisStream {
+    /// [`STATE_STREAMING`] once `patchvis_stream_init` succeeded, 0 after it failed.
+    state: u64,
+    /// Holds a `Streaming` when `state` says so.
+    storage: [MaybeUninit<u64>; STREAM_WORDS],
+}
+
+/// Size of `PatchvisStream` as this library was built.
+#[unsafe(no_mangle)]
+pub extern "C" fn patchvis_stream_size() -> usize {
+    size_of::<PatchvisStream>()
+}
+
+/// `u64` words of scratch a streaming state needs (`Pvis::scratch_bound`: the decoded rows of
+/// its path, plus 32 KiB of tree-walk memo for VISB encoding 2); 0 for a null or unparsed
+/// `file`.
+///
+/// # Safety
+/// `file` as for every call.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn patchvis_stream_scratch_words(file: *const PatchvisFile) -> usize {
+    // SAFETY: caller contract on `file`.
+    unsafe { handle(file) }.map_or(0, |pvis| pvis.scratch_bound())
+}
+
+/// Starts a streaming query state over `file` in `*out`, keeping its decoded rows in
+/// `scratch`. Returns 0, `PATCHVIS_ERR_ARGUMENT`, `PATCHVIS_ERR_NOT_PARSED` or
+/// `PATCHVIS_ERR_SCRATCH` (fewer than `patchvis_stream_scratch_words` words). On failure
+/// `*out` is marked unusable.
+///
+/// # Safety
+/// `file` as for every call, and its bytes must stay valid while `*out` is used (the state
+/// holds its own copy of the reader, so `*file` itself may go). `scratch` must be valid for
+/// reads and writes of `scratch_words` words for as long as `*out` is used, used by nothing
+/// else meanwhile, and not overlap the file's bytes. `out` must be null or point to writable
+/// memory of `sizeof(PatchvisStream)` bytes, aligned to 8.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn patchvis_stream_init(
+    file: *const PatchvisFile,
+    scratch: *mut u64,
+    scratch_words: usize,
+    out: *mut PatchvisStream,
+) -> i32 {
+    if out.is_null() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    // SAFETY: `out` is non-null, writable and aligned (caller contract).
+    unsafe { addr_of_mut!((*out).state).write(0) };
+    // SAFETY: caller contract on `file`; its bytes outlive `*out`.
+    let pvis: Pvis<'static> = match unsafe { handle(file) } {
+        Ok(pvis) => *pvis,
+        Err(code) => return code,
+    };
+    if scratch.is_null() || scratch_words > isize::MAX as usize / size_of::<u64>() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    if scratch_words < pvis.scratch_bound() {
+        return PATCHVIS_ERR_SCRATCH;
+    }
+    // SAFETY: non-null, valid for reads and writes of `scratch_words` words for as long as
+    // `*out` is used, and used by nothing else (caller contract).
+    let scratch: &'static mut [u64] =
+        unsafe { core::slice::from_raw_parts_mut(scratch, scratch_words) };
+    let stream = pvis.streaming(scratch);
+    // SAFETY: `storage` is large and aligned enough for a `Streaming` (const assertions); a
+    // `Streaming` owns no resources, so overwriting an older one leaks nothing.
+    unsafe {
+        addr_of_mut!((*out).storage)
+            .cast::<Streaming<'static, 'static>>()
+            .write(stream);
+        addr_of_mut!((*out).state).write(STATE_STREAMING);
+    }
+    PATCHVIS_OK
+}
+
+/// The patches visible from `eye`, as `patchvis_query` answers, from the streaming state: a
+/// camera that stays in its leaf costs only the point location, a move to a neighbouring leaf
+/// decodes the few rows it needs. The answer lives in the state's scratch until the next
+/// query on it. Returns 0, `PATCHVIS_ERR_ARGUMENT` or `PATCHVIS_ERR_NOT_PARSED` (not from a
+/// successful `patchvis_stream_init`).
+///
+/// # Safety
+/// `stream` must be null or a `PatchvisStream` passed to `patchvis_stream_init`, whose file
+/// bytes and scratch are still valid, not used by another thread at the same time. `eye` must
+/// be null or point to 3 readable floats; `out` null or valid for a write of a
+/// `PatchvisVisible`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn patchvis_stream_query(
+    stream: *mut PatchvisStream,
+    eye: *const f32,
+    out: *mut PatchvisVisible,
+) -> i32 {
+    if stream.is_null() || eye.is_null() || out.is_null() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    // SAFETY: non-null and points to a `PatchvisStream` (caller contract).
+    if unsafe { addr_of!((*stream).state).read() } != STATE_STREAMING {
+        return PATCHVIS_ERR_NOT_PARSED;
+    }
+    // SAFETY: the marker is written only after a `Streaming` was written to `storage`; its
+    // borrows are valid and exclusive for now (caller contract).
+    let state =
+        unsafe { &mut *addr_of_mut!((*stream).storage).cast::<Streaming<'static, 'static>>() };
+    // SAFETY: `eye` is non-null and points to 3 readable floats (caller contract).
+    let eye = unsafe { [eye.read(), eye.add(1).read(), eye.add(2).read()] };
+    let visible = state.query(eye);
+    let answer = PatchvisVisible {
+        bits: visible.bits().as_ptr(),
+        words: visible.bits().len(),
+        leaf: visible.leaf,
+        visible_count: visible.count(),
+        inside_sphere: u32::from(visible.inside_sphere),
+    };
+    // SAFETY: `out` is non-null and valid for a write (caller contract).
+    unsafe { out.write(answer) };
     PATCHVIS_OK
 }
 

@@ -13,6 +13,9 @@ use super::*;
 
 const VALID: &[u8] = include_bytes!("../../tests/conformance/valid/002-level1-seven-patches.pvis");
 const DUMP: &str = include_str!("../../tests/conformance/valid/002-level1-seven-patches.dump");
+/// A structured level-3 file whose VISB uses encoding 2 with a real tree.
+const TREE: &[u8] =
+    include_bytes!("../../tests/conformance/valid/010-level3-300-patches-facing.pvis");
 const INVALID: &[u8] =
     include_bytes!("../../tests/conformance/invalid/131-non-contiguous-patch-ranges.pvis");
 const INVALID_ERR: &str =
@@ -242,4 +245,125 @@ fn refusals_have_codes_and_exact_messages() {
     // SAFETY: as above.
     let unknown = unsafe { CStr::from_ptr(patchvis_error_message(1234)) };
     assert_eq!(unknown.to_str().unwrap(), "unknown error code");
+}
+
+#[test]
+fn streaming_answers_equal_the_stateless_query() {
+    assert_eq!(patchvis_stream_size(), PATCHVIS_STREAM_SIZE);
+    assert_eq!(align_of::<PatchvisStream>(), 8);
+    for bytes in [VALID, TREE] {
+        let (code, file) = parsed(bytes);
+        assert_eq!(code, PATCHVIS_OK);
+        // SAFETY: `file` was parsed from static bytes.
+        let (words, stream_words) = unsafe {
+            (
+                patchvis_scratch_words(&file),
+                patchvis_stream_scratch_words(&file),
+            )
+        };
+        assert!(stream_words >= 4 * words);
+        let mut scratch = vec![0u64; words];
+        let mut stream_scratch = vec![!0u64; stream_words];
+        let mut stream = MaybeUninit::<PatchvisStream>::uninit();
+        // SAFETY: too little scratch is refused and marks the state unusable.
+        let short = unsafe {
+            patchvis_stream_init(
+                &file,
+                stream_scratch.as_mut_ptr(),
+                stream_words - 1,
+                stream.as_mut_ptr(),
+            )
+        };
+        assert_eq!(short, PATCHVIS_ERR_SCRATCH);
+        let mut out = MaybeUninit::<PatchvisVisible>::uninit();
+        // SAFETY: `state` was written; the query must refuse it.
+        let refused = unsafe {
+            patchvis_stream_query(stream.as_mut_ptr(), [0.0f32; 3].as_ptr(), out.as_mut_ptr())
+        };
+        assert_eq!(refused, PATCHVIS_ERR_NOT_PARSED);
+        // SAFETY: scratch (garbage-filled on purpose) outlives the stream; nothing else uses it.
+        let ok = unsafe {
+            patchvis_stream_init(
+                &file,
+                stream_scratch.as_mut_ptr(),
+                stream_words,
+                stream.as_mut_ptr(),
+            )
+        };
+        assert_eq!(ok, PATCHVIS_OK);
+        // An orbit that changes leaf now and then, a far jump, the centre and a NaN eye.
+        let mut eyes: Vec<[f32; 3]> = (0..200)
+            .map(|i| {
+                let t = i as f32 * 0.05;
+                [
+                    1.0 + 6.0 * t.cos(),
+                    2.0 + 0.5 * (3.0 * t).sin(),
+                    3.0 + 6.0 * t.sin(),
+                ]
+            })
+            .collect();
+        eyes.extend([
+            [-50.0, 9.0, 1.0],
+            [1.0, 2.0, 3.0],
+            [f32::NAN, 0.0, 0.0],
+            [7.0, 2.0, 3.0],
+        ]);
+        for eye in eyes {
+            let mut a = MaybeUninit::<PatchvisVisible>::uninit();
+            let mut b = MaybeUninit::<PatchvisVisible>::uninit();
+            // SAFETY: valid file, scratch, eye and outputs; the stream's borrows are alive.
+            unsafe {
+                assert_eq!(
+                    patchvis_query(
+                        &file,
+                        eye.as_ptr(),
+                        scratch.as_mut_ptr(),
+                        words,
+                        a.as_mut_ptr()
+                    ),
+                    PATCHVIS_OK
+                );
+                assert_eq!(
+                    patchvis_stream_query(stream.as_mut_ptr(), eye.as_ptr(), b.as_mut_ptr()),
+                    PATCHVIS_OK
+                );
+            }
+            // SAFETY: both were written above; each answer's bits are valid until its scratch
+            // is reused.
+            let (a, b) = unsafe { (a.assume_init(), b.assume_init()) };
+            assert_eq!(
+                (a.leaf, a.visible_count, a.inside_sphere),
+                (b.leaf, b.visible_count, b.inside_sphere),
+                "eye {eye:?}"
+            );
+            // SAFETY: as above.
+            let (ra, rb) = unsafe {
+                (
+                    core::slice::from_raw_parts(a.bits, a.words),
+                    core::slice::from_raw_parts(b.bits, b.words),
+                )
+            };
+            assert_eq!(ra, rb, "eye {eye:?}");
+        }
+        // SAFETY: null arguments are refused, not dereferenced.
+        unsafe {
+            assert_eq!(
+                patchvis_stream_query(
+                    core::ptr::null_mut(),
+                    [0.0f32; 3].as_ptr(),
+                    out.as_mut_ptr()
+                ),
+                PATCHVIS_ERR_ARGUMENT
+            );
+            assert_eq!(
+                patchvis_stream_init(
+                    &file,
+                    core::ptr::null_mut(),
+                    stream_words,
+                    stream.as_mut_ptr()
+                ),
+                PATCHVIS_ERR_ARGUMENT
+            );
+        }
+    }
 }

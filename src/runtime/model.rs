@@ -166,27 +166,33 @@ pub const TREE_CACHE_WORDS: usize = 4096;
 
 /// A direct-mapped memo of [`tree_p0`] over caller-provided words: the same keys recur within
 /// a row and across rows (the key holds the level, so rows of every level share it), so most
-/// bits skip the walk. An entry holds `key + 1` (0: empty) above the probability; the slice's
-/// length must be a power of two, and it must start zeroed.
+/// bits skip the walk. An entry holds `key + 1` (0: empty) above the probability; the slice
+/// must start zeroed. Its largest power-of-two prefix of at least 2 words is used; a shorter
+/// slice (an encoding without a tree gets an empty one) disables the memo.
 #[derive(Debug)]
 pub(crate) struct TreeCache<'c> {
     slots: &'c mut [u64],
+    /// `32 − log2(slots.len())`: the hash's top bits index the slots.
     shift: u32,
 }
 
 impl<'c> TreeCache<'c> {
-    /// A cache over `slots` (a power-of-two length, all zero).
+    /// A cache over `slots` (all zero).
     pub(crate) fn new(slots: &'c mut [u64]) -> Self {
-        debug_assert!(slots.len().is_power_of_two());
-        let shift = 32 - slots.len().trailing_zeros();
-        TreeCache { slots, shift }
+        let bits = slots.len().checked_ilog2().unwrap_or(0).min(31);
+        let used = if bits == 0 { 0 } else { 1usize << bits };
+        TreeCache {
+            slots: &mut slots[..used],
+            shift: 32 - bits,
+        }
     }
 
     /// [`tree_p0`]`(nodes, key)`, from the cache when it holds `key`. Every call on one cache
     /// must pass the same tree.
     #[inline(always)]
     pub(crate) fn p0(&mut self, nodes: &[u8], key: u32) -> u32 {
-        let slot = (key.wrapping_mul(0x9E37_79B1) >> self.shift) as usize;
+        // Multiplicative hash; its top bits pick the slot (with no slots, `get_mut` fails).
+        let slot = (u64::from(key.wrapping_mul(0x9E37_79B1)) >> self.shift) as usize;
         let tag = u64::from(key + 1) << 32;
         let Some(entry) = self.slots.get_mut(slot) else {
             return tree_p0(nodes, key);

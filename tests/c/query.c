@@ -86,6 +86,15 @@ int main(int argc, char **argv) {
     size_t words = patchvis_scratch_words(&file);
     uint64_t *scratch = calloc(words, sizeof *scratch);
     if (!scratch || words != info.scratch_words) return 3;
+    if (patchvis_stream_size() != sizeof(PatchvisStream)) return 3;
+    size_t stream_words = patchvis_stream_scratch_words(&file);
+    uint64_t *stream_scratch = malloc(stream_words * sizeof *stream_scratch);
+    PatchvisStream stream;
+    if (!stream_scratch ||
+        patchvis_stream_init(&file, stream_scratch, stream_words - 1, &stream) !=
+            PATCHVIS_ERR_SCRATCH ||
+        patchvis_stream_init(&file, stream_scratch, stream_words, &stream) != PATCHVIS_OK)
+        return 3;
     for (uint32_t v = 0; v < info.views; v++) {
         if (patchvis_view_row(&file, v, scratch, words) != PATCHVIS_OK) return 3;
         printf("view %u: ", v);
@@ -107,6 +116,14 @@ int main(int argc, char **argv) {
         PatchvisVisible vis;
         if (patchvis_query(&file, eye, scratch, words, &vis) != PATCHVIS_OK) return 3;
         if (vis.bits != scratch || vis.words != words) return 3;
+        /* The streaming state gives the same answer. */
+        PatchvisVisible streamed;
+        if (patchvis_stream_query(&stream, eye, &streamed) != PATCHVIS_OK) return 3;
+        if (streamed.words != words || streamed.visible_count != vis.visible_count ||
+            streamed.inside_sphere != vis.inside_sphere ||
+            memcmp(streamed.leaf, vis.leaf, sizeof vis.leaf) != 0 ||
+            memcmp(streamed.bits, vis.bits, words * sizeof *vis.bits) != 0)
+            return 4;
         printf("query %s -> inside %s views [%u,%u,%u] patches [", argv[i],
                vis.inside_sphere ? "true" : "false", vis.leaf[0], vis.leaf[1], vis.leaf[2]);
         uint32_t listed = 0;
@@ -125,6 +142,7 @@ int main(int argc, char **argv) {
     if (patchvis_patch_range(&file, info.patch_count, &first, &count) != PATCHVIS_ERR_RANGE)
         return 3;
 
+    free(stream_scratch);
     free(scratch);
     free(data);
     return 0;
