@@ -182,6 +182,19 @@ pub struct PatchvisVisible {
     pub inside_sphere: u32,
 }
 
+impl PatchvisVisible {
+    /// The C description of a query's answer; `bits` points into the answer's scratch.
+    fn of(visible: &crate::runtime::Visible<'_>) -> Self {
+        PatchvisVisible {
+            bits: visible.bits().as_ptr(),
+            words: visible.bits().len(),
+            leaf: visible.leaf,
+            visible_count: visible.count(),
+            inside_sphere: u32::from(visible.inside_sphere),
+        }
+    }
+}
+
 /// A byte slice from C, or `None` for a null pointer with a non-zero length or a length past
 /// what a Rust slice may span.
 ///
@@ -432,15 +445,8 @@ pub unsafe extern "C" fn patchvis_query(
     // the file (caller contract); the length fits a slice (checked above).
     let scratch = unsafe { core::slice::from_raw_parts_mut(scratch, scratch_words) };
     let visible = pvis.query(eye, scratch);
-    let answer = PatchvisVisible {
-        bits: visible.bits().as_ptr(),
-        words: visible.bits().len(),
-        leaf: visible.leaf,
-        visible_count: visible.count(),
-        inside_sphere: u32::from(visible.inside_sphere),
-    };
     // SAFETY: `out` is non-null and valid for a write (caller contract).
-    unsafe { out.write(answer) };
+    unsafe { out.write(PatchvisVisible::of(&visible)) };
     PATCHVIS_OK
 }
 
@@ -614,15 +620,8 @@ pub unsafe extern "C" fn patchvis_stream_query(
     // SAFETY: `eye` is non-null and points to 3 readable floats (caller contract).
     let eye = unsafe { [eye.read(), eye.add(1).read(), eye.add(2).read()] };
     let visible = state.query(eye);
-    let answer = PatchvisVisible {
-        bits: visible.bits().as_ptr(),
-        words: visible.bits().len(),
-        leaf: visible.leaf,
-        visible_count: visible.count(),
-        inside_sphere: u32::from(visible.inside_sphere),
-    };
     // SAFETY: `out` is non-null and valid for a write (caller contract).
-    unsafe { out.write(answer) };
+    unsafe { out.write(PatchvisVisible::of(&visible)) };
     PATCHVIS_OK
 }
 

@@ -1,15 +1,17 @@
 //! Reading VISB (spec § VISB): raw rows (encoding 0) or rows coded along the sphere hierarchy
-//! (encoding 1), and the two ways of decoding the latter.
+//! (encodings 1 and 2), and the two ways of decoding the latter.
 //!
-//! Encoding 1 codes each view's bits with a static-model binary range coder whose context is
-//! the view's two parent views' bits (the endpoints of the sphere edge it splits), so one view
-//! decodes from its parents' rows alone ([`Visb::decode_row`], used when the parents' rows are
-//! at hand: streaming and expanded queries). Without them, [`Visb::or_rows_lockstep`] decodes a
-//! view together with its whole ancestor closure bit by bit in lock step — the contexts only
-//! look at patch `p` and `p − 1`, so each ancestor needs a decoder state and two bits, not a
-//! row — which keeps [`crate::runtime::Pvis::view_row`] and the stateless query free of
-//! scratch beyond the output row. Cost: decoding one bit is one range-coder step; lock step
-//! decodes the `3 + 3·level` views of the closure.
+//! Encodings 1 and 2 code each view's bits with a static-model binary range coder whose
+//! probabilities depend on the view's two parent views' bits (the endpoints of the sphere edge
+//! it splits) near the patch and on its own earlier bits (`model`: a table, or a context
+//! tree), so one view decodes from its parents' rows alone ([`Visb::decode_row`], used when
+//! the parents' rows are at hand: streaming and expanded queries). Without them,
+//! [`Visb::or_rows_lockstep`] decodes a view together with its whole ancestor closure bit by
+//! bit in lock step — the contexts only look a few patches around `p`, so each ancestor needs
+//! a decoder state and its last 64 bits, not a row — which keeps
+//! [`crate::runtime::Pvis::view_row`] and the stateless query free of scratch beyond the output
+//! row. Cost: decoding one bit is one range-coder step plus a key and a (memoised) tree walk;
+//! lock step decodes the `3 + 3·level` views of the closure.
 
 use super::coder::RangeDecoder;
 use super::consts::{CHECKPOINT_INTERVAL, CONTEXTS, MAX_LANES, MAX_VARINT_LEN};
