@@ -11,7 +11,7 @@
 //! keys are sorted, ties go to the lower feature. Cost: one key per bit (twice), a tree build
 //! over the distinct keys (≤ 2^23, ~10^5 in practice), one tree walk per bit.
 
-use super::visb::{RangeEncoder, write_varint};
+use super::visb::{RangeEncoder, append_records};
 use crate::runtime::consts::*;
 use crate::runtime::model::{
     FEATURES, LEAF, MAX_TREE_DEPTH, MAX_TREE_NODES, ViewState, facing, key, tree_p0, window,
@@ -37,33 +37,13 @@ pub fn encode_tree(matrix: &VisibilityMatrix, patches: &[Patch]) -> Vec<u8> {
     out.extend_from_slice(&(nodes.len() as u32).to_le_bytes());
     let tree: Vec<u8> = nodes.iter().flat_map(|n| n.to_le_bytes()).collect();
     out.extend_from_slice(&tree);
-    let codes: Vec<Vec<u8>> = (0..views)
-        .into_par_iter()
-        .map(|v| {
-            let mut code = Vec::new();
-            let mut enc = RangeEncoder::new(&mut code);
-            for_each_key(matrix, v, &axes, |k, x| {
-                enc.bit(x as u64, tree_p0(&tree, k))
-            });
-            enc.finish();
-            code
-        })
-        .collect();
-    let checkpoints_at = out.len();
-    out.resize(
-        checkpoints_at + 4 * views.div_ceil(CHECKPOINT_INTERVAL) as usize,
-        0,
-    );
-    let records_at = out.len();
-    for (v, code) in codes.iter().enumerate() {
-        if (v as u32).is_multiple_of(CHECKPOINT_INTERVAL) {
-            let k = checkpoints_at + 4 * (v as u32 / CHECKPOINT_INTERVAL) as usize;
-            let offset = u32::try_from(out.len() - records_at).expect("VISB over 4 GiB");
-            out[k..k + 4].copy_from_slice(&offset.to_le_bytes());
-        }
-        write_varint(&mut out, code.len() as u32);
-        out.extend_from_slice(code);
-    }
+    append_records(&mut out, views, |v, code| {
+        let mut enc = RangeEncoder::new(code);
+        for_each_key(matrix, v, &axes, |k, x| {
+            enc.bit(x as u64, tree_p0(&tree, k))
+        });
+        enc.finish();
+    });
     out
 }
 

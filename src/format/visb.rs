@@ -13,6 +13,7 @@ use crate::runtime::consts::*;
 use crate::runtime::context;
 use crate::sampler::VisibilityMatrix;
 use crate::sphere::{level_of, parents};
+use rayon::prelude::*;
 
 /// Encodes `matrix` (rows of `view_count(level)` views) as a VISB body with encoding 1.
 pub fn encode_hierarchical(matrix: &VisibilityMatrix, level: u32) -> Vec<u8> {
@@ -24,25 +25,43 @@ pub fn encode_hierarchical(matrix: &VisibilityMatrix, level: u32) -> Vec<u8> {
     for p in probs.iter().flatten() {
         out.extend_from_slice(&p.to_le_bytes());
     }
+    append_records(&mut out, views, |v, code| {
+        encode_view(matrix, v, &probs[level_of(v) as usize], code)
+    });
+    out
+}
+
+/// Appends the checkpoints and view records of encodings 1 and 2 (spec § VISB, encoding 1) to
+/// `out`: `code(v, buf)` range-codes view `v` into the empty `buf`. Views are coded in
+/// parallel and laid out in view order.
+pub(crate) fn append_records(
+    out: &mut Vec<u8>,
+    views: u32,
+    code: impl Fn(u32, &mut Vec<u8>) + Sync,
+) {
+    let codes: Vec<Vec<u8>> = (0..views)
+        .into_par_iter()
+        .map(|v| {
+            let mut buf = Vec::new();
+            code(v, &mut buf);
+            buf
+        })
+        .collect();
     let checkpoints_at = out.len();
     out.resize(
         checkpoints_at + 4 * views.div_ceil(CHECKPOINT_INTERVAL) as usize,
         0,
     );
     let records_at = out.len();
-    let mut code = Vec::new();
-    for v in 0..views {
-        if v % CHECKPOINT_INTERVAL == 0 {
+    for (v, code) in (0..views).zip(&codes) {
+        if v.is_multiple_of(CHECKPOINT_INTERVAL) {
             let k = checkpoints_at + 4 * (v / CHECKPOINT_INTERVAL) as usize;
             let offset = u32::try_from(out.len() - records_at).expect("VISB over 4 GiB");
             out[k..k + 4].copy_from_slice(&offset.to_le_bytes());
         }
-        code.clear();
-        encode_view(matrix, v, &probs[level_of(v) as usize], &mut code);
-        write_varint(&mut out, code.len() as u32);
-        out.extend_from_slice(&code);
+        write_varint(out, code.len() as u32);
+        out.extend_from_slice(code);
     }
-    out
 }
 
 /// Calls `f(context, bit)` for every patch of `view`, in patch order.
@@ -166,7 +185,7 @@ impl<'o> RangeEncoder<'o> {
 }
 
 /// Appends `value` as an unsigned LEB128.
-pub(crate) fn write_varint(out: &mut Vec<u8>, mut value: u32) {
+fn write_varint(out: &mut Vec<u8>, mut value: u32) {
     while value >= 0x80 {
         out.push((value as u8 & 0x7F) | 0x80);
         value >>= 7;
