@@ -16,7 +16,7 @@ mod tree;
 mod visb;
 
 pub use atomic::write_atomic;
-pub use patch_order::{MAX_TOUR_WORK, covisibility_order};
+pub use patch_order::{MAX_TOUR_WORK, centre_order, covisibility_order};
 pub use tree::encode_tree;
 pub use visb::{encode_hierarchical, probabilities};
 

@@ -242,6 +242,38 @@ impl Camera {
         };
         let (x_lo, x_hi) = lo_hi(x);
         let (y_lo, y_hi) = lo_hi(y);
+        self.screen_rect(x_lo, x_hi, y_lo, y_hi, w_near)
+    }
+}
+
+impl Camera {
+    /// Where the convex hull of `corners` (a patch's bounding box) can appear: like
+    /// [`Camera::sphere_bounds`], from the corners' projections. When every corner lies
+    /// beyond the near plane the hull's image is the convex hull of the projected corners,
+    /// so their rectangle (widened by the same margin for snapping) holds every pixel, and
+    /// view depth is linear, so no point is nearer than the nearest corner.
+    pub(crate) fn hull_bounds(&self, corners: &[[f64; 3]]) -> SphereBounds {
+        let (mut x_lo, mut x_hi, mut y_lo, mut y_hi) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        let mut w_near = f64::MAX;
+        for &c in corners {
+            let d = sub(c, self.eye);
+            let (x, y, w) = (dot(d, self.right), dot(d, self.up), dot(d, self.forward));
+            if w <= self.near || w.is_nan() {
+                return SphereBounds::Unbounded;
+            }
+            let (x, y) = (x / w, y / w);
+            x_lo = x_lo.min(x);
+            x_hi = x_hi.max(x);
+            y_lo = y_lo.min(y);
+            y_hi = y_hi.max(y);
+            w_near = w_near.min(w);
+        }
+        self.screen_rect(x_lo, x_hi, y_lo, y_hi, w_near)
+    }
+
+    /// The bounds of contents whose `x / w` spans `[x_lo, x_hi]`, `y / w` spans `[y_lo,
+    /// y_hi]` and whose nearest view depth is `w_near`.
+    fn screen_rect(&self, x_lo: f64, x_hi: f64, y_lo: f64, y_hi: f64, w_near: f64) -> SphereBounds {
         let x0 = self.half + self.scale * x_lo - SPHERE_RECT_MARGIN;
         let x1 = self.half + self.scale * x_hi + SPHERE_RECT_MARGIN;
         // Image y grows downwards, against `up`.
@@ -257,9 +289,7 @@ impl Camera {
             nearest: (1.0 + SPHERE_DEPTH_SLACK) / w_near,
         }
     }
-}
 
-impl Camera {
     /// Whether every point of the ball of `radius` around `center` has view depth `w >=
     /// min_w` and projects into the pixel square `[lo, hi]²` (bounds as in
     /// [`Camera::sphere_bounds`]; callers leave a wide margin for rounding).
@@ -440,5 +470,67 @@ mod tests {
         );
         assert_eq!(camera.project([0.0, 0.0, 5.0]), None);
         assert!((camera.near() - 5e-3).abs() < 1e-12);
+    }
+
+    #[test]
+    fn hull_bounds_hold_every_point_of_the_hull() {
+        let p = params([10.0, -3.0, 250.0], 2.5);
+        // A thin tilted box near the centre, and points spread through it.
+        let corners: [[f64; 3]; 8] = std::array::from_fn(|i| {
+            let s = |k: usize| if i >> k & 1 == 1 { 1.0 } else { -1.0 };
+            [
+                10.0 + 1.5 * s(0) + 0.2 * s(2),
+                -3.0 + 0.7 * s(1),
+                250.0 + 0.3 * s(0) + 0.05 * s(2),
+            ]
+        });
+        let mut seed = 7u64;
+        let mut unit = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for dir in DIRECTIONS {
+            let camera = Camera::sampling(&p, dir);
+            let SphereBounds::Rect { rect, nearest } = camera.hull_bounds(&corners) else {
+                panic!("{dir:?}: a box inside the sampling sphere has a rectangle");
+            };
+            for _ in 0..500 {
+                let weights: [f64; 8] = std::array::from_fn(|_| unit());
+                let total: f64 = weights.iter().sum();
+                let mut q = [0.0; 3];
+                for (w, c) in weights.iter().zip(&corners) {
+                    for k in 0..3 {
+                        q[k] += w / total * c[k];
+                    }
+                }
+                let q32 = q.map(|c| c as f32);
+                let [cx, cy, w] = camera.clip(q32);
+                let (x, y) = (cx / w, cy / w);
+                assert!(
+                    x >= rect[0] as f64 && x <= rect[2] as f64 + 1.0,
+                    "{dir:?} x {x} {rect:?}"
+                );
+                assert!(
+                    y >= rect[1] as f64 && y <= rect[3] as f64 + 1.0,
+                    "{dir:?} y {y} {rect:?}"
+                );
+                assert!(1.0 / w <= nearest, "{dir:?} depth");
+            }
+        }
+        // Reaching behind the near plane: no bound; wholly beside the image: outside.
+        let camera = Camera::sampling(&p, [0.0, 0.0, 1.0]);
+        let eye = camera.eye();
+        let around_eye = corners.map(|c| {
+            [
+                c[0] - 10.0 + eye[0],
+                c[1] + 3.0 + eye[1],
+                c[2] - 250.0 + eye[2],
+            ]
+        });
+        assert_eq!(camera.hull_bounds(&around_eye), SphereBounds::Unbounded);
+        let beside = corners.map(|c| [c[0] + 500.0, c[1], c[2]]);
+        assert_eq!(camera.hull_bounds(&beside), SphereBounds::Outside);
     }
 }

@@ -15,6 +15,7 @@ mod conservative;
 pub mod gpu;
 mod id_buffer;
 mod key_buffer;
+mod patch_box;
 mod patch_graph;
 mod patch_mesh;
 mod raster;

@@ -37,6 +37,7 @@ use super::camera::{Camera, SphereBounds};
 use super::checkpoint;
 use super::conservative::scan_triangle_conservative;
 use super::key_buffer::KeyBuffer;
+use super::patch_box::{PatchBox, patch_boxes};
 use super::patch_graph::{PatchGraph, may_face};
 use super::patch_mesh::{PatchMesh, Storage};
 use super::raster::{
@@ -145,8 +146,10 @@ pub fn sample_tiled(
         progress.inc(u64::from(view_count(first_level - 1)));
     }
     let storage = Storage::for_budget(u64::from(mesh.triangle_count()), options.memory_budget);
+    let patch_mesh = PatchMesh::new(mesh, tiling, storage).map_err(SamplingError::TempFile)?;
     let context = ViewContext {
-        mesh: PatchMesh::new(mesh, tiling, storage).map_err(SamplingError::TempFile)?,
+        boxes: patch_boxes(&patch_mesh, tiling),
+        mesh: patch_mesh,
         tiling,
         params,
         options,
@@ -218,6 +221,8 @@ struct ViewContext<'a> {
     params: &'a SamplingParams,
     options: &'a SamplingOptions,
     always: Vec<u64>,
+    /// Every patch's oriented bounding box, the tight bound of the occlusion test.
+    boxes: Vec<PatchBox>,
     graph: Option<PatchGraph>,
     /// The patch of the key whose low half is `low`, at index `low.wrapping_neg()` (input
     /// triangle + 1); index 0 (empty pixel) holds the spare patch number `patch_count`.
@@ -300,6 +305,21 @@ fn back_winding(mesh: &Mesh) -> i64 {
     if volume < 0.0 { -1 } else { 1 }
 }
 
+/// Whether contents within `bounds` provably change no pixel of `keys` (by its tiles).
+fn hidden(bounds: SphereBounds, keys: &KeyBuffer) -> bool {
+    match bounds {
+        SphereBounds::Outside => true,
+        SphereBounds::Unbounded => false,
+        SphereBounds::Rect { rect, nearest } => {
+            let mut q = nearest as f32;
+            if (q as f64) < nearest {
+                q = q.next_up();
+            }
+            q.is_finite() && keys.occludes(rect, q.to_bits())
+        }
+    }
+}
+
 /// Calls `f` with every set bit of `words`.
 fn for_each_bit(words: impl Iterator<Item = u64>, mut f: impl FnMut(usize)) {
     for (w, mut bits) in words.enumerate() {
@@ -353,17 +373,11 @@ impl ViewContext<'_> {
         let rest = first.iter().enumerate().map(|(w, &d)| !d & valid(w));
         for_each_bit(rest, |p| {
             let patch = &self.tiling.patches[p];
-            let visible = match camera.sphere_bounds(patch.center, patch.radius) {
-                SphereBounds::Outside => false,
-                SphereBounds::Unbounded => true,
-                SphereBounds::Rect { rect, nearest } => {
-                    let mut q = nearest as f32;
-                    if (q as f64) < nearest {
-                        q = q.next_up();
-                    }
-                    !q.is_finite() || !scratch.keys.occludes(rect, q.to_bits())
-                }
-            };
+            // The sphere first (cheap), then the tighter box (8 projections).
+            let visible = !hidden(
+                camera.sphere_bounds(patch.center, patch.radius),
+                &scratch.keys,
+            ) && !hidden(camera.hull_bounds(&self.boxes[p].corners()), &scratch.keys);
             if visible {
                 self.draw_patch(p, &camera, scratch, Pass::Tested);
             }

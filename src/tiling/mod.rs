@@ -45,8 +45,9 @@ mod tests;
 use rayon::prelude::*;
 
 use crate::ooc::Mesh;
-use aabb::Aabb;
+pub(crate) use aabb::Aabb;
 use greedy::Fusion;
+pub(crate) use morton::morton_code;
 pub use quality::TilingQuality;
 pub use triangle_map::TriangleMap;
 
