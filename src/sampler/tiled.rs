@@ -5,12 +5,14 @@
 //! view of level `l + 1` splits an edge between two views of coarser levels
 //! (`sphere::parents`), which are finished and lie next to it, so the patches they see are
 //! nearly the patches it sees. Each view draws those patches first (plus the always-visible
-//! ones; every patch in level 0), except their triangles that wind away from the eye (back
-//! faces, which on a closed mesh are hidden and make poor occluders), builds the farthest
+//! ones; every patch in level 0) — but not those whose normal cone faces wholly away, nor
+//! their triangles that wind away from the eye (back faces, which on a closed mesh are
+//! hidden and make poor occluders) — builds the farthest
 //! depth of every 8×8-pixel tile from them (one level of a hierarchical Z-buffer; Greene,
 //! Kass & Miller 1993), and then draws each put-off back face and each remaining patch only
 //! if the tiles cannot prove it hidden: a patch by its bounding sphere's screen rectangle and
-//! nearest depth, then each of its triangles by its pixel box and largest corner depth. What
+//! nearest depth, then by its oriented bounding box's (`patch_box.rs`), then each of its
+//! triangles by its pixel box and largest corner depth. What
 //! fails cannot change any pixel, and the packed depth/triangle keys (`key_buffer.rs`) make
 //! the buffer independent of drawing order, so the result equals the reference render
 //! ([`super::sample`]) bit for bit. The mesh is regrouped by patch (`patch_mesh.rs`), so a
@@ -356,6 +358,19 @@ impl ViewContext<'_> {
         };
         for (w, d) in scratch.drawn.iter_mut().enumerate() {
             *d = hints.map_or(u64::MAX, |[a, b]| a[w] | b[w] | self.always[w]) & valid(w);
+        }
+        // A hinted patch that wholly faces away makes a poor occluder and is often hidden:
+        // leave it to the tested pass.
+        let eye = camera.eye();
+        for (w, d) in scratch.drawn.iter_mut().enumerate() {
+            let mut bits = *d & !self.always[w];
+            while bits != 0 {
+                let p = w * 64 + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                if !may_face(&self.tiling.patches[p], eye) {
+                    *d &= !(1 << (p % 64));
+                }
+            }
         }
         let first = std::mem::take(&mut scratch.drawn);
         for_each_bit(first.iter().copied(), |p| {
