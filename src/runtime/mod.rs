@@ -10,7 +10,7 @@
 //! file (CRC) plus one over the patch table and the VISB records; three query modes trade
 //! memory for time — [`Pvis::query`] (one row of scratch, decodes the leaf's `3 + 3·level`
 //! ancestor views in lock step), [`Streaming`] (`4 + 3·level` rows, decodes only where the path
-//! to the leaf changed) and [`Expanded`] (every row decoded once; `O(level + P/64)` a query).
+//! to the leaf changed) and [`Expanded`] (every row decoded once; every leaf's answer stored; `O(level)` a query).
 //!
 //! **Invariant:** nothing here allocates or panics on any input; the only panics are `assert!`s
 //! on caller contracts (an out-of-range patch index, a too-small scratch buffer).
@@ -272,8 +272,8 @@ impl<'a> Pvis<'a> {
 
     /// `u64` words of the table [`Pvis::expand`] fills: every view's row, the answer row,
     /// 5 words per inner face of the sphere hierarchy (its 3 split planes), 1.5 words per
-    /// leaf face (its 3 corner views) and a 32,768-word (256 KiB) grid of where point location
-    /// starts (8 octants × 128² cells × 2 bytes).
+    /// leaf face (its 3 corner views), a 32,768-word (256 KiB) grid of where point location
+    /// starts (8 octants × 128² cells × 2 bytes) and one row per leaf face (its answer).
     pub fn expanded_bound(&self) -> usize {
         expanded::words(self.sampling.level, self.sampling.views, self.row_words())
     }
@@ -289,7 +289,8 @@ impl<'a> Pvis<'a> {
     }
 
     /// Decodes every view once into `table` (at least [`Pvis::expanded_bound`] words) and
-    /// precomputes the point-location planes, for queries in `O(level + P/64)`.
+    /// precomputes the point-location planes and every leaf's answer, for queries in
+    /// `O(level)` that return a borrowed row.
     ///
     /// # Panics
     /// If `table.len() < self.expanded_bound()`.
