@@ -11,7 +11,8 @@
 //! Depth is `1/w`, interpolated affinely in screen space; a fragment wins only if strictly
 //! nearer, so with triangles drawn in input order the result is deterministic.
 //!
-//! Cost per view: one `f64` transform per vertex, ~20 integer operations of setup per
+//! Cost per view: one `f32` transform per vertex (four at a time where no clipping is
+//! needed; clipping itself runs in `f64`), ~20 integer operations of setup per
 //! triangle, and per covered bounding-box pixel three adds and a compare. Bounding boxes up
 //! to `SPAN_MIN_WIDTH` pixels wide are walked pixel by pixel; wider ones solve each row's
 //! covered span directly so large triangles cost their area, not their bounding box.
@@ -204,13 +205,24 @@ pub(crate) fn draw_triangle(
         scan([a.screen, b.screen, c.screen]);
         return;
     }
-    let clipped = clip::clip_triangle(positions().map(|p| camera.clip(p)), planes);
+    let corners = positions().map(|p| camera.clip(p));
+    let clipped = clip::clip_triangle(corners, planes);
+    // Corners the clipper kept (it copies them bit for bit) keep the snapped position every
+    // other triangle sharing them has; only the new vertices on the planes are snapped here.
+    let snap_kept = |c: &[f64; 3]| {
+        v.iter()
+            .zip(&corners)
+            .find(|(p, k)| {
+                p.outcode & NEEDS_CLIP == 0 && k.map(f64::to_bits) == c.map(f64::to_bits)
+            })
+            .map_or_else(|| snap(*c), |(p, _)| p.screen)
+    };
     // The clipped polygon is convex: fan it from its first vertex. Fan diagonals are shared
     // exactly, so the fill rule keeps the polygon's interior watertight too.
     if let [first, rest @ ..] = clipped.vertices() {
-        let first = snap(*first);
+        let first = snap_kept(first);
         for pair in rest.windows(2) {
-            scan([first, snap(pair[0]), snap(pair[1])]);
+            scan([first, snap_kept(&pair[0]), snap_kept(&pair[1])]);
         }
     }
 }
@@ -240,7 +252,7 @@ pub(crate) fn project(
         outcode |= GUARD;
     }
     let screen = if outcode & NEEDS_CLIP == 0 {
-        snap(c)
+        snap32(camera.clip32(p))
     } else {
         ScreenVertex::default()
     };
@@ -250,7 +262,8 @@ pub(crate) fn project(
 /// Whether every vertex within `radius` of `center` is certainly in front of the near plane
 /// and inside the guard band, so that [`project_unclipped`] may replace [`project`] for it:
 /// the ball must lie beyond twice the near distance and within half the guard band, margins
-/// that dwarf the rounding of the `f64` transforms (~1e-15 relative). True for every patch of
+/// that dwarf the rounding of the transforms (~1e-15 relative in `f64`, ~1e-7 in the `f32`
+/// snapping transform). True for every patch of
 /// a sampling view, whose cameras frame the whole model.
 pub(crate) fn sphere_needs_no_clip(camera: &Camera, center: [f32; 3], radius: f32) -> bool {
     let margin = GUARD_BAND / 2.0;
@@ -277,12 +290,45 @@ pub(crate) fn project_unclipped(camera: &Camera, p: [f32; 3]) -> ProjectedVertex
     outcode |= if cy < 0.0 { TOP } else { 0 };
     outcode |= if cy > edge { BOTTOM } else { 0 };
     ProjectedVertex {
-        screen: snap(c),
+        screen: snap32(camera.clip32(p)),
         outcode,
     }
 }
 
-/// Perspective division and snapping to the sub-pixel grid. `c` must have `w > 0`.
+/// [`snap`] of binary32 clip coordinates ([`Camera::clip32`]): how every vertex that needs no
+/// clipping is snapped. Division, scaling, clamp and the round-half-up in binary32, a fixed
+/// sequence of IEEE operations (the same bits on every machine), over four lanes at once in
+/// `ScreenBatch::project`. `c` must have `w > 0`.
+#[inline(always)]
+pub(crate) fn snap32(c: [f32; 3]) -> ScreenVertex {
+    let inv_w = 1.0 / c[2];
+    ScreenVertex {
+        x: snap_coordinate32(c[0], inv_w),
+        y: snap_coordinate32(c[1], inv_w),
+        q: inv_w,
+    }
+}
+
+/// `floor(v · inv_w · 256 + 0.5)` in binary32, clamped to `±COORD_LIMIT`: truncation then a
+/// correction where it rounded up (negative values), which SSE2 does four lanes at a time
+/// (`cvttps2dq`, compare, add) where `f32::floor` would be a library call per value.
+#[inline(always)]
+pub(crate) fn snap_coordinate32(v: f32, inv_w: f32) -> i32 {
+    // `max`/`min` rather than `clamp`: a NaN becomes `-COORD_LIMIT32`, as in the lanes.
+    #[allow(clippy::manual_clamp)]
+    let t = (v * inv_w * SUBPIXEL as f32)
+        .max(-COORD_LIMIT32)
+        .min(COORD_LIMIT32)
+        + 0.5;
+    let i = t as i32;
+    i - i32::from((i as f32) > t)
+}
+
+/// [`COORD_LIMIT`] in binary32 (exact: a power of two).
+pub(crate) const COORD_LIMIT32: f32 = COORD_LIMIT as f32;
+
+/// Perspective division and snapping to the sub-pixel grid in `f64`: for the new vertices a
+/// clipper makes (every vertex of the mesh goes through [`snap32`]). `c` must have `w > 0`.
 #[inline]
 fn snap(c: [f64; 3]) -> ScreenVertex {
     let inv_w = 1.0 / c[2];

@@ -1,15 +1,15 @@
 //! A patch's vertices projected together for the sub-pixel fast path of tiled sampling.
 //!
 //! Technique: the same transform and snapping as [`super::project`], bit for bit, over a
-//! whole patch, four points at a time in lane arrays that the compiler pairs into packed
-//! SSE2 `f64` multiplies and adds (the division and rounding stay scalar).
+//! whole patch, four points at a time in lane arrays that the compiler packs into SSE2
+//! `f32` registers (transform, division and rounding).
 //! Only patches that need no clipping come here (see [`super::sphere_needs_no_clip`]), so
 //! outcodes are not computed: they only reject triangles wholly beyond one image edge early,
 //! and such a triangle has no pixel centre in its clamped bounding box, so
 //! [`super::scan_triangle`] draws nothing for it either.
-//! Cost: per vertex one `f64` transform, a division and two roundings.
+//! Cost: per vertex one `f32` transform, a division and two roundings, four lanes at a time.
 
-use super::{HALF_PIXEL, SUBPIXEL_BITS, ScreenVertex, snap_coordinate};
+use super::{COORD_LIMIT32, HALF_PIXEL, SUBPIXEL, SUBPIXEL_BITS, ScreenVertex};
 use crate::sampler::camera::Camera;
 
 /// Screen positions of one patch's vertices: snapped `x`, `y` in sub-pixel units and
@@ -34,13 +34,13 @@ impl ScreenBatch {
         let mut chunks = points.chunks_exact(LANES);
         for chunk in &mut chunks {
             let lanes: &[[f32; 3]; LANES] = chunk.try_into().expect("exact chunk");
-            out.extend_from_slice(&snap_lanes(camera.clip_lanes(lanes)));
+            out.extend_from_slice(&snap_lanes(camera.clip32_lanes(lanes)));
         }
         let rest = chunks.remainder();
         if let Some(&last) = rest.last() {
             let lanes: [[f32; 3]; LANES] =
                 std::array::from_fn(|i| rest.get(i).copied().unwrap_or(last));
-            out.extend_from_slice(&snap_lanes(camera.clip_lanes(&lanes))[..rest.len()]);
+            out.extend_from_slice(&snap_lanes(camera.clip32_lanes(&lanes))[..rest.len()]);
         }
     }
 
@@ -52,15 +52,31 @@ impl ScreenBatch {
     }
 }
 
-/// `snap` lane by lane.
+/// `snap32` of four lanes in SSE2 registers (`wide`): the same IEEE operations in the same
+/// order as the scalar [`snap_coordinate32`], so the same bits.
 #[inline(always)]
-fn snap_lanes<const N: usize>(c: [[f64; N]; 3]) -> [ScreenVertex; N] {
-    let [cx, cy, w] = c;
-    let inv_w: [f64; N] = std::array::from_fn(|i| 1.0 / w[i]);
+fn snap_lanes(c: [[f32; LANES]; 3]) -> [ScreenVertex; LANES] {
+    use wide::{CmpGt, f32x4};
+    let [cx, cy, w] = c.map(f32x4::from);
+    let inv_w = f32x4::splat(1.0) / w;
+    let limit = f32x4::splat(COORD_LIMIT32);
+    let one = f32x4::splat(1.0);
+    let snap = |v: f32x4| -> [i32; LANES] {
+        let t = (v * inv_w * f32x4::splat(SUBPIXEL as f32))
+            .max(-limit)
+            .min(limit)
+            + 0.5;
+        let i = t.trunc_int();
+        // Truncation rounded negative values up: take 1 off there. Every value here is an
+        // integer below 2^29, exact in binary32, so this is exactly `floor(t)`.
+        let below = i.round_float() - (i.round_float().cmp_gt(t) & one);
+        below.trunc_int().to_array()
+    };
+    let (x, y, q) = (snap(cx), snap(cy), inv_w.to_array());
     std::array::from_fn(|i| ScreenVertex {
-        x: snap_coordinate(cx[i], inv_w[i]),
-        y: snap_coordinate(cy[i], inv_w[i]),
-        q: inv_w[i] as f32,
+        x: x[i],
+        y: y[i],
+        q: q[i],
     })
 }
 
@@ -80,4 +96,42 @@ pub(crate) fn covers_no_centre(tri: [ScreenVertex; 3]) -> bool {
     let y0 = (a.y.min(b.y).min(c.y) + BELOW_HALF) >> SUBPIXEL_BITS;
     let y1 = (a.y.max(b.y).max(c.y) - HALF) >> SUBPIXEL_BITS;
     (x0 > x1) | (y0 > y1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::snap32;
+    use super::*;
+    use proptest::prelude::*;
+
+    fn lane_value() -> impl Strategy<Value = f32> {
+        prop_oneof![
+            -600.0f32..600.0,
+            -1e9f32..1e9,
+            Just(f32::NAN),
+            Just(f32::INFINITY),
+            Just(-0.0),
+            Just(0.5 / 256.0),
+            Just(-0.5 / 256.0),
+        ]
+    }
+
+    proptest! {
+        /// The SSE2 lanes give the scalar snap's bits for any input, NaN and overflow included.
+        #[test]
+        fn lanes_equal_the_scalar_snap(
+            cx in proptest::array::uniform4(lane_value()),
+            cy in proptest::array::uniform4(lane_value()),
+            w in proptest::array::uniform4(prop_oneof![1e-3f32..1e3, Just(f32::NAN), Just(1e-30)]),
+        ) {
+            let lanes = snap_lanes([cx, cy, w]);
+            for i in 0..LANES {
+                let one = snap32([cx[i], cy[i], w[i]]);
+                prop_assert_eq!(
+                    (lanes[i].x, lanes[i].y, lanes[i].q.to_bits()),
+                    (one.x, one.y, one.q.to_bits())
+                );
+            }
+        }
+    }
 }
