@@ -348,10 +348,10 @@ fn widen(p: [f32; 3]) -> [f64; 3] {
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+pub(super) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+pub(super) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [
         a[1] * b[2] - a[2] * b[1],
         a[2] * b[0] - a[0] * b[2],
@@ -361,7 +361,7 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 fn scale3(a: [f64; 3], s: f64) -> [f64; 3] {
     [a[0] * s, a[1] * s, a[2] * s]
 }
-fn normalize(a: [f64; 3]) -> [f64; 3] {
+pub(super) fn normalize(a: [f64; 3]) -> [f64; 3] {
     let len = dot(a, a).sqrt();
     assert!(len > 0.0, "cannot normalise the zero vector");
     scale3(a, 1.0 / len)

@@ -19,6 +19,7 @@
 //! no point of it is nearer than its nearest corner (depth is linear in the box).
 //! Cost: one pass over each patch's vertices when sampling starts; 8 projections per test.
 
+use super::camera::{cross, dot, normalize};
 use super::patch_mesh::PatchMesh;
 use crate::tiling::Tiling;
 use rayon::prelude::*;
@@ -108,7 +109,7 @@ fn box_axes(points: &[[f32; 3]], normal: [f64; 3]) -> [[f64; 3]; 3] {
         .unwrap_or(0);
     let mut e = [0.0; 3];
     e[least] = 1.0;
-    let t1 = normalized(cross(n, e));
+    let t1 = normalize(cross(n, e));
     let t2 = cross(n, t1);
     // Second moments of the tangent coordinates about their mean.
     let count = points.len() as f64;
@@ -128,30 +129,13 @@ fn box_axes(points: &[[f32; 3]], normal: [f64; 3]) -> [[f64; 3]; 3] {
     let cuv = suv / count - mu * mv;
     let angle = 0.5 * (2.0 * cuv).atan2(cuu - cvv);
     let (sin, cos) = angle.sin_cos();
-    let major = normalized([
+    let major = normalize([
         cos * t1[0] + sin * t2[0],
         cos * t1[1] + sin * t2[1],
         cos * t1[2] + sin * t2[2],
     ]);
     let minor = cross(n, major);
     [major, minor, n]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn normalized(a: [f64; 3]) -> [f64; 3] {
-    let l = dot(a, a).sqrt();
-    a.map(|c| c / l)
 }
 
 #[cfg(test)]
