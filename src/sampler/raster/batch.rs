@@ -1,8 +1,8 @@
 //! A patch's vertices projected together for the sub-pixel fast path of tiled sampling.
 //!
 //! Technique: the same transform and snapping as [`super::project`], bit for bit, over a
-//! whole patch, four points at a time in lane arrays that the compiler packs into SSE2
-//! `f32` registers (transform, division and rounding).
+//! whole patch, four points at a time: the transform in lane arrays the compiler packs into
+//! SSE2 `f32` registers, the division and rounding in `wide`'s `f32x4` (safe code).
 //! Only patches that need no clipping come here (see [`super::sphere_needs_no_clip`]), so
 //! outcodes are not computed: they only reject triangles wholly beyond one image edge early,
 //! and such a triangle has no pixel centre in its clamped bounding box, so
@@ -19,9 +19,9 @@ pub(crate) struct ScreenBatch {
     vertices: Vec<ScreenVertex>,
 }
 
-/// Points per step of [`ScreenBatch::project`]: four `f64` lanes are two SSE2 registers
-/// per value. (A plain loop that the compiler vectorized completely, division and a
-/// float-only floor included, measured slower; see BENCHMARKS.md, "Third pass".)
+/// Points per step of [`ScreenBatch::project`]: four `f32` lanes, one SSE2 register per
+/// value (BENCHMARKS.md, "Fifth pass": plain lane arrays left the division and the
+/// conversions scalar, `wide`'s `f32x4` does not).
 const LANES: usize = 4;
 
 impl ScreenBatch {
