@@ -17,7 +17,10 @@ use std::io::Write;
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"PVISCKPT";
-const VERSION: u32 = 1;
+/// Bumped whenever the sampler's rows change for the same inputs, so that a checkpoint an
+/// older build wrote is refused instead of mixed with rows of this one: 2 since vertices
+/// snap through the binary32 transform (`raster::snap32`).
+const VERSION: u32 = 2;
 const HEADER_BYTES: usize = 8 + 4 + 4 + 8 + 4 + 4;
 
 /// A 64-bit FNV-1a-style hash fed whole words: enough to tell one bake's inputs from
