@@ -82,14 +82,35 @@ const MARGIN: f64 = 1.0 / (1u32 << 20) as f64;
 /// the root.
 const GRID_S_RANGE: (f32, f32) = (1e-18, 1e18);
 
-/// Table words for a file: the answer row, every view's row, the inner-face records, the leaf
-/// corners, the start grid, and every leaf's answer (the OR of its corners' rows).
+/// Where the parts of the table start, in words: after the answer row and every view's row
+/// come the inner-face records, the leaf corners, the start grid, and every leaf's answer
+/// (the OR of its corners' rows), which ends at `end`.
+#[derive(Clone, Copy)]
+struct Layout {
+    faces: usize,
+    leaves: usize,
+    grid: usize,
+    answers: usize,
+    end: usize,
+}
+
+const fn layout(level: u32, views: u32, row_words: usize) -> Layout {
+    let faces = (1 + views as usize) * row_words;
+    let leaves = faces + FACE_WORDS * faces_before(level);
+    let grid = leaves + leaf_words(level);
+    let answers = grid + GRID_WORDS;
+    Layout {
+        faces,
+        leaves,
+        grid,
+        answers,
+        end: answers + faces_at(level) * row_words,
+    }
+}
+
+/// Table words for a file (see [`Layout`]).
 pub(super) const fn words(level: u32, views: u32, row_words: usize) -> usize {
-    (1 + views as usize) * row_words
-        + FACE_WORDS * faces_before(level)
-        + leaf_words(level)
-        + GRID_WORDS
-        + faces_at(level) * row_words
+    layout(level, views, row_words).end
 }
 
 /// A file with every view decoded: see the module documentation. Made by [`Pvis::expand`].
@@ -122,23 +143,20 @@ impl<'a, 't> Expanded<'a, 't> {
             pvis.decode_row(v as u32, parent_rows, &mut rest[..words], &mut cache);
         }
         let level = pvis.sampling.level;
-        let (faces, rest) =
-            table[(1 + views) * words..need].split_at_mut(FACE_WORDS * faces_before(level));
-        let (leaves, rest) = rest.split_at_mut(leaf_words(level));
-        let (grid, _) = rest.split_at_mut(GRID_WORDS);
+        let at = layout(level, pvis.sampling.views, words);
+        let (front, answers) = table[..at.end].split_at_mut(at.answers);
+        let (faces, rest) = front[at.faces..].split_at_mut(at.leaves - at.faces);
+        let (leaves, grid) = rest.split_at_mut(at.grid - at.leaves);
         leaves.fill(0);
         for (octant, face) in root_faces().iter().enumerate() {
             build(face, 0, octant, level, faces, leaves);
         }
         build_grid(faces, level, grid);
         // Every leaf's answer, so that a query ORs nothing (see the module documentation).
-        let leaves_at = need - faces_at(level) * words;
-        let (front, answers) = table[..need].split_at_mut(leaves_at);
-        let leaf_corners =
-            &front[front.len() - GRID_WORDS - leaf_words(level)..][..leaf_words(level)];
+        let (rows, leaves) = (&front[..at.faces], &front[at.leaves..at.grid]);
         for (leaf, answer) in answers.chunks_exact_mut(words.max(1)).enumerate() {
-            let corners = leaf_views(leaf_corners, leaf);
-            let row = |v: u32| &front[(1 + v as usize) * words..][..words];
+            let corners = leaf_views(leaves, leaf);
+            let row = |v: u32| &rows[(1 + v as usize) * words..][..words];
             let (a, b, c) = (row(corners[0]), row(corners[1]), row(corners[2]));
             for (w, ((a, b), c)) in answer.iter_mut().zip(a.iter().zip(b).zip(c)) {
                 *w = a | b | c;
@@ -166,14 +184,12 @@ impl<'a, 't> Expanded<'a, 't> {
             return everything(&pvis, &mut self.table[..words]);
         };
         let level = pvis.sampling.level;
-        let rows_end = (1 + pvis.sampling.views as usize) * words;
-        let (faces, rest) = self.table[rows_end..].split_at(FACE_WORDS * faces_before(level));
-        let leaves = &rest[..leaf_words(level)];
-        let (grid, answers) = rest[leaf_words(level)..].split_at(GRID_WORDS);
-        let (start, index) = grid_start(d, grid);
-        let index = walk(d, faces, level, start, index);
-        let corners = leaf_views(leaves, index);
-        let answer = answers
+        let at = layout(level, pvis.sampling.views, words);
+        let t = &self.table[..at.end];
+        let (start, index) = grid_start(d, &t[at.grid..at.answers]);
+        let index = walk(d, &t[at.faces..at.leaves], level, start, index);
+        let corners = leaf_views(&t[at.leaves..at.grid], index);
+        let answer = t[at.answers..]
             .get(index * words..(index + 1) * words)
             .unwrap_or(&[]);
         visible(&pvis, inside_sphere, corners, answer)

@@ -10,7 +10,8 @@
 //! file (CRC) plus one over the patch table and the VISB records; three query modes trade
 //! memory for time — [`Pvis::query`] (one row of scratch, decodes the leaf's `3 + 3·level`
 //! ancestor views in lock step), [`Streaming`] (`4 + 3·level` rows, decodes only where the path
-//! to the leaf changed) and [`Expanded`] (every row decoded once; every leaf's answer stored; `O(level)` a query).
+//! to the leaf changed) and [`Expanded`] (every row decoded once and every leaf's answer
+//! stored; `O(level)` a query).
 //!
 //! **Invariant:** nothing here allocates or panics on any input; the only panics are `assert!`s
 //! on caller contracts (an out-of-range patch index, a too-small scratch buffer).
