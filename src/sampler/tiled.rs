@@ -356,21 +356,18 @@ impl ViewContext<'_> {
                 (1u64 << (patch_count % 64)) - 1
             }
         };
-        for (w, d) in scratch.drawn.iter_mut().enumerate() {
-            *d = hints.map_or(u64::MAX, |[a, b]| a[w] | b[w] | self.always[w]) & valid(w);
-        }
         // A hinted patch that wholly faces away makes a poor occluder and is often hidden:
-        // leave it to the tested pass.
+        // it is left to the tested pass. Always-visible patches are always drawn first.
         let eye = camera.eye();
         for (w, d) in scratch.drawn.iter_mut().enumerate() {
-            let mut bits = *d & !self.always[w];
-            while bits != 0 {
-                let p = w * 64 + bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                if !may_face(&self.tiling.patches[p], eye) {
-                    *d &= !(1 << (p % 64));
+            let hinted = hints.map_or(u64::MAX, |[a, b]| a[w] | b[w]) & valid(w);
+            let mut away = 0u64;
+            for_each_bit(std::iter::once(hinted), |i| {
+                if !may_face(&self.tiling.patches[w * 64 + i], eye) {
+                    away |= 1 << i;
                 }
-            }
+            });
+            *d = (hinted & !away) | (self.always[w] & valid(w));
         }
         let first = std::mem::take(&mut scratch.drawn);
         for_each_bit(first.iter().copied(), |p| {
