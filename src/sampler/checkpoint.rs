@@ -19,8 +19,9 @@ use std::path::Path;
 const MAGIC: &[u8; 8] = b"PVISCKPT";
 /// Bumped whenever the sampler's rows change for the same inputs, so that a checkpoint an
 /// older build wrote is refused instead of mixed with rows of this one: 2 since vertices
-/// snap through the binary32 transform (`raster::snap32`).
-const VERSION: u32 = 2;
+/// snap through the binary32 transform (`raster::snap32`), 3 since a depth tie goes to the
+/// smaller patch id instead of the smaller input triangle.
+const VERSION: u32 = 3;
 const HEADER_BYTES: usize = 8 + 4 + 4 + 8 + 4 + 4;
 
 /// A 64-bit FNV-1a-style hash fed whole words: enough to tell one bake's inputs from

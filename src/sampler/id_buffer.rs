@@ -49,16 +49,19 @@ impl IdBuffer {
         &self.depth
     }
 
-    /// Depth test and write: the fragment `(id, q)` replaces pixel `index` only if `covered`
-    /// and strictly nearer, so among equal depths the triangle drawn first keeps the pixel.
+    /// Depth test and write: the fragment `(id, q)` replaces pixel `index` only if `covered`,
+    /// `q > 0`, and it is strictly nearer or as near with a smaller patch id. That makes the
+    /// buffer independent of the order fragments arrive in (the tiled sampler's packed keys,
+    /// `key_buffer.rs`, keep the same fragment), and on equal depth the pixel's patch is
+    /// the same whichever of the tied triangles came first.
     /// Branch-free: the rasterizer calls it for every pixel of a small triangle's bounding box,
     /// where a branch on coverage would mispredict about half the time.
     #[inline(always)]
     pub(crate) fn plot(&mut self, index: usize, q: f32, id: u32, covered: bool) {
         let stored = self.depth[index];
-        let wins = covered & (q > stored);
-        self.depth[index] = if wins { q } else { stored };
         let id_stored = self.ids[index];
+        let wins = covered & (q > 0.0) & ((q > stored) | ((q == stored) & (id < id_stored)));
+        self.depth[index] = if wins { q } else { stored };
         self.ids[index] = if wins { id } else { id_stored };
     }
 }
@@ -81,12 +84,19 @@ mod tests {
     }
 
     #[test]
-    fn equal_depth_keeps_the_first_fragment() {
-        let mut buffer = IdBuffer::new(1);
-        buffer.plot(0, 0.5, 1, true);
-        buffer.plot(0, 0.5, 2, true);
-        assert_eq!(buffer.ids(), &[1]);
-        buffer.plot(0, 0.6, 3, true);
-        assert_eq!(buffer.ids(), &[3]);
+    fn equal_depth_keeps_the_smaller_patch_in_any_order() {
+        for order in [[1, 2], [2, 1]] {
+            let mut buffer = IdBuffer::new(1);
+            for id in order {
+                buffer.plot(0, 0.5, id, true);
+            }
+            assert_eq!(buffer.ids(), &[1]);
+            buffer.plot(0, 0.6, 3, true);
+            assert_eq!(buffer.ids(), &[3]);
+            buffer.plot(0, 0.6, 4, true);
+            buffer.plot(0, 0.0, 0, true);
+            buffer.plot(0, f32::NAN, 0, true);
+            assert_eq!(buffer.ids(), &[3]);
+        }
     }
 }

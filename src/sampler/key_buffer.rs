@@ -1,14 +1,15 @@
 //! The packed render target of tiled sampling: one `u64` per pixel holding the depth in the
-//! high half and the complement of the input triangle index in the low half.
+//! high half and the fragment's patch, coded by [`low_half`], in the low half.
 //!
 //! Depth is `1/w` (larger is nearer) as `f32` bits; for positive floats the bit patterns sort
 //! like the values, so one integer `max` is the whole depth test. On equal depth the larger
-//! low half wins, i.e. the smaller input triangle index: exactly the fragment the reference
-//! renderer ([`super::Rasterizer`], drawing in input order with a strictly-nearer test)
-//! keeps. The buffer's content therefore does not depend on the order triangles are drawn
-//! in, which is what lets the tiled sampler draw likely occluders first and skip hidden
-//! patches while staying bit-identical to a brute-force render. A cleared pixel is `0`, and a
-//! fragment with depth `<= 0` (never nearer than "empty" in the reference) is dropped.
+//! low half wins, i.e. the smaller patch id: exactly the fragment the reference renderer
+//! ([`super::IdBuffer`]'s depth test) keeps. The buffer's content therefore does not depend
+//! on the order triangles are drawn in, which is what lets the tiled sampler draw likely
+//! occluders first and skip hidden patches while staying bit-identical to a brute-force
+//! render. A cleared pixel is `0`, and a fragment with depth `<= 0` (never nearer than
+//! "empty" in the reference) is dropped. The patch comes straight out of the key
+//! ([`patch_slot`]), with no per-triangle table to look up.
 //! Cost: 8 bytes per pixel, one load, `max` and store per fragment.
 
 use super::raster::{SUBPIXEL_BITS, ScreenVertex};
@@ -54,7 +55,7 @@ impl KeyBuffer {
         &self.keys
     }
 
-    /// Depth test and write of the fragment of triangle `!low` at depth `q`; branch-free
+    /// Depth test and write of a fragment with low half `low` ([`low_half`]) at depth `q`; branch-free
     /// like [`super::IdBuffer`]'s `plot`.
     #[inline(always)]
     pub(crate) fn plot(&mut self, index: usize, q: f32, low: u32, covered: bool) {
@@ -127,11 +128,19 @@ impl KeyBuffer {
     }
 }
 
-/// The input triangle of a non-empty key (the sampler resolves keys through a table).
-#[cfg(test)]
-#[inline]
-pub(crate) fn triangle_of(key: u64) -> u32 {
-    !(key as u32)
+/// The low half of patch `patch`'s keys among `patch_count` patches: `patch_count − patch`,
+/// so that a smaller patch id wins a depth tie and no fragment's low half is 0.
+#[inline(always)]
+pub(crate) fn low_half(patch: u32, patch_count: u32) -> u32 {
+    debug_assert!(patch < patch_count);
+    patch_count - patch
+}
+
+/// The patch of a key among `patch_count` patches, or `patch_count` for an empty pixel
+/// (a spare slot for branch-free counting).
+#[inline(always)]
+pub(crate) fn patch_slot(key: u64, patch_count: u32) -> usize {
+    patch_count.wrapping_sub(key as u32) as usize
 }
 
 #[cfg(test)]
@@ -139,20 +148,26 @@ mod tests {
     use super::*;
 
     #[test]
-    fn nearer_wins_and_equal_depth_keeps_the_smaller_triangle() {
+    fn nearer_wins_and_equal_depth_keeps_the_smaller_patch() {
+        const PATCHES: u32 = 10;
+        let low = |p| low_half(p, PATCHES);
+        let patch = |b: &KeyBuffer, i: usize| patch_slot(b.keys()[i], PATCHES);
         let mut b = KeyBuffer::new(2);
-        b.plot(0, 0.5, !7, true);
-        b.plot(0, 0.5, !9, true);
-        assert_eq!(triangle_of(b.keys()[0]), 7);
-        b.plot(0, 0.5, !3, true);
-        assert_eq!(triangle_of(b.keys()[0]), 3);
-        b.plot(0, 0.25, !1, true);
-        assert_eq!(triangle_of(b.keys()[0]), 3);
-        b.plot(0, 0.75, !8, false);
-        b.plot(1, 0.0, !8, true);
-        b.plot(1, -1.0, !8, true);
-        b.plot(1, f32::NAN, !8, true);
-        assert_eq!(triangle_of(b.keys()[0]), 3);
+        assert_eq!(patch(&b, 0), PATCHES as usize);
+        b.plot(0, 0.5, low(7), true);
+        b.plot(0, 0.5, low(9), true);
+        assert_eq!(patch(&b, 0), 7);
+        b.plot(0, 0.5, low(3), true);
+        assert_eq!(patch(&b, 0), 3);
+        b.plot(0, 0.5, low(0), true);
+        assert_eq!(patch(&b, 0), 0);
+        b.plot(0, 0.25, low(1), true);
+        assert_eq!(patch(&b, 0), 0);
+        b.plot(0, 0.75, low(8), false);
+        b.plot(1, 0.0, low(8), true);
+        b.plot(1, -1.0, low(8), true);
+        b.plot(1, f32::NAN, low(8), true);
+        assert_eq!(patch(&b, 0), 0);
         assert_eq!(b.keys()[1], 0);
     }
 

@@ -435,9 +435,9 @@ pub(crate) fn scan_triangle(
     let e1 = Edge::new(c, a, sample_x, sample_y, sign);
     let e2 = Edge::new(a, b, sample_x, sample_y, sign);
     // Barycentric weights of b and c are e1 / area and e2 / area.
-    let inv_area = 1.0 / area as f64;
-    let kb = ((b.q - a.q) as f64 * inv_area) as f32;
-    let kc = ((c.q - a.q) as f64 * inv_area) as f32;
+    let inv_area = 1.0 / area as f32;
+    let kb = (b.q - a.q) * inv_area;
+    let kc = (c.q - a.q) * inv_area;
     let depth = |w1: i64, w2: i64| a.q + w1 as f32 * kb + w2 as f32 * kc;
     let stride = resolution as usize;
 

@@ -27,9 +27,9 @@
 //! set in every row), `conservative` (conservative rasterization, `conservative.rs`), and a
 //! checkpoint written after each level (`checkpoint.rs`).
 //! Cost per view: a sphere test per patch, the triangles of the drawn patches (a tile test
-//! for those drawn after the tiles), one pass over the pixels. Memory: one `resolution² × 8`-byte buffer per thread, the
-//! result (one bit per view and patch), and the regrouped mesh (about 22 bytes per triangle
-//! with the key→patch table) — on the heap, or in mapped temporary files when it would take
+//! for those drawn after the tiles), one pass over the pixels. Memory: one
+//! `resolution² × 8`-byte buffer per thread, the result (one bit per view and patch), and the
+//! regrouped mesh (about 18 bytes per triangle) — on the heap, or in a mapped temporary file when it would take
 //! more than a quarter of [`SamplingOptions::memory_budget`], so that the heap stays
 //! independent of the mesh size.
 //! **Invariant**: the result is the same for any number of threads, and with or without a
@@ -38,7 +38,7 @@
 use super::camera::{Camera, SphereBounds};
 use super::checkpoint;
 use super::conservative::scan_triangle_conservative;
-use super::key_buffer::KeyBuffer;
+use super::key_buffer::{KeyBuffer, low_half, patch_slot};
 use super::patch_box::{PatchBox, patch_boxes};
 use super::patch_graph::{PatchGraph, may_face};
 use super::patch_mesh::{PatchMesh, Storage};
@@ -50,7 +50,7 @@ use super::{SamplingParams, VisibilityMatrix};
 use crate::ooc::Mesh;
 use crate::progress::Progress;
 use crate::sphere::{parents, view_count};
-use crate::tiling::{PatchId, Tiling, TriangleMap};
+use crate::tiling::{PatchId, Tiling};
 use rayon::prelude::*;
 use std::path::PathBuf;
 
@@ -157,8 +157,6 @@ pub fn sample_tiled(
         options,
         always,
         back_winding: back_winding(mesh),
-        patch_of_key: patch_of_key(tiling, patch_count, storage)
-            .map_err(SamplingError::TempFile)?,
         graph: options
             .dilate
             .then(|| PatchGraph::new(mesh, &tiling.patch_of, patch_count)),
@@ -193,23 +191,6 @@ pub fn sample_tiled(
     Ok(matrix)
 }
 
-/// The patch of every key's low half (see `ViewContext::patch_of_key`): 4 bytes per
-/// triangle, mapped like the regrouped mesh when that is.
-fn patch_of_key(
-    tiling: &Tiling,
-    patch_count: u32,
-    storage: Storage,
-) -> std::io::Result<TriangleMap> {
-    let entries = tiling.patch_of.len() + 1;
-    let mut table = match storage {
-        Storage::Heap => TriangleMap::from_vec(vec![0; entries]),
-        Storage::Mapped => TriangleMap::mapped_zeroed(entries)?,
-    };
-    table[0] = patch_count;
-    table[1..].copy_from_slice(&tiling.patch_of);
-    Ok(table)
-}
-
 /// Most back faces a view puts off until its occlusion tiles exist (about 40 bytes each,
 /// so 10 MiB per thread): on a 20M-triangle mesh the hinted patches hold millions of back
 /// faces, which would otherwise make the heap grow with the mesh. Tests use a small cap, so
@@ -226,9 +207,6 @@ struct ViewContext<'a> {
     /// Every patch's oriented bounding box, the tight bound of the occlusion test.
     boxes: Vec<PatchBox>,
     graph: Option<PatchGraph>,
-    /// The patch of the key whose low half is `low`, at index `low.wrapping_neg()` (input
-    /// triangle + 1); index 0 (empty pixel) holds the spare patch number `patch_count`.
-    patch_of_key: TriangleMap,
     /// [`back_winding`] of the mesh.
     back_winding: i64,
 }
@@ -411,8 +389,8 @@ impl ViewContext<'_> {
             ..
         } = scratch;
         let patch = &self.tiling.patches[p];
-        let (start, triangles) = self.mesh.triangles(p);
-        let order = &self.tiling.order[start..start + triangles.len()];
+        let (_, triangles) = self.mesh.triangles(p);
+        let low = low_half(p as u32, self.mesh.patch_count() as u32);
         let resolution = camera.resolution();
         let conservative = self.options.conservative;
         let mut place = |tri: [ScreenVertex; 3], low: u32| {
@@ -437,10 +415,10 @@ impl ViewContext<'_> {
             // Every patch of a sampling view: packed projection, and the sub-pixel
             // triangles (most of a mesh much finer than the image) leave after a box test.
             screen.project(camera, vertices);
-            for (&tri, &input) in triangles.iter().zip(order) {
+            for &tri in triangles {
                 let tri = screen.triangle(tri);
                 if conservative || !covers_no_centre(tri) {
-                    place(tri, !input);
+                    place(tri, low);
                 }
             }
             return;
@@ -448,18 +426,18 @@ impl ViewContext<'_> {
         let planes = view_planes(camera);
         projected.clear();
         projected.extend(vertices.iter().map(|&v| project(camera, &planes, v)));
-        for (tri, &input) in triangles.iter().zip(order) {
+        for tri in triangles {
             draw_triangle(
                 tri.map(|i| projected[i as usize]),
                 || tri.map(|i| vertices[i as usize]),
                 camera,
                 &planes,
-                |screen| place(screen, !input),
+                |screen| place(screen, low),
             );
         }
     }
 
-    /// Rasterizes one screen triangle of input triangle `!low` into `keys`.
+    /// Rasterizes one screen triangle with key low half `low` into `keys`.
     #[inline(always)]
     fn scan(&self, screen: [ScreenVertex; 3], low: u32, resolution: u32, keys: &mut KeyBuffer) {
         let plot = |index, q, covered| keys.plot(index, q, low, covered);
@@ -475,18 +453,16 @@ impl ViewContext<'_> {
     fn resolve(&self, camera: &Camera, scratch: &mut ViewScratch, row: &mut [u64]) {
         let min_pixels = self.options.min_pixels;
         let patch_count = self.mesh.patch_count();
-        let lookup = &self.patch_of_key;
-        // Neighbouring pixels mostly hold different triangles (1–2 px each), so a "same as the
-        // previous pixel" test mispredicts constantly: every pixel does a branch-free table
-        // look-up and store instead, empty pixels landing on the spare entry `patch_count`.
-        let slot = |key: u64| (key as u32).wrapping_neg() as usize;
+        // Branch-free: every pixel stores to its patch's entry, empty pixels to the spare
+        // entry `patch_count` (a "same as the previous pixel" test would mispredict often).
+        let slot = |key: u64| patch_slot(key, patch_count as u32);
         row.fill(0);
         let seen = &mut scratch.seen;
         seen.fill(0);
         if min_pixels <= 1 {
             let hit = &mut scratch.hit;
             for &key in scratch.keys.keys() {
-                hit[lookup[slot(key)] as usize] = 1;
+                hit[slot(key)] = 1;
             }
             for (p, h) in hit[..patch_count].iter_mut().enumerate() {
                 seen[p / 64] |= u64::from(*h) << (p % 64);
@@ -495,7 +471,7 @@ impl ViewContext<'_> {
         } else {
             let pixels = &mut scratch.pixels;
             for &key in scratch.keys.keys() {
-                pixels[lookup[slot(key)] as usize] += 1;
+                pixels[slot(key)] += 1;
             }
             for (p, count) in pixels[..patch_count].iter_mut().enumerate() {
                 if *count >= min_pixels {
