@@ -139,6 +139,12 @@ impl Camera {
         }
     }
 
+    /// Pixels per world unit at view depth 1 (`resolution / 2 / tan(fov / 2)`): a length
+    /// `l` at depth `d` along [`Camera::forward`] spans about `l · pixel_scale / d` pixels.
+    pub(crate) fn pixel_scale(&self) -> f64 {
+        self.scale
+    }
+
     /// Image width and height in pixels.
     pub fn resolution(&self) -> u32 {
         self.resolution

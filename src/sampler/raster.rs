@@ -442,6 +442,17 @@ pub(crate) fn scan_triangle(
     let stride = resolution as usize;
 
     let (dx, dy) = (x1 - x0, y1 - y0);
+    if paths.tiny && (dx | dy) == 0 {
+        // One pixel centre in the box (most triangles that hold one on meshes finer than
+        // the image): one sample, no steps.
+        let w = [e0.start, e1.start, e2.start];
+        plot(
+            y0 as usize * stride + x0 as usize,
+            depth(w[1], w[2]),
+            (w[0] | w[1] | w[2]) >= 0,
+        );
+        return;
+    }
     if paths.tiny && dx <= 1 && dy <= 1 {
         // Most triangles of a dense mesh: four samples, no loops, no data-dependent
         // branches. A sample beyond a 1-pixel-wide box is outside the triangle or the image;

@@ -197,6 +197,21 @@ pub fn sample_tiled(
 /// that both ways (put off, drawn at once) run in every test view.
 const MAX_DEFERRED: usize = if cfg!(test) { 64 } else { 1 << 18 };
 
+/// Whether patch `patch`'s triangles average less than a pixel of surface each in `camera`'s
+/// image (their projected area is at most that): the patches where most triangles hold no
+/// pixel centre. Only chooses between two loops that draw the same fragments.
+fn finer_than_pixels(camera: &Camera, patch: &crate::tiling::Patch) -> bool {
+    let (eye, forward) = (camera.eye(), camera.forward());
+    let depth: f64 = (0..3)
+        .map(|i| (f64::from(patch.center[i]) - eye[i]) * forward[i])
+        .sum();
+    let scale = camera.pixel_scale() / depth;
+    patch.area * scale * scale < f64::from(patch.count)
+}
+
+/// Triangles box-tested per batch before the kept ones are drawn (36 bytes each).
+const CANDIDATE_BATCH: usize = 256;
+
 /// Everything every view shares.
 struct ViewContext<'a> {
     mesh: PatchMesh,
@@ -214,6 +229,8 @@ struct ViewContext<'a> {
 /// One worker's buffers.
 struct ViewScratch {
     keys: KeyBuffer,
+    /// Screen triangles of a patch that hold a pixel centre (`CANDIDATE_BATCH` slots).
+    candidates: Vec<[ScreenVertex; 3]>,
     projected: Vec<ProjectedVertex>,
     /// Screen vertices of a patch that needs no clipping.
     screen: ScreenBatch,
@@ -232,6 +249,7 @@ impl ViewScratch {
         let words = (patch_count as usize).div_ceil(64);
         ViewScratch {
             keys: KeyBuffer::new(resolution),
+            candidates: vec![[ScreenVertex::default(); 3]; CANDIDATE_BATCH],
             projected: Vec::new(),
             screen: ScreenBatch::default(),
             drawn: vec![0; words],
@@ -383,6 +401,7 @@ impl ViewContext<'_> {
         let vertices = self.mesh.vertices(p);
         let ViewScratch {
             keys,
+            candidates,
             projected,
             screen,
             deferred,
@@ -415,10 +434,28 @@ impl ViewContext<'_> {
             // Every patch of a sampling view: packed projection, and the sub-pixel
             // triangles (most of a mesh much finer than the image) leave after a box test.
             screen.project(camera, vertices);
-            for &tri in triangles {
-                let tri = screen.triangle(tri);
-                if conservative || !covers_no_centre(tri) {
-                    place(tri, low);
+            if conservative || !finer_than_pixels(camera, patch) {
+                for &tri in triangles {
+                    let tri = screen.triangle(tri);
+                    if conservative || !covers_no_centre(tri) {
+                        place(tri, low);
+                    }
+                }
+                return;
+            }
+            // Triangles smaller than pixels: two loops. The box test writes every triangle's
+            // slot and keeps it only if it holds a centre (branch-free: its outcome is a coin
+            // toss there), then the kept ones are drawn. Larger triangles nearly all hold a
+            // centre, so the one loop above predicts well and skips the copy.
+            for chunk in triangles.chunks(CANDIDATE_BATCH) {
+                let mut kept = 0;
+                for &tri in chunk {
+                    let corners = screen.triangle(tri);
+                    candidates[kept] = corners;
+                    kept += usize::from(!covers_no_centre(corners));
+                }
+                for &corners in &candidates[..kept] {
+                    place(corners, low);
                 }
             }
             return;

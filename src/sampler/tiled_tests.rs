@@ -160,10 +160,13 @@ fn tiled_equals_brute_force_on_generated_meshes() {
     // Boxes: one patch per face pair, so a patch is a slab of a box; and a greedy tiling.
     let by_pairs = tiling_of(&boxes, (0..boxes.triangle_count()).map(|t| t / 4).collect());
     let sphere = noisy_sphere(30, 60, 0.3, 9);
+    // About half a pixel of surface per triangle at 64²: the sub-pixel loop of `draw_patch`.
+    let fine = noisy_sphere(80, 160, 0.3, 5);
     for (mesh, tiling) in [
         (&boxes, by_pairs),
         (&boxes, crate::tiling::tile(&boxes, 40).unwrap()),
         (&sphere, crate::tiling::tile(&sphere, 50).unwrap()),
+        (&fine, crate::tiling::tile(&fine, 40).unwrap()),
     ] {
         let p = params_for(mesh, 3, 64);
         let count = tiling.patches.len() as u32;
@@ -182,7 +185,7 @@ fn tiled_equals_brute_force_on_generated_meshes() {
 }
 
 /// The visible patches of one view by a sequential, unculled render into an [`IdBuffer`]
-/// (input order, strictly-nearer test): the reference for the options.
+/// (a depth tie kept by the smaller patch): the reference for the options.
 fn reference_row(
     mesh: &Mesh,
     patch_of: &[PatchId],
