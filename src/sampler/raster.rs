@@ -8,8 +8,9 @@
 //! rasterize watertight. Pixel centres are sampled; triangles covering none draw nothing.
 //! Triangles reaching behind the near plane or beyond the guard band are clipped first (see
 //! `clip.rs`); all others, which is every triangle of a sampling view, go straight to setup.
-//! Depth is `1/w`, interpolated affinely in screen space; a fragment wins only if strictly
-//! nearer, so with triangles drawn in input order the result is deterministic.
+//! Depth is `1/w`, interpolated affinely in screen space from `f32` plane coefficients (one
+//! `f32` division per triangle); a fragment wins if nearer, or as near with a smaller patch
+//! id ([`IdBuffer`]'s test), so the result does not depend on the order triangles are drawn in.
 //!
 //! Cost per view: one `f32` transform per vertex (four at a time where no clipping is
 //! needed; clipping itself runs in `f64`), ~20 integer operations of setup per

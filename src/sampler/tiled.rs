@@ -20,7 +20,8 @@
 //! plane and guard band (all of them, in sampling views) skip the clip-plane tests: their
 //! vertices are projected four at a time (`raster/batch.rs`), and a triangle whose bounding
 //! box holds no pixel centre (most of them on meshes much finer than the image) is dropped
-//! after a box test, before winding, deferral or edge setup.
+//! after a box test, before winding, deferral or edge setup; in patches whose triangles are
+//! smaller than a pixel that test is branch-free (a batch of kept triangles is drawn after).
 //!
 //! Options: `min_pixels` (a patch counts only if it covers that many pixels), `dilate` (also
 //! mark edge neighbours of visible patches that may face the eye), `always_visible` (patches
