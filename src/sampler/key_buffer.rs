@@ -55,8 +55,8 @@ impl KeyBuffer {
         &self.keys
     }
 
-    /// Depth test and write of a fragment with low half `low` ([`low_half`]) at depth `q`; branch-free
-    /// like [`super::IdBuffer`]'s `plot`.
+    /// Depth test and write of a fragment with low half `low` ([`low_half`]) at depth `q`;
+    /// branch-free like [`super::IdBuffer`]'s `plot`.
     #[inline(always)]
     pub(crate) fn plot(&mut self, index: usize, q: f32, low: u32, covered: bool) {
         let key = (u64::from(q.to_bits()) << 32) | u64::from(low);

@@ -30,9 +30,9 @@
 //! Cost per view: a sphere test per patch, the triangles of the drawn patches (a tile test
 //! for those drawn after the tiles), one pass over the pixels. Memory: one
 //! `resolution² × 8`-byte buffer per thread, the result (one bit per view and patch), and the
-//! regrouped mesh (about 18 bytes per triangle) — on the heap, or in a mapped temporary file when it would take
-//! more than a quarter of [`SamplingOptions::memory_budget`], so that the heap stays
-//! independent of the mesh size.
+//! regrouped mesh (about 18 bytes per triangle) — on the heap, or in a mapped temporary file
+//! when it would take more than a quarter of [`SamplingOptions::memory_budget`], so that the
+//! heap stays independent of the mesh size.
 //! **Invariant**: the result is the same for any number of threads, and with or without a
 //! resumed checkpoint.
 
