@@ -160,7 +160,7 @@ fn tiled_equals_brute_force_on_generated_meshes() {
     // Boxes: one patch per face pair, so a patch is a slab of a box; and a greedy tiling.
     let by_pairs = tiling_of(&boxes, (0..boxes.triangle_count()).map(|t| t / 4).collect());
     let sphere = noisy_sphere(30, 60, 0.3, 9);
-    // About half a pixel of surface per triangle at 64²: the sub-pixel loop of `draw_patch`.
+    // About 0.4 pixel of surface per triangle at 64²: the branch-free loop of `draw_patch`.
     let fine = noisy_sphere(80, 160, 0.3, 5);
     for (mesh, tiling) in [
         (&boxes, by_pairs),
