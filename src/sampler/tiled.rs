@@ -212,7 +212,7 @@ fn centres_are_a_coin_toss(camera: &Camera, patch: &crate::tiling::Patch) -> boo
         .sum();
     let scale = camera.pixel_scale() / depth;
     let ppt = patch.area * scale * scale / f64::from(patch.count);
-    (ppt < 1.0) & (ppt >= 1.0 / 16.0)
+    (1.0 / 16.0..1.0).contains(&ppt)
 }
 
 /// Triangles box-tested per batch before the kept ones are drawn (36 bytes each).
