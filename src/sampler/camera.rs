@@ -139,10 +139,10 @@ impl Camera {
         }
     }
 
-    /// Pixels per world unit at view depth 1 (`resolution / 2 / tan(fov / 2)`): a length
-    /// `l` at depth `d` along [`Camera::forward`] spans about `l · pixel_scale / d` pixels.
-    pub(crate) fn pixel_scale(&self) -> f64 {
-        self.scale
+    /// About how many pixels one world unit spans at the view depth of `p` (along
+    /// [`Camera::forward`]; `p` must lie in front of the eye).
+    pub(crate) fn pixels_per_unit_at(&self, p: [f32; 3]) -> f64 {
+        self.scale / dot(sub(widen(p), self.eye), self.forward)
     }
 
     /// Image width and height in pixels.

@@ -206,11 +206,7 @@ const MAX_DEFERRED: usize = if cfg!(test) { 64 } else { 1 << 18 };
 /// rarely do (7 % on the 6.4M bunny). Only chooses between two loops that draw the same
 /// fragments.
 fn centres_are_a_coin_toss(camera: &Camera, patch: &crate::tiling::Patch) -> bool {
-    let (eye, forward) = (camera.eye(), camera.forward());
-    let depth: f64 = (0..3)
-        .map(|i| (f64::from(patch.center[i]) - eye[i]) * forward[i])
-        .sum();
-    let scale = camera.pixel_scale() / depth;
+    let scale = camera.pixels_per_unit_at(patch.center);
     let ppt = patch.area * scale * scale / f64::from(patch.count);
     (1.0 / 16.0..1.0).contains(&ppt)
 }
@@ -418,7 +414,7 @@ impl ViewContext<'_> {
         let low = low_half(p as u32, self.mesh.patch_count() as u32);
         let resolution = camera.resolution();
         let conservative = self.options.conservative;
-        let mut place = |tri: [ScreenVertex; 3], low: u32| {
+        let mut place = |tri: [ScreenVertex; 3]| {
             match pass {
                 Pass::First => {
                     // Past the cap a back face is drawn at once: slower (no tile test), same
@@ -444,7 +440,7 @@ impl ViewContext<'_> {
                 for &tri in triangles {
                     let tri = screen.triangle(tri);
                     if conservative || !covers_no_centre(tri) {
-                        place(tri, low);
+                        place(tri);
                     }
                 }
                 return;
@@ -460,7 +456,7 @@ impl ViewContext<'_> {
                     kept += usize::from(!covers_no_centre(corners));
                 }
                 for &corners in &candidates[..kept] {
-                    place(corners, low);
+                    place(corners);
                 }
             }
             return;
@@ -474,7 +470,7 @@ impl ViewContext<'_> {
                 || tri.map(|i| vertices[i as usize]),
                 camera,
                 &planes,
-                |screen| place(screen, low),
+                &mut place,
             );
         }
     }
