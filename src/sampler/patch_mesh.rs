@@ -1,6 +1,6 @@
 //! The mesh regrouped patch by patch for tiled sampling: each patch's distinct vertices in
-//! one contiguous run and its triangles as indices into that run, on the heap or, for meshes
-//! that would not fit the memory budget, in a memory-mapped temporary file.
+//! one contiguous run and its triangles as 16-bit indices into that run, on the heap or, for
+//! meshes that would not fit the memory budget, in a memory-mapped temporary file.
 //!
 //! A view then transforms only the vertices of the patches it draws, and a patch's vertices
 //! and triangles sit together in memory, so skipped patches cost nothing and drawn ones stream
@@ -8,15 +8,23 @@
 //! `2·sqrt(triangles per patch)` extra per patch); both copies hold the same `f32` position,
 //! so they project to bit-identical screen vertices and the mesh stays watertight.
 //!
-//! **Storage.** The copy is about 18 bytes per triangle (12 per triangle, 12 per patch
-//! vertex): 360 MB at 20M triangles, more than a 512 MiB budget can hold next to everything
+//! **Sections.** A patch's triangles are cut, in the tiling's order, into *sections* of at
+//! most [`SECTION_VERTICES`] distinct vertices (65,536: one section per patch unless a patch
+//! holds more than about 130,000 triangles), each with its own vertex run, so that a corner
+//! is a `u16`. That halves the bytes a view streams per triangle (6 instead of 12), and the
+//! sampler looks corners up in a 65,536-entry table without bounds checks: together −33 % of
+//! a view at 6.4M triangles (BENCHMARKS.md, "Seventh pass"). A section border duplicates
+//! vertices the way a patch border does, with the same bits.
+//!
+//! **Storage.** The copy is about 12 bytes per triangle (6 per triangle, 12 per patch
+//! vertex): 240 MB at 20M triangles, more than a 512 MiB budget can hold next to everything
 //! else. [`Storage::Mapped`] writes it, batch of patches after batch, to an unlinked temporary
 //! file and maps that read-only: the kernel's page cache holds it, the heap holds only one
-//! batch while it is built and the per-patch offsets afterwards. Views read it through the
+//! batch while it is built and the per-section offsets afterwards. Views read it through the
 //! same slices either way, patch by patch in file order, so a view's reads are sequential
 //! runs of the file.
 //!
-//! This file's only `unsafe` code views the mapped bytes as `[f32; 3]` / `[u32; 3]`.
+//! This file's only `unsafe` code views the mapped bytes as `[f32; 3]` / `[u16; 3]`.
 //! Cost: one pass over the triangles plus a sort per patch.
 
 use std::fs::File;
@@ -29,8 +37,12 @@ use rayon::prelude::*;
 use crate::ooc::Mesh;
 use crate::tiling::Tiling;
 
-/// Bytes per regrouped triangle (three `u32` corners) and per patch vertex (three `f32`).
-const RECORD_BYTES: usize = 12;
+/// Most distinct vertices in one section: what a `u16` corner can index.
+pub(crate) const SECTION_VERTICES: usize = 1 << 16;
+
+/// The section size the build uses: small under `cfg(test)`, so that the tests' meshes have
+/// patches of several sections.
+const BUILD_SECTION_VERTICES: usize = if cfg!(test) { 100 } else { SECTION_VERTICES };
 
 /// Triangles regrouped per batch when the result goes to a mapped file: bounds the heap the
 /// build needs (about 60 bytes per triangle in flight: corners, their sorted copy, positions)
@@ -58,13 +70,13 @@ impl Storage {
     }
 }
 
-/// The regrouped mesh's expected size: 12 bytes per triangle and, on a typical mesh (half
+/// The regrouped mesh's expected size: 6 bytes per triangle and, on a typical mesh (half
 /// as many vertices as triangles, plus the border copies), about 6 more for vertices.
 pub(crate) fn estimated_bytes(triangles: u64) -> u64 {
-    triangles.saturating_mul(18)
+    triangles.saturating_mul(12)
 }
 
-/// Records of one kind (`[f32; 3]` or `[u32; 3]`) on the heap or in a mapped file.
+/// Records of one kind (`[f32; 3]` or `[u16; 3]`) on the heap or in a mapped file.
 #[derive(Debug)]
 enum Records<T: Plain> {
     Heap(Vec<T>),
@@ -76,7 +88,7 @@ enum Records<T: Plain> {
     },
 }
 
-/// Three 32-bit numbers: 4-byte aligned, 12 bytes, every bit pattern valid.
+/// Three 32-bit or 16-bit numbers: no padding, alignment at most 4, every bit pattern valid.
 trait Plain: Copy + Default + std::fmt::Debug {
     fn write_to(&self, out: &mut impl Write) -> io::Result<()>;
 }
@@ -90,7 +102,7 @@ impl Plain for [f32; 3] {
     }
 }
 
-impl Plain for [u32; 3] {
+impl Plain for [u16; 3] {
     fn write_to(&self, out: &mut impl Write) -> io::Result<()> {
         for x in self {
             out.write_all(&x.to_ne_bytes())?;
@@ -106,9 +118,9 @@ impl<T: Plain> Deref for Records<T> {
         match self {
             Records::Heap(v) => v,
             Records::Mapped { map, len } => {
-                let bytes: &[u8] = &map[..len * RECORD_BYTES];
-                // SAFETY: `T` is `[f32; 3]` or `[u32; 3]` (the sealed `Plain`): 12 bytes,
-                // align 4, every bit pattern valid. A mapping starts on a page boundary, so
+                let bytes: &[u8] = &map[..len * std::mem::size_of::<T>()];
+                // SAFETY: `T` is `[f32; 3]` or `[u16; 3]` (the sealed `Plain`): no padding,
+                // align 4 or 2, every bit pattern valid. A mapping starts on a page boundary, so
                 // the pointer is aligned; `bytes` holds exactly `len` records, written in
                 // native byte order by `Sink::push`; the slice borrows `self`, so the map
                 // outlives it, and nothing writes the unlinked file while it is mapped.
@@ -173,21 +185,67 @@ impl<T: Plain> Sink<T> {
     }
 }
 
-/// One patch's distinct vertices and its triangles' corners as indices into them.
-type PatchPart = (Vec<[f32; 3]>, Vec<[u32; 3]>);
+/// One patch's sections: each one's distinct vertices and its triangles' corners as indices
+/// into them.
+type PatchPart = Vec<(Vec<[f32; 3]>, Vec<[u16; 3]>)>;
 
-/// Vertices and triangles grouped by patch; triangle `first + k` of patch `p` (in the tiling's
-/// order) is input triangle `order[first + k]`.
+/// Vertices and triangles grouped by patch and section; triangle `first + k` of patch `p` (in
+/// the tiling's order, across its sections) is input triangle `order[first + k]`.
 #[derive(Debug)]
 pub(crate) struct PatchMesh {
-    /// Distinct vertices of every patch, patch after patch.
+    /// Distinct vertices of every section, section after section, patch after patch.
     positions: Records<[f32; 3]>,
-    /// `positions[vertex_start[p]..vertex_start[p + 1]]` are patch `p`'s vertices.
+    /// `positions[vertex_start[s]..vertex_start[s + 1]]` are section `s`'s vertices.
     vertex_start: Vec<usize>,
-    /// Corners of reordered triangle `i`, as indices into its patch's vertex run.
-    triangles: Records<[u32; 3]>,
-    /// `triangle_start[p]..triangle_start[p + 1]` are patch `p`'s reordered triangles.
+    /// Corners of reordered triangle `i`, as indices into its section's vertex run.
+    triangles: Records<[u16; 3]>,
+    /// `triangle_start[s]..triangle_start[s + 1]` are section `s`'s reordered triangles.
     triangle_start: Vec<usize>,
+    /// `section_start[p]..section_start[p + 1]` are patch `p`'s sections.
+    section_start: Vec<usize>,
+}
+
+/// One section of a patch: its vertices and its triangles' corners, indices into them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Section<'a> {
+    /// The section's distinct vertices (at most [`SECTION_VERTICES`]).
+    pub(crate) vertices: &'a [[f32; 3]],
+    /// The section's triangles.
+    pub(crate) triangles: &'a [[u16; 3]],
+}
+
+/// Cuts the triangles `corners` (global vertex indices, in order) into runs of at most
+/// `max_vertices` distinct vertices each, and returns every run's vertices (ascending global
+/// index) and its corners as indices into them.
+fn sections(corners: &[[u32; 3]], max_vertices: usize) -> Vec<(Vec<u32>, Vec<[u16; 3]>)> {
+    assert!((3..=SECTION_VERTICES).contains(&max_vertices));
+    let mut out = Vec::new();
+    let mut start = 0;
+    while start < corners.len() {
+        // Fast path: the whole rest fits (always so for patches of under 21,846 triangles).
+        let mut end = corners.len();
+        if 3 * (end - start) > max_vertices {
+            let mut seen = std::collections::HashSet::new();
+            end = start;
+            while end < corners.len() {
+                let new = corners[end].iter().filter(|v| !seen.contains(*v)).count();
+                if seen.len() + new > max_vertices {
+                    break;
+                }
+                seen.extend(corners[end]);
+                end += 1;
+            }
+        }
+        let run = &corners[start..end];
+        let mut distinct: Vec<u32> = run.iter().flatten().copied().collect();
+        distinct.sort_unstable();
+        distinct.dedup();
+        let local = |v: u32| distinct.binary_search(&v).unwrap_or(0) as u16;
+        let triangles = run.iter().map(|c| c.map(local)).collect();
+        out.push((distinct, triangles));
+        start = end;
+    }
+    out
 }
 
 impl PatchMesh {
@@ -198,16 +256,23 @@ impl PatchMesh {
             Storage::Heap => usize::MAX,
             Storage::Mapped => MAPPED_BATCH_TRIANGLES,
         };
-        PatchMesh::build(mesh, tiling, storage, batch_triangles)
+        PatchMesh::build(
+            mesh,
+            tiling,
+            storage,
+            batch_triangles,
+            BUILD_SECTION_VERTICES,
+        )
     }
 
     /// [`Self::new`], regrouping `batch_triangles` triangles (whole patches, at least one) at
-    /// a time.
+    /// a time into sections of at most `section_vertices` vertices.
     fn build(
         mesh: &Mesh,
         tiling: &Tiling,
         storage: Storage,
         batch_triangles: usize,
+        section_vertices: usize,
     ) -> io::Result<PatchMesh> {
         assert_eq!(
             tiling.order.len(),
@@ -221,21 +286,23 @@ impl PatchMesh {
                 .iter()
                 .map(|&t| mesh.triangle(t))
                 .collect();
-            let mut distinct: Vec<u32> = corners.iter().flatten().copied().collect();
-            distinct.sort_unstable();
-            distinct.dedup();
-            let local = |v: u32| distinct.binary_search(&v).unwrap_or(0) as u32;
-            let triangles = corners.iter().map(|c| c.map(local)).collect();
-            let positions = distinct.iter().map(|&v| mesh.position(v)).collect();
-            (positions, triangles)
+            sections(&corners, section_vertices)
+                .into_iter()
+                .map(|(distinct, triangles)| {
+                    let positions = distinct.iter().map(|&v| mesh.position(v)).collect();
+                    (positions, triangles)
+                })
+                .collect()
         };
         let patch_count = tiling.patches.len();
         let mut positions = Sink::new(storage)?;
         let mut triangles = Sink::new(storage)?;
         let mut vertex_start = Vec::with_capacity(patch_count + 1);
         let mut triangle_start = Vec::with_capacity(patch_count + 1);
+        let mut section_start = Vec::with_capacity(patch_count + 1);
         vertex_start.push(0);
         triangle_start.push(0);
+        section_start.push(0);
         let mut first = 0;
         while first < patch_count {
             // Whole patches up to the batch size (at least one, however large).
@@ -250,11 +317,14 @@ impl PatchMesh {
                 end += 1;
             }
             let parts: Vec<PatchPart> = (first..end).into_par_iter().map(part).collect();
-            for (p, t) in parts {
-                positions.push(&p)?;
-                triangles.push(&t)?;
-                vertex_start.push(positions.len());
-                triangle_start.push(triangles.len());
+            for sections in parts {
+                for (p, t) in sections {
+                    positions.push(&p)?;
+                    triangles.push(&t)?;
+                    vertex_start.push(positions.len());
+                    triangle_start.push(triangles.len());
+                }
+                section_start.push(vertex_start.len() - 1);
             }
             first = end;
         }
@@ -263,40 +333,55 @@ impl PatchMesh {
             vertex_start,
             triangles: triangles.finish()?,
             triangle_start,
+            section_start,
         })
     }
 
     /// Number of patches.
     pub(crate) fn patch_count(&self) -> usize {
-        self.vertex_start.len() - 1
+        self.section_start.len() - 1
     }
 
-    /// Patch `p`'s vertices.
+    /// Patch `p`'s vertices: its sections' runs, one after the other.
     pub(crate) fn vertices(&self, p: usize) -> &[[f32; 3]] {
-        &self.positions[self.vertex_start[p]..self.vertex_start[p + 1]]
+        let (s0, s1) = (self.section_start[p], self.section_start[p + 1]);
+        &self.positions[self.vertex_start[s0]..self.vertex_start[s1]]
     }
 
-    /// Patch `p`'s triangles (local corner indices) and the reordered index of the first.
-    pub(crate) fn triangles(&self, p: usize) -> (usize, &[[u32; 3]]) {
-        let start = self.triangle_start[p];
-        (start, &self.triangles[start..self.triangle_start[p + 1]])
+    /// Patch `p`'s sections, in order.
+    pub(crate) fn sections(&self, p: usize) -> impl Iterator<Item = Section<'_>> {
+        (self.section_start[p]..self.section_start[p + 1]).map(|s| Section {
+            vertices: &self.positions[self.vertex_start[s]..self.vertex_start[s + 1]],
+            triangles: &self.triangles[self.triangle_start[s]..self.triangle_start[s + 1]],
+        })
+    }
+
+    /// The reordered index of patch `p`'s first triangle.
+    #[cfg(test)]
+    fn first_triangle(&self, p: usize) -> usize {
+        self.triangle_start[self.section_start[p]]
     }
 
     /// Bytes of the regrouped mesh, wherever it lives.
     #[cfg(test)]
     pub(crate) fn bytes(&self) -> usize {
-        (self.positions.len() + self.triangles.len()) * RECORD_BYTES
-            + (self.vertex_start.len() + self.triangle_start.len()) * 8
+        self.positions.len() * 12 + self.triangles.len() * 6 + self.offset_bytes()
+    }
+
+    /// Heap bytes of the per-section and per-patch offsets.
+    #[cfg(test)]
+    fn offset_bytes(&self) -> usize {
+        (self.vertex_start.len() + self.triangle_start.len() + self.section_start.len()) * 8
     }
 
     /// Heap bytes held: [`Self::bytes`] on the heap, the per-patch offsets when mapped.
     #[cfg(test)]
     pub(crate) fn heap_bytes(&self) -> usize {
-        let offsets = (self.vertex_start.len() + self.triangle_start.len()) * 8;
+        let offsets = self.offset_bytes();
         match (&self.positions, &self.triangles) {
             (Records::Heap(_), Records::Heap(_)) => self.bytes(),
-            (Records::Heap(p), _) => offsets + p.len() * RECORD_BYTES,
-            (_, Records::Heap(t)) => offsets + t.len() * RECORD_BYTES,
+            (Records::Heap(p), _) => offsets + p.len() * 12,
+            (_, Records::Heap(t)) => offsets + t.len() * 6,
             _ => offsets,
         }
     }
@@ -319,22 +404,57 @@ mod tests {
         let tiling = crate::tiling::tile(&mesh, 40).unwrap();
         let heap = PatchMesh::new(&mesh, &tiling, Storage::Heap).unwrap();
         // Small batches, so that the file is written in many pieces.
-        let mapped = PatchMesh::build(&mesh, &tiling, Storage::Mapped, 500).unwrap();
+        let mapped = PatchMesh::build(&mesh, &tiling, Storage::Mapped, 500, 100).unwrap();
         assert!(!heap.is_mapped() && mapped.is_mapped());
         assert_eq!(heap.patch_count(), tiling.patches.len());
         assert_eq!(mapped.patch_count(), tiling.patches.len());
         assert!(mapped.heap_bytes() < heap.heap_bytes() / 10);
         assert_eq!(mapped.bytes(), heap.bytes());
+        let mut multi_section = 0;
         for p in 0..heap.patch_count() {
             assert_eq!(heap.vertices(p), mapped.vertices(p));
-            assert_eq!(heap.triangles(p), mapped.triangles(p));
-            // The regrouped triangles are the tiling's, corner for corner.
-            let (first, tris) = heap.triangles(p);
-            for (k, local) in tris.iter().enumerate() {
-                let input = mesh.triangle(tiling.order[first + k]);
-                let expect = input.map(|v| mesh.position(v));
-                assert_eq!(local.map(|v| heap.vertices(p)[v as usize]), expect);
+            assert!(heap.sections(p).eq(mapped.sections(p)));
+            multi_section += usize::from(heap.sections(p).count() > 1);
+            // The regrouped triangles are the tiling's, corner for corner, across sections.
+            let first = heap.first_triangle(p);
+            let local = heap.sections(p).flat_map(|s| {
+                assert!(s.vertices.len() <= 100);
+                s.triangles
+                    .iter()
+                    .map(move |t| t.map(|v| s.vertices[v as usize]))
+            });
+            let input = (first..).map(|k| mesh.triangle(tiling.order[k]).map(|v| mesh.position(v)));
+            let count = tiling.patches[p].count as usize;
+            assert!(local.eq(input.take(count)));
+        }
+        assert!(
+            multi_section > 0,
+            "the test mesh must have patches of several sections"
+        );
+    }
+
+    #[test]
+    fn sections_hold_at_most_their_vertex_limit() {
+        // A strip of triangles: each adds one new vertex after the first.
+        let corners: Vec<[u32; 3]> = (0..1000).map(|i| [i, i + 1, i + 2]).collect();
+        for limit in [3, 4, 10, 999, 1002, 4000] {
+            let sections = sections(&corners, limit);
+            let mut k = 0;
+            for (distinct, tris) in &sections {
+                assert!(distinct.len() <= limit && !tris.is_empty());
+                for t in tris {
+                    assert_eq!(t.map(|v| distinct[v as usize]), corners[k]);
+                    k += 1;
+                }
             }
+            assert_eq!(k, corners.len());
+            // Greedy: each section but the last is full (one more triangle would not fit).
+            let expected = if limit >= 1002 {
+                1
+            } else {
+                1000usize.div_ceil(limit - 2)
+            };
+            assert_eq!(sections.len(), expected, "limit {limit}");
         }
     }
 

@@ -31,7 +31,7 @@
 //! Cost per view: a sphere test per patch, the triangles of the drawn patches (a tile test
 //! for those drawn after the tiles), one pass over the pixels. Memory: one
 //! `resolution² × 8`-byte buffer per thread, the result (one bit per view and patch), and the
-//! regrouped mesh (about 18 bytes per triangle) — on the heap, or in a mapped temporary file
+//! regrouped mesh (about 12 bytes per triangle) — on the heap, or in a mapped temporary file
 //! when it would take more than a quarter of [`SamplingOptions::memory_budget`], so that the
 //! heap stays independent of the mesh size.
 //! **Invariant**: the result is the same for any number of threads, and with or without a
@@ -400,7 +400,6 @@ impl ViewContext<'_> {
     /// but those facing away (which go to `scratch.deferred`), in the tested pass those the
     /// occlusion tiles do not hide.
     fn draw_patch(&self, p: usize, camera: &Camera, scratch: &mut ViewScratch, pass: Pass) {
-        let vertices = self.mesh.vertices(p);
         let ViewScratch {
             keys,
             candidates,
@@ -410,7 +409,6 @@ impl ViewContext<'_> {
             ..
         } = scratch;
         let patch = &self.tiling.patches[p];
-        let (_, triangles) = self.mesh.triangles(p);
         let low = low_half(p as u32, self.mesh.patch_count() as u32);
         let resolution = camera.resolution();
         let conservative = self.options.conservative;
@@ -435,43 +433,49 @@ impl ViewContext<'_> {
         if sphere_needs_no_clip(camera, patch.center, patch.radius) {
             // Every patch of a sampling view: packed projection, and the sub-pixel
             // triangles (most of a mesh much finer than the image) leave after a box test.
-            screen.project(camera, vertices);
-            if conservative || !centres_are_a_coin_toss(camera, patch) {
-                for &tri in triangles {
-                    let tri = screen.triangle(tri);
-                    if conservative || !covers_no_centre(tri) {
-                        place(tri);
+            // Two loops: where the box test is a coin toss, one writes every triangle's slot
+            // and keeps it only if it holds a centre (branch-free), then the kept ones are
+            // drawn; elsewhere the plain loop predicts well and skips the copy.
+            let branch_free = !conservative && centres_are_a_coin_toss(camera, patch);
+            for section in self.mesh.sections(p) {
+                screen.project(camera, section.vertices);
+                if !branch_free {
+                    for &tri in section.triangles {
+                        let tri = screen.triangle(tri);
+                        if conservative || !covers_no_centre(tri) {
+                            place(tri);
+                        }
                     }
+                    continue;
                 }
-                return;
-            }
-            // Two loops where the box test is a coin toss: it writes every triangle's slot and
-            // keeps it only if it holds a centre (branch-free), then the kept ones are drawn.
-            // Elsewhere the one loop above predicts well and skips the copy.
-            for chunk in triangles.chunks(CANDIDATE_BATCH) {
-                let mut kept = 0;
-                for &tri in chunk {
-                    let corners = screen.triangle(tri);
-                    candidates[kept] = corners;
-                    kept += usize::from(!covers_no_centre(corners));
-                }
-                for &corners in &candidates[..kept] {
-                    place(corners);
+                for chunk in section.triangles.chunks(CANDIDATE_BATCH) {
+                    let mut kept = 0;
+                    for &tri in chunk {
+                        let corners = screen.triangle(tri);
+                        candidates[kept] = corners;
+                        kept += usize::from(!covers_no_centre(corners));
+                    }
+                    for &corners in &candidates[..kept] {
+                        place(corners);
+                    }
                 }
             }
             return;
         }
         let planes = view_planes(camera);
-        projected.clear();
-        projected.extend(vertices.iter().map(|&v| project(camera, &planes, v)));
-        for tri in triangles {
-            draw_triangle(
-                tri.map(|i| projected[i as usize]),
-                || tri.map(|i| vertices[i as usize]),
-                camera,
-                &planes,
-                &mut place,
-            );
+        for section in self.mesh.sections(p) {
+            let vertices = section.vertices;
+            projected.clear();
+            projected.extend(vertices.iter().map(|&v| project(camera, &planes, v)));
+            for tri in section.triangles {
+                draw_triangle(
+                    tri.map(|i| projected[usize::from(i)]),
+                    || tri.map(|i| vertices[usize::from(i)]),
+                    camera,
+                    &planes,
+                    &mut place,
+                );
+            }
         }
     }
 

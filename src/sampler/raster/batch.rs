@@ -11,12 +11,24 @@
 
 use super::{COORD_LIMIT32, HALF_PIXEL, SUBPIXEL, SUBPIXEL_BITS, ScreenVertex};
 use crate::sampler::camera::Camera;
+use crate::sampler::patch_mesh::SECTION_VERTICES;
 
-/// Screen positions of one patch's vertices: snapped `x`, `y` in sub-pixel units and
-/// depth `1/w`.
-#[derive(Debug, Default)]
+/// Screen positions of one patch section's vertices: snapped `x`, `y` in sub-pixel units
+/// and depth `1/w`, in a table of [`SECTION_VERTICES`] entries, so that a `u16` corner
+/// indexes it without a bounds check (one per corner cost a third of the triangle loop on
+/// sub-pixel meshes). Entries past the section's vertices hold earlier sections' values.
+#[derive(Debug)]
 pub(crate) struct ScreenBatch {
-    vertices: Vec<ScreenVertex>,
+    vertices: Box<[ScreenVertex; SECTION_VERTICES]>,
+}
+
+impl Default for ScreenBatch {
+    fn default() -> ScreenBatch {
+        let table = vec![ScreenVertex::default(); SECTION_VERTICES].into_boxed_slice();
+        ScreenBatch {
+            vertices: table.try_into().expect("the table's length"),
+        }
+    }
 }
 
 /// Points per step of [`ScreenBatch::project`]: four `f32` lanes, one SSE2 register per
@@ -25,29 +37,28 @@ pub(crate) struct ScreenBatch {
 const LANES: usize = 4;
 
 impl ScreenBatch {
-    /// Projects `points`, replacing the previous contents. Every point must need no clipping
-    /// (it lies in a ball [`super::sphere_needs_no_clip`] accepted).
+    /// Projects `points` (at most [`SECTION_VERTICES`]) into the first entries. Every point
+    /// must need no clipping (it lies in a ball [`super::sphere_needs_no_clip`] accepted).
     pub(crate) fn project(&mut self, camera: &Camera, points: &[[f32; 3]]) {
-        let out = &mut self.vertices;
-        out.clear();
-        out.reserve(points.len());
+        let out = &mut self.vertices[..points.len()];
         let mut chunks = points.chunks_exact(LANES);
-        for chunk in &mut chunks {
+        let mut slots = out.chunks_exact_mut(LANES);
+        for (chunk, slot) in (&mut chunks).zip(&mut slots) {
             let lanes: &[[f32; 3]; LANES] = chunk.try_into().expect("exact chunk");
-            out.extend_from_slice(&snap_lanes(camera.clip32_lanes(lanes)));
+            slot.copy_from_slice(&snap_lanes(camera.clip32_lanes(lanes)));
         }
-        let rest = chunks.remainder();
+        let (rest, slot) = (chunks.remainder(), slots.into_remainder());
         if let Some(&last) = rest.last() {
             let lanes: [[f32; 3]; LANES] =
                 std::array::from_fn(|i| rest.get(i).copied().unwrap_or(last));
-            out.extend_from_slice(&snap_lanes(camera.clip32_lanes(&lanes))[..rest.len()]);
+            slot.copy_from_slice(&snap_lanes(camera.clip32_lanes(&lanes))[..rest.len()]);
         }
     }
 
     /// The screen triangle `tri` (indices into the projected points).
     #[inline(always)]
-    pub(crate) fn triangle(&self, tri: [u32; 3]) -> [ScreenVertex; 3] {
-        let v = &self.vertices;
+    pub(crate) fn triangle(&self, tri: [u16; 3]) -> [ScreenVertex; 3] {
+        let v = &*self.vertices;
         [v[tri[0] as usize], v[tri[1] as usize], v[tri[2] as usize]]
     }
 }

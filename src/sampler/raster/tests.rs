@@ -336,7 +336,7 @@ fn batched_projection_equals_the_single_one_bit_for_bit() {
             points.push([0.0, 0.0, 0.0]);
             batch.project(&camera, &points);
             for (i, &p) in points.iter().enumerate() {
-                let i = i as u32;
+                let i = i as u16;
                 let single = project_unclipped(&camera, p).screen;
                 let [v, ..] = batch.triangle([i; 3]);
                 assert_eq!(
