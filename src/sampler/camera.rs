@@ -201,6 +201,12 @@ impl Camera {
             .map(|r| r[0] * p[0] + r[1] * p[1] + r[2] * p[2] + r[3])
     }
 
+    /// The rows of [`Camera::clip32`]'s transform: `cx`, `cy`, `w` = `row · [p, 1]`.
+    #[inline(always)]
+    pub(crate) fn rows32(&self) -> [[f32; 4]; 3] {
+        self.rows32
+    }
+
     /// [`Camera::clip32`] of `N` points at once: `[cx, cy, w]`, each an array over the points,
     /// lane by lane the same operations in the same order (so equal bit for bit), written over
     /// arrays so that the compiler packs the lanes into SIMD registers.

