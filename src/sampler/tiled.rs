@@ -151,6 +151,7 @@ pub fn sample_tiled(
     }
     let storage = Storage::for_budget(u64::from(mesh.triangle_count()), options.memory_budget);
     let patch_mesh = PatchMesh::new(mesh, tiling, storage).map_err(SamplingError::TempFile)?;
+    let batch = views_per_batch(tiling, params);
     let context = ViewContext {
         boxes: patch_boxes(&patch_mesh, tiling),
         mesh: patch_mesh,
@@ -159,6 +160,7 @@ pub fn sample_tiled(
         options,
         always,
         back_winding: back_winding(mesh),
+        max_deferred: MAX_DEFERRED / batch,
         graph: options
             .dilate
             .then(|| PatchGraph::new(mesh, &tiling.patch_of, patch_count)),
@@ -172,17 +174,20 @@ pub fn sample_tiled(
         let done: &[u64] = done;
         let new_rows = (view_count(level) - first_view) as usize * words_per_row;
         rest[..new_rows]
-            .par_chunks_mut(words_per_row)
+            .par_chunks_mut(words_per_row * batch)
             .enumerate()
             .for_each_init(
-                || ViewScratch::new(params.resolution, patch_count),
-                |scratch, (i, row)| {
-                    let view = first_view + i as u32;
-                    let hints = parents(view).map(|pair| {
-                        pair.map(|p| &done[p as usize * words_per_row..][..words_per_row])
-                    });
-                    context.render_view(view, hints, scratch, row);
-                    progress.inc(1);
+                || WorkerScratch::new(params.resolution, patch_count, batch),
+                |scratch, (b, rows)| {
+                    let first = first_view + (b * batch) as u32;
+                    let views = rows.len() / words_per_row;
+                    let hints = |view: u32| {
+                        parents(view).map(|pair| {
+                            pair.map(|p| &done[p as usize * words_per_row..][..words_per_row])
+                        })
+                    };
+                    context.render_views(first, hints, scratch, rows);
+                    progress.inc(views as u64);
                 },
             );
         if let (Some(path), Some(hash)) = (&options.checkpoint, hash) {
@@ -193,10 +198,40 @@ pub fn sample_tiled(
     Ok(matrix)
 }
 
-/// Most back faces a view puts off until its occlusion tiles exist (about 40 bytes each,
-/// so 10 MiB per thread): on a 20M-triangle mesh the hinted patches hold millions of back
-/// faces, which would otherwise make the heap grow with the mesh. Tests use a small cap, so
-/// that both ways (put off, drawn at once) run in every test view.
+/// Views one worker renders together on meshes much finer than the image, patch by patch:
+/// each patch's vertices and triangles are read from memory once for all of them and from
+/// the cache for the others. There a view is bound by streaming the patches it draws (about
+/// 55 MB per view at 6.4M triangles), and the views of a batch, consecutive in their level,
+/// draw many of the same patches. Costs one key buffer (`resolution² × 8` bytes) per view
+/// of the batch and thread. Tuned at 6.4M triangles, level 4, 512² (BENCHMARKS.md, "Seventh
+/// pass"): 1 → 4 views −14 %, 8 and 16 within noise of 4.
+const VIEW_BATCH: usize = 4;
+
+/// Below this many pixels of surface per triangle (the mesh's mean at the model centre's
+/// depth, both sides counted) a worker renders [`VIEW_BATCH`] views together, above it one:
+/// where many triangles hold a pixel centre, the key buffers are the working set, and
+/// several of them at once cost more cache than the shared patches save. Measured: the bunny
+/// (2.9 px per triangle) +5 % batched, 1.6M (0.18) +8 %, 6.4M (0.046) −14 %; the threshold
+/// sits between the last two.
+const BATCH_BELOW_PIXELS_PER_TRIANGLE: f64 = 0.1;
+
+/// How many views a worker renders together (see [`VIEW_BATCH`]); always a batch in tests,
+/// so that every test runs whole and partial batches.
+fn views_per_batch(tiling: &Tiling, params: &SamplingParams) -> usize {
+    let scale = Camera::sampling_view(params, 0).pixels_per_unit_at(params.center);
+    let area: f64 = tiling.patches.iter().map(|p| p.area).sum();
+    let triangles = tiling.order.len().max(1) as f64;
+    if cfg!(test) || area * scale * scale / triangles < BATCH_BELOW_PIXELS_PER_TRIANGLE {
+        VIEW_BATCH
+    } else {
+        1
+    }
+}
+
+/// Most back faces a worker's views put off until their occlusion tiles exist (about 40
+/// bytes each, so 10 MiB per thread): on a 20M-triangle mesh the hinted patches hold
+/// millions of back faces, which would otherwise make the heap grow with the mesh. Tests use
+/// a small cap, so that both ways (put off, drawn at once) run in every test view.
 const MAX_DEFERRED: usize = if cfg!(test) { 64 } else { 1 << 18 };
 
 /// Whether patch `patch`'s triangles average between 1/16 and 1 pixel of surface each in
@@ -226,19 +261,30 @@ struct ViewContext<'a> {
     graph: Option<PatchGraph>,
     /// [`back_winding`] of the mesh.
     back_winding: i64,
+    /// Most back faces one view puts off: [`MAX_DEFERRED`] shared by a worker's views.
+    max_deferred: usize,
 }
 
-/// One worker's buffers.
+/// One view's buffers.
 struct ViewScratch {
     keys: KeyBuffer,
-    /// Screen triangles of a patch that hold a pixel centre (`CANDIDATE_BATCH` slots).
-    candidates: Vec<[ScreenVertex; 3]>,
-    projected: Vec<ProjectedVertex>,
-    /// Screen vertices of a patch that needs no clipping.
-    screen: ScreenBatch,
+    /// The patches of the first pass.
     drawn: Vec<u64>,
     /// First-pass triangles put off as facing away: screen corners and key low half.
     deferred: Vec<([ScreenVertex; 3], u32)>,
+}
+
+/// What drawing one patch needs besides its view's buffers, shared by a worker's views.
+struct DrawScratch {
+    /// Screen triangles of a patch that hold a pixel centre (`CANDIDATE_BATCH` slots).
+    candidates: Vec<[ScreenVertex; 3]>,
+    projected: Vec<ProjectedVertex>,
+    /// Screen vertices of a patch section that needs no clipping.
+    screen: ScreenBatch,
+}
+
+/// What resolving a view's keys into its row needs.
+struct ResolveScratch {
     /// Pixels per patch (plus one spare entry for empty pixels), for `min_pixels`.
     pixels: Vec<u32>,
     /// Whether a patch holds a pixel (plus the spare entry).
@@ -246,19 +292,34 @@ struct ViewScratch {
     seen: Vec<u64>,
 }
 
-impl ViewScratch {
-    fn new(resolution: u32, patch_count: u32) -> ViewScratch {
+/// One worker's buffers: a batch of views and what they share.
+struct WorkerScratch {
+    views: Vec<ViewScratch>,
+    draw: DrawScratch,
+    resolve: ResolveScratch,
+}
+
+impl WorkerScratch {
+    fn new(resolution: u32, patch_count: u32, batch: usize) -> WorkerScratch {
         let words = (patch_count as usize).div_ceil(64);
-        ViewScratch {
-            keys: KeyBuffer::new(resolution),
-            candidates: vec![[ScreenVertex::default(); 3]; CANDIDATE_BATCH],
-            projected: Vec::new(),
-            screen: ScreenBatch::default(),
-            drawn: vec![0; words],
-            deferred: Vec::new(),
-            pixels: vec![0; patch_count as usize + 1],
-            hit: vec![0; patch_count as usize + 1],
-            seen: vec![0; words],
+        WorkerScratch {
+            views: (0..batch)
+                .map(|_| ViewScratch {
+                    keys: KeyBuffer::new(resolution),
+                    drawn: vec![0; words],
+                    deferred: Vec::new(),
+                })
+                .collect(),
+            draw: DrawScratch {
+                candidates: vec![[ScreenVertex::default(); 3]; CANDIDATE_BATCH],
+                projected: Vec::new(),
+                screen: ScreenBatch::default(),
+            },
+            resolve: ResolveScratch {
+                pixels: vec![0; patch_count as usize + 1],
+                hit: vec![0; patch_count as usize + 1],
+                seen: vec![0; words],
+            },
         }
     }
 }
@@ -331,22 +392,28 @@ fn for_each_bit(words: impl Iterator<Item = u64>, mut f: impl FnMut(usize)) {
 }
 
 impl ViewContext<'_> {
-    /// Renders `view` into `row`. The patches `hints` show (the parents' rows; every patch in
-    /// the first level) are drawn first, except their triangles that face away from the eye,
-    /// which are put off; then the occlusion tiles are built, and the put-off triangles and
-    /// the other patches are drawn unless the tiles prove them hidden (patches by their
-    /// bounding sphere, then each triangle by its bounding box).
-    fn render_view(
+    /// Renders the views `first..` into `rows` (one row per view, at most the worker's batch),
+    /// `hints(view)` giving a view's parents' rows (`None` in the first level). Per view: the
+    /// patches its hints show (every patch in the first level) are drawn first, except their
+    /// triangles that face away from the eye, which are put off; then the occlusion tiles are
+    /// built, and the put-off triangles and the other patches are drawn unless the tiles
+    /// prove them hidden (patches by their bounding sphere and box, then each triangle by
+    /// its bounding box). Each pass goes patch by patch over all the views, so that a patch
+    /// is read from memory once per batch; a view's keys do not depend on drawing order, so
+    /// its row is the same as if it were rendered alone.
+    fn render_views<'h>(
         &self,
-        view: u32,
-        hints: Option<[&[u64]; 2]>,
-        scratch: &mut ViewScratch,
-        row: &mut [u64],
+        first: u32,
+        hints: impl Fn(u32) -> Option<[&'h [u64]; 2]>,
+        scratch: &mut WorkerScratch,
+        rows: &mut [u64],
     ) {
-        let camera = Camera::sampling_view(self.params, view);
-        scratch.keys.clear();
-        scratch.deferred.clear();
         let patch_count = self.mesh.patch_count();
+        let words = patch_count.div_ceil(64);
+        let count = rows.len() / words;
+        let cameras: Vec<Camera> = (0..count)
+            .map(|i| Camera::sampling_view(self.params, first + i as u32))
+            .collect();
         let valid = |w: usize| {
             if (w + 1) * 64 <= patch_count {
                 u64::MAX
@@ -354,70 +421,108 @@ impl ViewContext<'_> {
                 (1u64 << (patch_count % 64)) - 1
             }
         };
-        // A hinted patch that wholly faces away makes a poor occluder and is often hidden:
-        // it is left to the tested pass. Always-visible patches are always drawn first.
-        let eye = camera.eye();
-        for (w, d) in scratch.drawn.iter_mut().enumerate() {
-            let hinted = hints.map_or(u64::MAX, |[a, b]| a[w] | b[w]) & valid(w);
-            let mut away = 0u64;
-            for_each_bit(std::iter::once(hinted), |i| {
-                if !may_face(&self.tiling.patches[w * 64 + i], eye) {
-                    away |= 1 << i;
+        let WorkerScratch {
+            views,
+            draw,
+            resolve,
+        } = scratch;
+        let views = &mut views[..count];
+        for (i, view) in views.iter_mut().enumerate() {
+            view.keys.clear();
+            view.deferred.clear();
+            // A hinted patch that wholly faces away makes a poor occluder and is often
+            // hidden: it is left to the tested pass. Always-visible patches are always drawn
+            // first.
+            let eye = cameras[i].eye();
+            let hint = hints(first + i as u32);
+            for (w, d) in view.drawn.iter_mut().enumerate() {
+                let hinted = hint.map_or(u64::MAX, |[a, b]| a[w] | b[w]) & valid(w);
+                let mut away = 0u64;
+                for_each_bit(std::iter::once(hinted), |k| {
+                    if !may_face(&self.tiling.patches[w * 64 + k], eye) {
+                        away |= 1 << k;
+                    }
+                });
+                *d = (hinted & !away) | (self.always[w] & valid(w));
+            }
+        }
+        let any = |w: usize, views: &[ViewScratch], f: fn(u64) -> u64| {
+            views.iter().fold(0, |acc, v| acc | f(v.drawn[w]))
+        };
+        for w in 0..words {
+            for_each_bit(std::iter::once(any(w, views, |d| d)), |k| {
+                let p = w * 64 + k;
+                for (camera, view) in cameras.iter().zip(views.iter_mut()) {
+                    if view.drawn[w] >> k & 1 == 1 {
+                        self.draw_patch(p, camera, view, draw, Pass::First);
+                    }
                 }
             });
-            *d = (hinted & !away) | (self.always[w] & valid(w));
         }
-        let first = std::mem::take(&mut scratch.drawn);
-        for_each_bit(first.iter().copied(), |p| {
-            self.draw_patch(p, &camera, scratch, Pass::First)
-        });
-        scratch.keys.build_tiles();
         let conservative = self.options.conservative;
-        let resolution = camera.resolution();
-        let ViewScratch { keys, deferred, .. } = &mut *scratch;
-        for &(screen, low) in deferred.iter() {
-            if !keys.triangle_hidden(screen, conservative) {
-                self.scan(screen, low, resolution, keys);
+        for (camera, view) in cameras.iter().zip(views.iter_mut()) {
+            view.keys.build_tiles();
+            let ViewScratch { keys, deferred, .. } = view;
+            for &(screen, low) in deferred.iter() {
+                if !keys.triangle_hidden(screen, conservative) {
+                    self.scan(screen, low, camera.resolution(), keys);
+                }
             }
         }
-        let rest = first.iter().enumerate().map(|(w, &d)| !d & valid(w));
-        for_each_bit(rest, |p| {
-            let patch = &self.tiling.patches[p];
-            // The sphere first (cheap), then the tighter box (8 projections).
-            let visible = !hidden(
-                camera.sphere_bounds(patch.center, patch.radius),
-                &scratch.keys,
-            ) && !hidden(camera.hull_bounds(&self.boxes[p].corners()), &scratch.keys);
-            if visible {
-                self.draw_patch(p, &camera, scratch, Pass::Tested);
-            }
-        });
-        scratch.drawn = first;
-        self.resolve(&camera, scratch, row);
+        for w in 0..words {
+            let rest = views
+                .iter()
+                .fold(0, |acc, v| acc | (!v.drawn[w] & valid(w)));
+            for_each_bit(std::iter::once(rest), |k| {
+                let p = w * 64 + k;
+                let patch = &self.tiling.patches[p];
+                for (camera, view) in cameras.iter().zip(views.iter_mut()) {
+                    if view.drawn[w] >> k & 1 == 1 {
+                        continue;
+                    }
+                    // The sphere first (cheap), then the tighter box (8 projections).
+                    let visible =
+                        !hidden(camera.sphere_bounds(patch.center, patch.radius), &view.keys)
+                            && !hidden(camera.hull_bounds(&self.boxes[p].corners()), &view.keys);
+                    if visible {
+                        self.draw_patch(p, camera, view, draw, Pass::Tested);
+                    }
+                }
+            });
+        }
+        for ((camera, view), row) in cameras.iter().zip(views.iter()).zip(rows.chunks_mut(words)) {
+            self.resolve(camera, &view.keys, resolve, row);
+        }
     }
 
-    /// Draws the triangles of patch `p` into the scratch key buffer: in the first pass all
-    /// but those facing away (which go to `scratch.deferred`), in the tested pass those the
+    /// Draws the triangles of patch `p` into `view`'s key buffer: in the first pass all but
+    /// those facing away (which go to `view.deferred`), in the tested pass those the
     /// occlusion tiles do not hide.
-    fn draw_patch(&self, p: usize, camera: &Camera, scratch: &mut ViewScratch, pass: Pass) {
-        let ViewScratch {
-            keys,
+    fn draw_patch(
+        &self,
+        p: usize,
+        camera: &Camera,
+        view: &mut ViewScratch,
+        draw: &mut DrawScratch,
+        pass: Pass,
+    ) {
+        let ViewScratch { keys, deferred, .. } = view;
+        let DrawScratch {
             candidates,
             projected,
             screen,
-            deferred,
-            ..
-        } = scratch;
+        } = draw;
         let patch = &self.tiling.patches[p];
         let low = low_half(p as u32, self.mesh.patch_count() as u32);
         let resolution = camera.resolution();
+        let max_deferred = self.max_deferred;
         let conservative = self.options.conservative;
         let mut place = |tri: [ScreenVertex; 3]| {
             match pass {
                 Pass::First => {
                     // Past the cap a back face is drawn at once: slower (no tile test), same
                     // result, and the heap stays bounded.
-                    if winding(tri) == self.back_winding && deferred.len() < MAX_DEFERRED {
+                    if winding(tri) == self.back_winding && deferred.len() < max_deferred {
                         deferred.push((tri, low));
                         return;
                     }
@@ -492,7 +597,13 @@ impl ViewContext<'_> {
 
     /// Turns the key buffer into the view's row: pixel counts, `min_pixels`, dilation and the
     /// always-visible patches.
-    fn resolve(&self, camera: &Camera, scratch: &mut ViewScratch, row: &mut [u64]) {
+    fn resolve(
+        &self,
+        camera: &Camera,
+        keys: &KeyBuffer,
+        scratch: &mut ResolveScratch,
+        row: &mut [u64],
+    ) {
         let min_pixels = self.options.min_pixels;
         let patch_count = self.mesh.patch_count();
         // Branch-free: every pixel stores to its patch's entry, empty pixels to the spare
@@ -503,7 +614,7 @@ impl ViewContext<'_> {
         seen.fill(0);
         if min_pixels <= 1 {
             let hit = &mut scratch.hit;
-            for &key in scratch.keys.keys() {
+            for &key in keys.keys() {
                 hit[slot(key)] = 1;
             }
             for (p, h) in hit[..patch_count].iter_mut().enumerate() {
@@ -512,7 +623,7 @@ impl ViewContext<'_> {
             }
         } else {
             let pixels = &mut scratch.pixels;
-            for &key in scratch.keys.keys() {
+            for &key in keys.keys() {
                 pixels[slot(key)] += 1;
             }
             for (p, count) in pixels[..patch_count].iter_mut().enumerate() {
