@@ -11,8 +11,9 @@
 //! depth of every 8×8-pixel tile from them (one level of a hierarchical Z-buffer; Greene,
 //! Kass & Miller 1993), and then draws each put-off back face and each remaining patch only
 //! if the tiles cannot prove it hidden: a patch by its bounding sphere's screen rectangle and
-//! nearest depth, then by its oriented bounding box's (`patch_box.rs`), then each of its
-//! triangles by its pixel box and largest corner depth. What
+//! nearest depth, then by its oriented bounding box's (`patch_box.rs`), then each cluster of
+//! its triangles (`patch_mesh.rs`) by its sphere, then each triangle by its pixel box and
+//! largest corner depth; a tile that cannot decide defers to its pixels. What
 //! fails cannot change any pixel, and the packed depth/triangle keys (`key_buffer.rs`) make
 //! the buffer independent of drawing order, so the result equals the reference render
 //! ([`super::sample`]) bit for bit. The mesh is regrouped by patch (`patch_mesh.rs`), so a
@@ -22,7 +23,9 @@
 //! box holds no pixel centre (most of them on meshes much finer than the image) is dropped
 //! after a box test, before winding, deferral or edge setup; in patches whose triangles are
 //! a little smaller than a pixel, where its outcome is a coin toss, that test is branch-free
-//! (a batch of kept triangles is drawn after).
+//! (a batch of kept triangles is drawn after). On meshes much finer than the image a worker
+//! renders a batch of views together, patch by patch, so that a patch streams from memory
+//! once per batch ([`VIEW_BATCH`]).
 //!
 //! Options: `min_pixels` (a patch counts only if it covers that many pixels), `dilate` (also
 //! mark edge neighbours of visible patches that may face the eye), `always_visible` (patches
@@ -30,7 +33,7 @@
 //! checkpoint written after each level (`checkpoint.rs`).
 //! Cost per view: a sphere test per patch, the triangles of the drawn patches (a tile test
 //! for those drawn after the tiles), one pass over the pixels. Memory: one
-//! `resolution² × 8`-byte buffer per thread, the result (one bit per view and patch), and the
+//! `resolution² × 8`-byte buffer per thread and view of its batch, the result (one bit per view and patch), and the
 //! regrouped mesh (about 12 bytes per triangle) — on the heap, or in a mapped temporary file
 //! when it would take more than a quarter of [`SamplingOptions::memory_budget`], so that the
 //! heap stays independent of the mesh size.
@@ -517,7 +520,7 @@ impl ViewContext<'_> {
         let resolution = camera.resolution();
         let max_deferred = self.max_deferred;
         let conservative = self.options.conservative;
-        let mut place = |tri: [ScreenVertex; 3]| {
+        let place = |keys: &mut KeyBuffer, deferred: &mut Vec<_>, tri: [ScreenVertex; 3]| {
             match pass {
                 Pass::First => {
                     // Past the cap a back face is drawn at once: slower (no tile test), same
@@ -541,27 +544,46 @@ impl ViewContext<'_> {
             // Two loops: where the box test is a coin toss, one writes every triangle's slot
             // and keeps it only if it holds a centre (branch-free), then the kept ones are
             // drawn; elsewhere the plain loop predicts well and skips the copy.
+            // In the tested pass each cluster is tested first, and the vertices are projected
+            // only as far as the clusters drawn so far use them (numbered by first use).
             let branch_free = !conservative && centres_are_a_coin_toss(camera, patch);
             for section in self.mesh.sections(p) {
-                screen.project(camera, section.vertices);
-                if !branch_free {
-                    for &tri in section.triangles {
-                        let tri = screen.triangle(tri);
-                        if conservative || !covers_no_centre(tri) {
-                            place(tri);
+                let mut projected_to = 0;
+                let mut start = 0;
+                for cluster in section.clusters {
+                    let end = cluster.triangle_end as usize;
+                    let run = &section.triangles[start..end];
+                    start = end;
+                    if pass == Pass::Tested
+                        && section.clusters.len() > 1
+                        && hidden(camera.sphere_bounds(cluster.center, cluster.radius), keys)
+                    {
+                        continue;
+                    }
+                    let vertex_end = cluster.vertex_end as usize;
+                    if vertex_end > projected_to {
+                        screen.project_from(camera, &section.vertices[..vertex_end], projected_to);
+                        projected_to = vertex_end;
+                    }
+                    if !branch_free {
+                        for &tri in run {
+                            let tri = screen.triangle(tri);
+                            if conservative || !covers_no_centre(tri) {
+                                place(keys, deferred, tri);
+                            }
                         }
+                        continue;
                     }
-                    continue;
-                }
-                for chunk in section.triangles.chunks(CANDIDATE_BATCH) {
-                    let mut kept = 0;
-                    for &tri in chunk {
-                        let corners = screen.triangle(tri);
-                        candidates[kept] = corners;
-                        kept += usize::from(!covers_no_centre(corners));
-                    }
-                    for &corners in &candidates[..kept] {
-                        place(corners);
+                    for chunk in run.chunks(CANDIDATE_BATCH) {
+                        let mut kept = 0;
+                        for &tri in chunk {
+                            let corners = screen.triangle(tri);
+                            candidates[kept] = corners;
+                            kept += usize::from(!covers_no_centre(corners));
+                        }
+                        for &corners in &candidates[..kept] {
+                            place(keys, deferred, corners);
+                        }
                     }
                 }
             }
@@ -578,7 +600,7 @@ impl ViewContext<'_> {
                     || tri.map(|i| vertices[usize::from(i)]),
                     camera,
                     &planes,
-                    &mut place,
+                    |tri| place(keys, deferred, tri),
                 );
             }
         }

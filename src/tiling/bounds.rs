@@ -77,28 +77,46 @@ pub(crate) fn patch_bounds(mesh: &Mesh, triangles: &[u32], first: u32) -> (Patch
         min: [0.0; 3],
         max: [0.0; 3],
     });
-    let center = bbox.center().map(|c| c as f32);
-    let c64 = center.map(f64::from);
-    let mut max_d2 = 0.0f64;
-    for &t in triangles {
-        for q in corners(mesh, t) {
-            let d2: f64 = (0..3).map(|k| (f64::from(q[k]) - c64[k]).powi(2)).sum();
-            max_d2 = max_d2.max(d2);
-        }
-    }
-    let scale = c64.iter().fold(0.0f64, |m, c| m.max(c.abs()));
-    let radius = max_d2.sqrt() + (max_d2.sqrt() + scale) * RADIUS_PAD;
+    let (center, radius) = sphere_in(&bbox, triangles.iter().flat_map(|&t| corners(mesh, t)));
     let (cone_axis, cone_cos) = normal_cone(mesh, triangles, normal_sum);
     let patch = Patch {
         first,
         count: triangles.len() as u32,
         area,
         center,
-        radius: round_up(radius),
+        radius,
         cone_axis,
         cone_cos,
     };
     (patch, bbox.diagonal_squared())
+}
+
+/// A bounding sphere of `points` (at least one): centred on their box `bbox` (rounded to
+/// `f32`), radius the largest distance from that centre, padded by [`RADIUS_PAD`] and
+/// rounded up, so that it holds every point in `f32` as well.
+fn sphere_in(bbox: &Aabb, points: impl Iterator<Item = [f32; 3]>) -> ([f32; 3], f32) {
+    let center = bbox.center().map(|c| c as f32);
+    let c64 = center.map(f64::from);
+    let mut max_d2 = 0.0f64;
+    for q in points {
+        let d2: f64 = (0..3).map(|k| (f64::from(q[k]) - c64[k]).powi(2)).sum();
+        max_d2 = max_d2.max(d2);
+    }
+    let scale = c64.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+    let radius = max_d2.sqrt() + (max_d2.sqrt() + scale) * RADIUS_PAD;
+    (center, round_up(radius))
+}
+
+/// [`sphere_in`] of `points` (at least one) around their own box.
+pub(crate) fn bounding_sphere(points: &[[f32; 3]]) -> ([f32; 3], f32) {
+    let mut bbox = Aabb {
+        min: points[0],
+        max: points[0],
+    };
+    for &q in points {
+        bbox.include(q);
+    }
+    sphere_in(&bbox, points.iter().copied())
 }
 
 /// The cone around the normalised `normal_sum` that holds every non-degenerate normal.

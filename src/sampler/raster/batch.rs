@@ -40,9 +40,18 @@ const LANES: usize = 4;
 impl ScreenBatch {
     /// Projects `points` (at most [`SECTION_VERTICES`]) into the first entries. Every point
     /// must need no clipping (it lies in a ball [`super::sphere_needs_no_clip`] accepted).
+    #[cfg(test)]
     pub(crate) fn project(&mut self, camera: &Camera, points: &[[f32; 3]]) {
+        self.project_from(camera, points, 0);
+    }
+
+    /// Projects `points[start..]` (`points` at most [`SECTION_VERTICES`]) into the same
+    /// entries; the ones before `start` keep what they hold. Every point must need no
+    /// clipping (it lies in a ball [`super::sphere_needs_no_clip`] accepted).
+    pub(crate) fn project_from(&mut self, camera: &Camera, points: &[[f32; 3]], start: usize) {
         let rows = camera.rows32().map(|r| r.map(f32x4::splat));
-        let out = &mut self.vertices[..points.len()];
+        let points = &points[start..];
+        let out = &mut self.vertices[start..start + points.len()];
         let mut chunks = points.chunks_exact(LANES);
         let mut slots = out.chunks_exact_mut(LANES);
         for (chunk, slot) in (&mut chunks).zip(&mut slots) {
