@@ -12,7 +12,7 @@
 //! most [`SECTION_VERTICES`] distinct vertices (65,536: one section per patch unless a patch
 //! holds more than about 130,000 triangles), each with its own vertex run, so that a corner
 //! is a `u16`. That halves the bytes a view streams per triangle (6 instead of 12), and the
-//! sampler looks corners up in a 65,536-entry table without bounds checks: together −33 % of
+//! sampler looks corners up in a 65,536-entry table without bounds checks: together −28 % of
 //! a view at 6.4M triangles (BENCHMARKS.md, "Seventh pass"). A section border duplicates
 //! vertices the way a patch border does, with the same bits.
 //!
