@@ -33,10 +33,10 @@
 //! checkpoint written after each level (`checkpoint.rs`).
 //! Cost per view: a sphere test per patch, the triangles of the drawn patches (a tile test
 //! for those drawn after the tiles), one pass over the pixels. Memory: one
-//! `resolution² × 8`-byte buffer per thread and view of its batch, the result (one bit per view and patch), and the
-//! regrouped mesh (about 12 bytes per triangle) — on the heap, or in a mapped temporary file
-//! when it would take more than a quarter of [`SamplingOptions::memory_budget`], so that the
-//! heap stays independent of the mesh size.
+//! `resolution² × 8`-byte buffer per thread and view of its batch, the result (one bit per
+//! view and patch), and the regrouped mesh (about 12 bytes per triangle) — on the heap, or in
+//! a mapped temporary file when it would take more than a quarter of
+//! [`SamplingOptions::memory_budget`], so that the heap stays independent of the mesh size.
 //! **Invariant**: the result is the same for any number of threads, and with or without a
 //! resumed checkpoint.
 
@@ -400,10 +400,10 @@ impl ViewContext<'_> {
     /// patches its hints show (every patch in the first level) are drawn first, except their
     /// triangles that face away from the eye, which are put off; then the occlusion tiles are
     /// built, and the put-off triangles and the other patches are drawn unless the tiles
-    /// prove them hidden (patches by their bounding sphere and box, then each triangle by
-    /// its bounding box). Each pass goes patch by patch over all the views, so that a patch
-    /// is read from memory once per batch; a view's keys do not depend on drawing order, so
-    /// its row is the same as if it were rendered alone.
+    /// prove them hidden (patches by their bounding sphere and box, then each cluster by its
+    /// sphere, then each triangle by its bounding box). Each pass goes patch by patch over
+    /// all the views, so that a patch is read from memory once per batch; a view's keys do
+    /// not depend on drawing order, so its row is the same as if it were rendered alone.
     fn render_views<'h>(
         &self,
         first: u32,
@@ -449,11 +449,9 @@ impl ViewContext<'_> {
                 *d = (hinted & !away) | (self.always[w] & valid(w));
             }
         }
-        let any = |w: usize, views: &[ViewScratch], f: fn(u64) -> u64| {
-            views.iter().fold(0, |acc, v| acc | f(v.drawn[w]))
-        };
         for w in 0..words {
-            for_each_bit(std::iter::once(any(w, views, |d| d)), |k| {
+            let union = views.iter().fold(0, |acc, v| acc | v.drawn[w]);
+            for_each_bit(std::iter::once(union), |k| {
                 let p = w * 64 + k;
                 for (camera, view) in cameras.iter().zip(views.iter_mut()) {
                     if view.drawn[w] >> k & 1 == 1 {
