@@ -270,8 +270,8 @@ pub(crate) struct Section<'a> {
 }
 
 /// Cuts the triangles `corners` (global vertex indices, in order) into runs of at most
-/// `max_vertices` distinct vertices each, and returns every run's vertices (ascending global
-/// index) and its corners as indices into them.
+/// `max_vertices` distinct vertices each, and returns every run's vertices (global indices,
+/// in order of first use) and its corners as indices into them.
 fn sections(corners: &[[u32; 3]], max_vertices: usize) -> Vec<(Vec<u32>, Vec<[u16; 3]>)> {
     assert!((3..=SECTION_VERTICES).contains(&max_vertices));
     let mut out = Vec::new();
@@ -455,7 +455,7 @@ impl PatchMesh {
             + self.clusters.len() * std::mem::size_of::<Cluster>()
     }
 
-    /// Heap bytes held: [`Self::bytes`] on the heap, the per-patch offsets when mapped.
+    /// Heap bytes held: [`Self::bytes`] on the heap, the offsets and clusters when mapped.
     #[cfg(test)]
     pub(crate) fn heap_bytes(&self) -> usize {
         let offsets = self.offset_bytes();

@@ -104,7 +104,7 @@ fn snap_lanes([cx, cy, w]: [f32x4; 3]) -> [ScreenVertex; LANES] {
         // Truncation rounded negative values up: take 1 off there (the compare's all-ones
         // lanes are −1 as integers). Every value here is an integer below 2^29, exact in
         // binary32, so this is exactly `floor(t)`.
-        let above: i32x4 = bytemuck_cast(i.round_float().cmp_gt(t));
+        let above: i32x4 = mask_as_integers(i.round_float().cmp_gt(t));
         (i + above).to_array()
     };
     let (x, y, q) = (snap(cx), snap(cy), inv_w.to_array());
@@ -117,7 +117,7 @@ fn snap_lanes([cx, cy, w]: [f32x4; 3]) -> [ScreenVertex; LANES] {
 
 /// The lanes of a compare mask (all ones or all zeros) as integers (−1 or 0).
 #[inline(always)]
-fn bytemuck_cast(mask: f32x4) -> i32x4 {
+fn mask_as_integers(mask: f32x4) -> i32x4 {
     let bits = mask.to_array().map(|m| m.to_bits() as i32);
     i32x4::from(bits)
 }
