@@ -19,6 +19,10 @@ use super::raster::{SUBPIXEL_BITS, ScreenVertex};
 /// conservative fragments by 1e-9 relative; 1e-4 is a wide margin.
 const TRIANGLE_DEPTH_SLACK: f32 = 1e-4;
 
+/// Triangles whose pixel rectangle is narrower and lower than this many pixels are tested
+/// against their pixels directly (a tile lookup costs more than a few pixels' depths).
+const SMALL_RECT: i64 = 4;
+
 /// Side of the square tiles of the occlusion map, in pixels.
 pub(crate) const TILE: usize = 8;
 
@@ -110,6 +114,11 @@ impl KeyBuffer {
             return false;
         }
         let rect = [x0 as usize, y0 as usize, x1 as usize, y1 as usize];
+        if x1 - x0 < SMALL_RECT && y1 - y0 < SMALL_RECT {
+            // A few pixels (most triangles): their own depths decide, as the tiles would
+            // with their fallback, and without the indirection.
+            return self.pixels_all_nearer(rect, q.to_bits());
+        }
         self.occludes(rect, q.to_bits())
     }
 
@@ -132,6 +141,20 @@ impl KeyBuffer {
             }
         }
         true
+    }
+
+    /// Whether every pixel of the inclusive rectangle `rect` holds a depth strictly nearer
+    /// than `q_bits`, pixel by pixel: [`Self::occludes`] without the tiles.
+    #[inline(always)]
+    fn pixels_all_nearer(&self, rect: [usize; 4], q_bits: u32) -> bool {
+        let [x0, y0, x1, y1] = rect;
+        let mut nearer = true;
+        for y in y0..=y1 {
+            for &k in &self.keys[y * self.resolution..][x0..=x1] {
+                nearer &= (k >> 32) as u32 > q_bits;
+            }
+        }
+        nearer
     }
 
     /// [`Self::occludes`] for the pixels of tile `(tx, ty)` inside `rect`, where the tile's

@@ -25,7 +25,9 @@ use crate::ooc::Mesh;
 use crate::tiling::PatchId;
 
 mod batch;
-pub(crate) use batch::{ScreenBatch, covers_no_centre};
+pub(crate) use batch::ScreenBatch;
+#[cfg(test)]
+pub(crate) use batch::{centre_code, codes_hold_no_centre, covers_no_centre};
 
 /// Fractional bits of snapped screen coordinates (1/256 pixel, as on D3D11-class hardware).
 pub const SUBPIXEL_BITS: u32 = 8;

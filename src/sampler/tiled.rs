@@ -21,7 +21,8 @@
 //! plane and guard band (all of them, in sampling views) skip the clip-plane tests: their
 //! vertices are projected four at a time (`raster/batch.rs`), and a triangle whose bounding
 //! box holds no pixel centre (most of them on meshes much finer than the image) is dropped
-//! after a box test, before winding, deferral or edge setup; in patches whose triangles are
+//! after a box test on its corners' centre codes (made with the projection), before its
+//! coordinates are read, winding, deferral or edge setup; in patches whose triangles are
 //! a little smaller than a pixel, where its outcome is a coin toss, that test is branch-free
 //! (a batch of kept triangles is drawn after). On meshes much finer than the image a worker
 //! renders a batch of views together, patch by patch, so that a patch streams from memory
@@ -48,8 +49,8 @@ use super::patch_box::{PatchBox, patch_boxes};
 use super::patch_graph::{PatchGraph, may_face};
 use super::patch_mesh::{PatchMesh, Storage};
 use super::raster::{
-    DEFAULT_PATHS, ProjectedVertex, ScreenBatch, ScreenVertex, covers_no_centre, draw_triangle,
-    project, scan_triangle, sphere_needs_no_clip, view_planes,
+    DEFAULT_PATHS, ProjectedVertex, ScreenBatch, ScreenVertex, draw_triangle, project,
+    scan_triangle, sphere_needs_no_clip, view_planes,
 };
 use super::{SamplingParams, VisibilityMatrix};
 use crate::ooc::Mesh;
@@ -279,8 +280,8 @@ struct ViewScratch {
 
 /// What drawing one patch needs besides its view's buffers, shared by a worker's views.
 struct DrawScratch {
-    /// Screen triangles of a patch that hold a pixel centre (`CANDIDATE_BATCH` slots).
-    candidates: Vec<[ScreenVertex; 3]>,
+    /// Positions in a run of the triangles that hold a pixel centre (`CANDIDATE_BATCH` slots).
+    candidates: Vec<u32>,
     projected: Vec<ProjectedVertex>,
     /// Screen vertices of a patch section that needs no clipping.
     screen: ScreenBatch,
@@ -314,7 +315,7 @@ impl WorkerScratch {
                 })
                 .collect(),
             draw: DrawScratch {
-                candidates: vec![[ScreenVertex::default(); 3]; CANDIDATE_BATCH],
+                candidates: vec![0; CANDIDATE_BATCH],
                 projected: Vec::new(),
                 screen: ScreenBatch::default(),
             },
@@ -391,6 +392,47 @@ fn for_each_bit(words: impl Iterator<Item = u64>, mut f: impl FnMut(usize)) {
             f(w * 64 + bits.trailing_zeros() as usize);
             bits &= bits - 1;
         }
+    }
+}
+
+/// How one patch's screen triangles reach a view's key buffer in one pass.
+struct Placer<'c, 'a> {
+    context: &'c ViewContext<'a>,
+    pass: Pass,
+    /// The patch's key low half.
+    low: u32,
+    resolution: u32,
+}
+
+impl Placer<'_, '_> {
+    /// Draws `tri` into `keys`: in the first pass put off (into `deferred`) if it faces
+    /// away, in the tested pass only if the tiles do not hide it. Inlined into every
+    /// triangle loop: out of line, the corners went through memory, and reading them back
+    /// whole stalled on the narrower stores that wrote them.
+    #[inline(always)]
+    fn place(
+        &self,
+        keys: &mut KeyBuffer,
+        deferred: &mut Vec<([ScreenVertex; 3], u32)>,
+        tri: [ScreenVertex; 3],
+    ) {
+        let context = self.context;
+        match self.pass {
+            Pass::First => {
+                // Past the cap a back face is drawn at once: slower (no tile test), same
+                // result, and the heap stays bounded.
+                if winding(tri) == context.back_winding && deferred.len() < context.max_deferred {
+                    deferred.push((tri, self.low));
+                    return;
+                }
+            }
+            Pass::Tested => {
+                if keys.triangle_hidden(tri, context.options.conservative) {
+                    return;
+                }
+            }
+        }
+        context.scan(tri, self.low, self.resolution, keys);
     }
 }
 
@@ -515,26 +557,12 @@ impl ViewContext<'_> {
         } = draw;
         let patch = &self.tiling.patches[p];
         let low = low_half(p as u32, self.mesh.patch_count() as u32);
-        let resolution = camera.resolution();
-        let max_deferred = self.max_deferred;
         let conservative = self.options.conservative;
-        let place = |keys: &mut KeyBuffer, deferred: &mut Vec<_>, tri: [ScreenVertex; 3]| {
-            match pass {
-                Pass::First => {
-                    // Past the cap a back face is drawn at once: slower (no tile test), same
-                    // result, and the heap stays bounded.
-                    if winding(tri) == self.back_winding && deferred.len() < max_deferred {
-                        deferred.push((tri, low));
-                        return;
-                    }
-                }
-                Pass::Tested => {
-                    if keys.triangle_hidden(tri, conservative) {
-                        return;
-                    }
-                }
-            }
-            self.scan(tri, low, resolution, keys);
+        let placer = Placer {
+            context: self,
+            pass,
+            low,
+            resolution: camera.resolution(),
         };
         if sphere_needs_no_clip(camera, patch.center, patch.radius) {
             // Every patch of a sampling view: packed projection, and the sub-pixel
@@ -565,22 +593,20 @@ impl ViewContext<'_> {
                     }
                     if !branch_free {
                         for &tri in run {
-                            let tri = screen.triangle(tri);
-                            if conservative || !covers_no_centre(tri) {
-                                place(keys, deferred, tri);
+                            if conservative || !screen.holds_no_centre(tri) {
+                                placer.place(keys, deferred, screen.triangle(tri));
                             }
                         }
                         continue;
                     }
                     for chunk in run.chunks(CANDIDATE_BATCH) {
                         let mut kept = 0;
-                        for &tri in chunk {
-                            let corners = screen.triangle(tri);
-                            candidates[kept] = corners;
-                            kept += usize::from(!covers_no_centre(corners));
+                        for (i, &tri) in chunk.iter().enumerate() {
+                            candidates[kept] = i as u32;
+                            kept += usize::from(!screen.holds_no_centre(tri));
                         }
-                        for &corners in &candidates[..kept] {
-                            place(keys, deferred, corners);
+                        for &i in &candidates[..kept] {
+                            placer.place(keys, deferred, screen.triangle(chunk[i as usize]));
                         }
                     }
                 }
@@ -598,7 +624,7 @@ impl ViewContext<'_> {
                     || tri.map(|i| vertices[usize::from(i)]),
                     camera,
                     &planes,
-                    |tri| place(keys, deferred, tri),
+                    |tri| placer.place(keys, deferred, tri),
                 );
             }
         }

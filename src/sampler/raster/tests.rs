@@ -401,6 +401,24 @@ proptest! {
             prop_assert_eq!(covered_pixels, 0);
         }
     }
+
+    #[test]
+    fn centre_codes_tell_what_the_box_test_tells(
+        tri in prop_oneof![
+            [screen_vertex(), screen_vertex(), screen_vertex()],
+            small_triangle(),
+            // Corners on pixel centres and on the lines between them.
+            proptest::array::uniform3((-4i32..8, -4i32..8, 0u8..4)).prop_map(|c| {
+                c.map(|(x, y, k)| {
+                    let on = |v: i32, centre: bool| v * 256 + if centre { 128 } else { 0 };
+                    ScreenVertex { x: on(x, k & 1 == 1), y: on(y, k & 2 == 2), q: 1.0 }
+                })
+            }),
+        ],
+    ) {
+        let codes = tri.map(|v| centre_code(v.x, v.y));
+        prop_assert_eq!(codes_hold_no_centre(codes), covers_no_centre(tri));
+    }
 }
 
 proptest! {
