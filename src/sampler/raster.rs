@@ -372,7 +372,9 @@ impl Edge {
         // Top-left rule (y points down, interior on the positive side): a top edge is
         // horizontal with the interior below it, a left edge goes upwards. Samples exactly on
         // other edges are excluded by requiring `E >= 1` there, i.e. biasing `E` by -1.
-        let top_left = ey < 0 || (ey == 0 && ex > 0);
+        // Non-short-circuit operators: as `||` and `&&` this compiled to branches on the
+        // edge's direction, a coin toss per edge (a third of a one-pixel triangle's cost).
+        let top_left = (ey < 0) | ((ey == 0) & (ex > 0));
         Edge {
             start: ex * (sample_y - fy) - ey * (sample_x - fx) - i64::from(!top_left),
             step_x: -ey * SUBPIXEL,
