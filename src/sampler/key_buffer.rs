@@ -83,11 +83,12 @@ impl KeyBuffer {
         }
     }
 
-    /// Whether screen triangle `tri` provably changes no pixel, by the tiles of the last
-    /// [`KeyBuffer::build_tiles`]: every tile under the pixels it may touch (centres inside
-    /// its bounding box; with `conservative`, every pixel square the box meets) holds only
-    /// depths strictly nearer than its largest corner depth widened by
-    /// [`TRIANGLE_DEPTH_SLACK`]. A triangle touching no pixel is hidden too.
+    /// Whether screen triangle `tri` provably changes no pixel: every pixel it may touch
+    /// (centres inside its bounding box; with `conservative`, every pixel square the box
+    /// meets) holds a depth strictly nearer than its largest corner depth widened by
+    /// [`TRIANGLE_DEPTH_SLACK`], by the pixels themselves under [`SMALL_RECT`]² pixels and
+    /// otherwise by the tiles of the last [`KeyBuffer::build_tiles`] ([`Self::occludes`]).
+    /// A triangle touching no pixel is hidden too.
     #[inline]
     pub(crate) fn triangle_hidden(&self, tri: [ScreenVertex; 3], conservative: bool) -> bool {
         const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;

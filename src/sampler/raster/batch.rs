@@ -131,10 +131,10 @@ pub(crate) fn codes_hold_no_centre([a, b, c]: [u64; 3]) -> bool {
 
 /// [`Camera::clip32`] then [`super::snap32`] of four points in SSE2 registers (`wide`), and
 /// their centre codes, `rows` being the camera's binary32 rows splatted: the same IEEE
-/// operations in the same order as the scalar code, so the same bits. Written on `f32x4` values throughout: as
-/// arrays, the transform was left an out-of-line call, and `wide`'s NaN-careful `max`,
-/// `min` and saturating truncation cost a third of the projection where the plain
-/// instructions are exact (see `snap`).
+/// operations in the same order as the scalar code, so the same bits. Written on `f32x4`
+/// values throughout: as arrays, the transform was left an out-of-line call, and `wide`'s
+/// NaN-careful `max`, `min` and saturating truncation cost a third of the projection where
+/// the plain instructions are exact (see `snap`).
 #[inline(always)]
 fn project_lanes(
     rows: &[[f32x4; 4]; 3],
