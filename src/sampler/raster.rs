@@ -15,8 +15,9 @@
 //! Cost per view: one `f32` transform per vertex (four at a time where no clipping is
 //! needed; clipping itself runs in `f64`), ~20 integer operations of setup per
 //! triangle, and per covered bounding-box pixel three adds and a compare. Bounding boxes up
-//! to `SPAN_MIN_WIDTH` pixels wide are walked pixel by pixel; wider ones solve each row's
-//! covered span directly so large triangles cost their area, not their bounding box.
+//! to `SPAN_MIN_WIDTH` pixels wide are walked pixel by pixel (those of up to 3 columns, most
+//! triangles of scanned meshes, with rows unrolled to their width); wider ones solve each
+//! row's covered span directly so large triangles cost their area, not their bounding box.
 
 use super::camera::Camera;
 use super::clip::{self, PLANE_COUNT, Plane};
@@ -485,6 +486,21 @@ pub(crate) fn scan_triangle(
         return;
     }
 
+    if paths.tiny && dx < 3 {
+        // One, two or three columns (most triangles of scanned meshes left here): each row
+        // takes exactly that many samples, unrolled, with no loop over the row (bunny −3 %;
+        // a fixed 4 samples per row, wasting the ones past the box, was +5 %).
+        let rows = y0..=y1;
+        let row = y0 as usize * stride + x0 as usize;
+        let edges = [&e0, &e1, &e2];
+        match dx {
+            0 => scan_columns::<1>(edges, rows, row, stride, depth, &mut plot),
+            1 => scan_columns::<2>(edges, rows, row, stride, depth, &mut plot),
+            _ => scan_columns::<3>(edges, rows, row, stride, depth, &mut plot),
+        }
+        return;
+    }
+
     let width = dx + 1;
     let (mut r0, mut r1, mut r2) = (e0.start, e1.start, e2.start);
     for y in y0..=y1 {
@@ -509,6 +525,30 @@ pub(crate) fn scan_triangle(
         r0 += e0.step_y;
         r1 += e1.step_y;
         r2 += e2.step_y;
+    }
+}
+
+/// The rows `rows` of a bounding box `W` pixels wide whose first pixel is `row`: `W`
+/// samples per row from the edges' values at the box's first sample.
+#[inline(always)]
+fn scan_columns<const W: usize>(
+    edges: [&Edge; 3],
+    rows: std::ops::RangeInclusive<i64>,
+    mut row: usize,
+    stride: usize,
+    depth: impl Fn(i64, i64) -> f32,
+    plot: &mut impl FnMut(usize, f32, bool),
+) {
+    let [e0, e1, e2] = edges;
+    let mut r = [e0.start, e1.start, e2.start];
+    for _ in rows {
+        let mut w = r;
+        for k in 0..W {
+            plot(row + k, depth(w[1], w[2]), (w[0] | w[1] | w[2]) >= 0);
+            w = [w[0] + e0.step_x, w[1] + e1.step_x, w[2] + e2.step_x];
+        }
+        r = [r[0] + e0.step_y, r[1] + e1.step_y, r[2] + e2.step_y];
+        row += stride;
     }
 }
 
