@@ -145,7 +145,10 @@ impl KeyBuffer {
     }
 
     /// Whether every pixel of the inclusive rectangle `rect` holds a depth strictly nearer
-    /// than `q_bits`, pixel by pixel: [`Self::occludes`] without the tiles.
+    /// than `q_bits`, pixel by pixel: [`Self::occludes`] without the tiles. Reads every
+    /// pixel (no early exit, which would branch per pixel on these few); the tiles' fallback
+    /// ([`Self::pixels_occlude`], up to 64 pixels) stops at the first farther one instead
+    /// (sharing this loop there measured +1–3 % on the bunny and 6.4M).
     #[inline(always)]
     fn pixels_all_nearer(&self, rect: [usize; 4], q_bits: u32) -> bool {
         let [x0, y0, x1, y1] = rect;

@@ -387,7 +387,8 @@ impl Edge {
 /// Which pixel loop [`scan_triangle`] uses for a bounding box; tests force each one.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ScanPaths {
-    /// Bounding boxes of at most 2 × 2 pixels take the unrolled, branch-free path.
+    /// Bounding boxes of at most 2 × 2 pixels take the unrolled, branch-free path, and those
+    /// of one to three columns rows unrolled to their width (`scan_columns`).
     pub(crate) tiny: bool,
     /// Bounding boxes at least this wide solve each row's span instead of testing pixels.
     pub(crate) span_min_width: i64,
