@@ -238,16 +238,35 @@ fn views_per_batch(tiling: &Tiling, params: &SamplingParams) -> usize {
 /// a small cap, so that both ways (put off, drawn at once) run in every test view.
 const MAX_DEFERRED: usize = if cfg!(test) { 64 } else { 1 << 18 };
 
-/// Whether patch `patch`'s triangles average between 1/16 and 1 pixel of surface each in
-/// `camera`'s image (their projected area is at most that): the patches where whether a
-/// triangle's box holds a pixel centre is hardest to predict (27 % hold one on the 1.6M
-/// bunny). Larger triangles nearly all hold one (93 % on the bunny), much smaller ones
-/// rarely do (7 % on the 6.4M bunny). Only chooses between two loops that draw the same
-/// fragments.
-fn centres_are_a_coin_toss(camera: &Camera, patch: &crate::tiling::Patch) -> bool {
+/// How a patch's triangle loop finds the triangles whose bounding box holds a pixel centre
+/// (the only ones drawn): each way draws the same fragments, and which is fastest depends on
+/// how often a triangle holds one, that is on the patch's pixels per triangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum BoxTest {
+    /// Triangles of a pixel or more: nearly all hold a centre (93 % on the bunny), so one
+    /// loop tests and draws each (a separate search loop was +3 % there).
+    Plain,
+    /// Between 1/16 and 1 pixel per triangle, where holding a centre is a coin toss (27 % on
+    /// the 1.6M bunny): a branch-free pass writes the positions of those that hold one into a
+    /// batch, then the batch is drawn.
+    BranchFree,
+    /// Much smaller triangles rarely hold one (7 % on the 6.4M bunny): a tight search loop
+    /// skips to the next that does, so the test keeps its registers to itself (6.4M −5 %).
+    Search,
+}
+
+/// The [`BoxTest`] for patch `patch` in `camera`'s image, by its triangles' average surface
+/// projected at its centre's depth (at most their projected area).
+fn box_test(camera: &Camera, patch: &crate::tiling::Patch) -> BoxTest {
     let scale = camera.pixels_per_unit_at(patch.center);
     let ppt = patch.area * scale * scale / f64::from(patch.count);
-    (1.0 / 16.0..1.0).contains(&ppt)
+    if ppt >= 1.0 {
+        BoxTest::Plain
+    } else if ppt >= 1.0 / 16.0 {
+        BoxTest::BranchFree
+    } else {
+        BoxTest::Search
+    }
 }
 
 /// Triangles box-tested per batch before the kept ones are drawn (36 bytes each).
@@ -281,7 +300,7 @@ struct ViewScratch {
 /// What drawing one patch needs besides its view's buffers, shared by a worker's views.
 struct DrawScratch {
     /// Positions in a run of the triangles that hold a pixel centre (`CANDIDATE_BATCH` slots).
-    candidates: Vec<u32>,
+    candidates: Box<[u32; CANDIDATE_BATCH]>,
     projected: Vec<ProjectedVertex>,
     /// Screen vertices of a patch section that needs no clipping.
     screen: ScreenBatch,
@@ -315,7 +334,7 @@ impl WorkerScratch {
                 })
                 .collect(),
             draw: DrawScratch {
-                candidates: vec![0; CANDIDATE_BATCH],
+                candidates: Box::new([0; CANDIDATE_BATCH]),
                 projected: Vec::new(),
                 screen: ScreenBatch::default(),
             },
@@ -567,12 +586,10 @@ impl ViewContext<'_> {
         if sphere_needs_no_clip(camera, patch.center, patch.radius) {
             // Every patch of a sampling view: packed projection, and the sub-pixel
             // triangles (most of a mesh much finer than the image) leave after a box test.
-            // Two loops: where the box test is a coin toss, one writes every triangle's slot
-            // and keeps it only if it holds a centre (branch-free), then the kept ones are
-            // drawn; elsewhere the plain loop predicts well and skips the copy.
+            // Three loops, by how often a triangle holds a centre (`BoxTest`).
             // In the tested pass each cluster is tested first, and the vertices are projected
             // only as far as the clusters drawn so far use them (numbered by first use).
-            let branch_free = !conservative && centres_are_a_coin_toss(camera, patch);
+            let test = box_test(camera, patch);
             for section in self.mesh.sections(p) {
                 let mut projected_to = 0;
                 let mut start = 0;
@@ -591,22 +608,35 @@ impl ViewContext<'_> {
                         screen.project_from(camera, &section.vertices[..vertex_end], projected_to);
                         projected_to = vertex_end;
                     }
-                    if !branch_free {
+                    if conservative {
                         for &tri in run {
-                            if conservative || !screen.holds_no_centre(tri) {
-                                placer.place(keys, deferred, screen.triangle(tri));
-                            }
+                            placer.place(keys, deferred, screen.triangle(tri));
                         }
                         continue;
                     }
-                    for chunk in run.chunks(CANDIDATE_BATCH) {
-                        let mut kept = 0;
-                        for (i, &tri) in chunk.iter().enumerate() {
-                            candidates[kept] = i as u32;
-                            kept += usize::from(!screen.holds_no_centre(tri));
+                    match test {
+                        BoxTest::Plain => {
+                            for &tri in run {
+                                if !screen.holds_no_centre(tri) {
+                                    placer.place(keys, deferred, screen.triangle(tri));
+                                }
+                            }
                         }
-                        for &i in &candidates[..kept] {
-                            placer.place(keys, deferred, screen.triangle(chunk[i as usize]));
+                        BoxTest::BranchFree => {
+                            for chunk in run.chunks(CANDIDATE_BATCH) {
+                                let kept = screen.keep_holding_centre(chunk, candidates);
+                                for &i in &candidates[..kept] {
+                                    let tri = screen.triangle(chunk[i as usize]);
+                                    placer.place(keys, deferred, tri);
+                                }
+                            }
+                        }
+                        BoxTest::Search => {
+                            let mut next = screen.next_holding_centre(run, 0);
+                            while let Some(&tri) = run.get(next) {
+                                placer.place(keys, deferred, screen.triangle(tri));
+                                next = screen.next_holding_centre(run, next + 1);
+                            }
                         }
                     }
                 }
@@ -659,7 +689,9 @@ impl ViewContext<'_> {
         let seen = &mut scratch.seen;
         seen.fill(0);
         if min_pixels <= 1 {
-            let hit = &mut scratch.hit;
+            // A slice of its own: through the vector, its pointer and length were reloaded
+            // from the stack on every pixel.
+            let hit: &mut [u8] = &mut scratch.hit;
             for &key in keys.keys() {
                 hit[slot(key)] = 1;
             }
