@@ -34,6 +34,8 @@ pub(crate) struct KeyBuffer {
     tiles_per_row: usize,
     /// Smallest depth bits (farthest) in each `TILE`² tile; 0 where a pixel is empty.
     tile_far: Vec<u32>,
+    /// [`Self::build_tiles`]' per-column minima of one band of tiles.
+    column_far: Vec<i32>,
 }
 
 impl KeyBuffer {
@@ -46,6 +48,7 @@ impl KeyBuffer {
             keys: vec![0; resolution * resolution],
             tiles_per_row,
             tile_far: vec![0; tiles_per_row * tiles_per_row],
+            column_far: vec![0; resolution],
         }
     }
 
@@ -69,16 +72,28 @@ impl KeyBuffer {
         *stored = (*stored).max(key);
     }
 
-    /// Recomputes the farthest depth of every tile from the current keys.
+    /// Recomputes the farthest depth of every tile from the current keys: each band of
+    /// [`TILE`] rows is folded into per-column minima first, a loop over whole rows that the
+    /// compiler turns into SIMD (minima across eight keys of one tile took twelve instructions
+    /// per pixel), and then each tile takes the minimum of its columns.
     pub(crate) fn build_tiles(&mut self) {
         let n = self.resolution;
-        self.tile_far.fill(u32::MAX);
-        for y in 0..n {
-            let tile_row = y / TILE * self.tiles_per_row;
-            for (tx, chunk) in self.keys[y * n..(y + 1) * n].chunks(TILE).enumerate() {
-                let far = chunk.iter().map(|&k| (k >> 32) as u32).min().unwrap_or(0);
-                let t = &mut self.tile_far[tile_row + tx];
-                *t = (*t).min(far);
+        let columns = &mut self.column_far[..n];
+        for (band, tiles) in self
+            .keys
+            .chunks(n * TILE)
+            .zip(self.tile_far.chunks_mut(self.tiles_per_row))
+        {
+            // Depth bits are those of a positive `f32` or 0 (empty), so they order as `i32`,
+            // whose minimum SSE2 has (it has no unsigned one).
+            columns.fill(i32::MAX);
+            for row in band.chunks_exact(n) {
+                for (c, &k) in columns.iter_mut().zip(row) {
+                    *c = (*c).min((k >> 32) as i32);
+                }
+            }
+            for (t, c) in tiles.iter_mut().zip(columns.chunks(TILE)) {
+                *t = c.iter().copied().min().unwrap_or(0) as u32;
             }
         }
     }
