@@ -24,6 +24,7 @@ use super::clip::{self, PLANE_COUNT, Plane};
 use super::id_buffer::IdBuffer;
 use crate::ooc::Mesh;
 use crate::tiling::PatchId;
+use wide::{CmpEq, CmpGt, CmpLt, f32x4, i32x4};
 
 mod batch;
 pub(crate) use batch::ScreenBatch;
@@ -438,17 +439,22 @@ pub(crate) fn scan_triangle(
     let sign = signed_area.signum();
     let area = signed_area * sign;
     let (sample_x, sample_y) = (x0 * SUBPIXEL + HALF_PIXEL, y0 * SUBPIXEL + HALF_PIXEL);
-    let e0 = Edge::new(b, c, sample_x, sample_y, sign);
-    let e1 = Edge::new(c, a, sample_x, sample_y, sign);
-    let e2 = Edge::new(a, b, sample_x, sample_y, sign);
     // Barycentric weights of b and c are e1 / area and e2 / area.
     let inv_area = 1.0 / area as f32;
     let kb = (b.q - a.q) * inv_area;
     let kc = (c.q - a.q) * inv_area;
-    let depth = |w1: i64, w2: i64| a.q + w1 as f32 * kb + w2 as f32 * kc;
     let stride = resolution as usize;
-
     let (dx, dy) = (x1 - x0, y1 - y0);
+    if paths.tiny && dx < 3 && max_x - min_x < LANE_SPAN && max_y - min_y < LANE_SPAN {
+        let edges = LaneEdges::new(tri, sample_x, sample_y, sign);
+        let depth = |w: [f32; 4]| a.q + w[1] * kb + w[2] * kc;
+        scan_small(edges, [x0, y0, dx, dy], stride, depth, &mut plot);
+        return;
+    }
+    let e0 = Edge::new(b, c, sample_x, sample_y, sign);
+    let e1 = Edge::new(c, a, sample_x, sample_y, sign);
+    let e2 = Edge::new(a, b, sample_x, sample_y, sign);
+    let depth = |w1: i64, w2: i64| a.q + w1 as f32 * kb + w2 as f32 * kc;
     if paths.tiny && (dx | dy) == 0 {
         // One pixel centre in the box (most triangles that hold one on meshes finer than
         // the image): one sample, no steps.
@@ -526,6 +532,109 @@ pub(crate) fn scan_triangle(
         r0 += e0.step_y;
         r1 += e1.step_y;
         r2 += e2.step_y;
+    }
+}
+
+/// Triangles whose corners span less than this (in both axes, in sub-pixel units: 4 pixels)
+/// take [`scan_small`]: their edge functions, products of two differences below 1,280, stay
+/// below 2^23 at every sample of their box, so `f32` lanes hold them exactly.
+const LANE_SPAN: i64 = 4 * SUBPIXEL;
+
+/// The three edge functions of a small triangle (`LANE_SPAN`) in the first three `f32` lanes,
+/// the fourth always 0: the same exact integers as [`Edge::new`]'s, set up together.
+#[derive(Clone, Copy)]
+struct LaneEdges {
+    start: f32x4,
+    step_x: f32x4,
+    step_y: f32x4,
+}
+
+impl LaneEdges {
+    /// [`Edge::new`] of `b → c`, `c → a` and `a → b` at the sample `(sample_x, sample_y)`,
+    /// which must lie within the triangle's bounding box.
+    #[inline(always)]
+    fn new([a, b, c]: [ScreenVertex; 3], sample_x: i64, sample_y: i64, sign: i64) -> LaneEdges {
+        let from_x = i32x4::from([b.x, c.x, a.x, 0]);
+        let from_y = i32x4::from([b.y, c.y, a.y, 0]);
+        // Differences of snapped coordinates (within ±2^28) fit `i32`, and those of a small
+        // triangle's corners and box samples convert to `f32` exactly.
+        let sign = f32x4::splat(sign as f32);
+        let ex = (i32x4::from([c.x, a.x, b.x, 0]) - from_x).round_float() * sign;
+        let ey = (i32x4::from([c.y, a.y, b.y, 0]) - from_y).round_float() * sign;
+        let to_sample_x = (i32x4::splat(sample_x as i32) - from_x).round_float();
+        let to_sample_y = (i32x4::splat(sample_y as i32) - from_y).round_float();
+        let zero = f32x4::splat(0.0);
+        // The top-left rule as in `Edge::new`; the fourth lane, no edge, is never biased.
+        let top_left = ey.cmp_lt(zero) | (ey.cmp_eq(zero) & ex.cmp_gt(zero));
+        let bias = top_left.blend(zero, f32x4::from([1.0, 1.0, 1.0, 0.0]));
+        let subpixel = f32x4::splat(SUBPIXEL as f32);
+        LaneEdges {
+            start: ex * to_sample_y - ey * to_sample_x - bias,
+            step_x: -ey * subpixel,
+            step_y: ex * subpixel,
+        }
+    }
+}
+
+/// [`scan_triangle`]'s small-box paths on [`LaneEdges`]: the box `[x0, y0, dx, dy]` is at
+/// most three pixels wide; `depth` takes the edge values at a sample. The same fragments, in
+/// the same order, as the `i64` paths.
+#[inline(always)]
+fn scan_small(
+    edges: LaneEdges,
+    [x0, y0, dx, dy]: [i64; 4],
+    stride: usize,
+    depth: impl Fn([f32; 4]) -> f32,
+    plot: &mut impl FnMut(usize, f32, bool),
+) {
+    let zero = f32x4::splat(0.0);
+    let mut sample = |w: f32x4, index: usize, valid: bool| {
+        let covered = w.cmp_lt(zero).move_mask() == 0;
+        plot(index, depth(w.to_array()), covered & valid);
+    };
+    let i00 = y0 as usize * stride + x0 as usize;
+    if (dx | dy) == 0 {
+        sample(edges.start, i00, true);
+        return;
+    }
+    if dx <= 1 && dy <= 1 {
+        // Four samples, no loops; a sample beyond a 1-pixel-wide box is plotted as
+        // uncovered onto an in-box pixel.
+        let (has_x, has_y) = (dx == 1, dy == 1);
+        let (i10, i01) = (i00 + dx as usize, i00 + dy as usize * stride);
+        let w01 = edges.start + edges.step_y;
+        sample(edges.start, i00, true);
+        sample(edges.start + edges.step_x, i10, has_x);
+        sample(w01, i01, has_y);
+        sample(w01 + edges.step_x, i01 + dx as usize, has_x & has_y);
+        return;
+    }
+    match dx {
+        0 => lane_columns::<1>(edges, dy, i00, stride, &mut sample),
+        1 => lane_columns::<2>(edges, dy, i00, stride, &mut sample),
+        _ => lane_columns::<3>(edges, dy, i00, stride, &mut sample),
+    }
+}
+
+/// The `dy + 1` rows of a box `W` pixels wide whose first pixel is `row`, for
+/// [`scan_small`]: `W` samples per row, unrolled.
+#[inline(always)]
+fn lane_columns<const W: usize>(
+    edges: LaneEdges,
+    dy: i64,
+    mut row: usize,
+    stride: usize,
+    sample: &mut impl FnMut(f32x4, usize, bool),
+) {
+    let mut r = edges.start;
+    for _ in 0..=dy {
+        let mut w = r;
+        for k in 0..W {
+            sample(w, row + k, true);
+            w += edges.step_x;
+        }
+        r += edges.step_y;
+        row += stride;
     }
 }
 
