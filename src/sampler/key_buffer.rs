@@ -23,6 +23,10 @@ const TRIANGLE_DEPTH_SLACK: f32 = 1e-4;
 /// against their pixels directly (a tile lookup costs more than a few pixels' depths).
 const SMALL_RECT: i64 = 4;
 
+/// Pixels [`KeyBuffer::drain`] tests for emptiness at once: eight keys, four SSE2 registers
+/// or-ed together.
+const DRAIN_RUN: usize = 8;
+
 /// Side of the square tiles of the occlusion map, in pixels.
 pub(crate) const TILE: usize = 8;
 
@@ -52,14 +56,28 @@ impl KeyBuffer {
         }
     }
 
-    /// Empties every pixel.
-    pub(crate) fn clear(&mut self) {
-        self.keys.fill(0);
-    }
-
     /// The packed keys, row by row from the top.
+    #[cfg(test)]
     pub(crate) fn keys(&self) -> &[u64] {
         &self.keys
+    }
+
+    /// Calls `f` with the key of every pixel that may hold a fragment, row by row from the
+    /// top (the others are empty: key 0), and empties every pixel: the buffer is then as
+    /// [`Self::new`] made it, ready for the next view without a clearing pass of its own.
+    /// Runs of [`DRAIN_RUN`] empty pixels (most of an image) are skipped after one test, and
+    /// only the others are written.
+    #[inline(always)]
+    pub(crate) fn drain(&mut self, mut f: impl FnMut(u64)) {
+        for run in self.keys.chunks_mut(DRAIN_RUN) {
+            if run.iter().fold(0, |any, &k| any | k) == 0 {
+                continue;
+            }
+            for k in run {
+                f(*k);
+                *k = 0;
+            }
+        }
     }
 
     /// Depth test and write of a fragment with low half `low` ([`low_half`]) at depth `q`;
@@ -104,7 +122,7 @@ impl KeyBuffer {
     /// [`TRIANGLE_DEPTH_SLACK`], by the pixels themselves under [`SMALL_RECT`]² pixels and
     /// otherwise by the tiles of the last [`KeyBuffer::build_tiles`] ([`Self::occludes`]).
     /// A triangle touching no pixel is hidden too.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn triangle_hidden(&self, tri: [ScreenVertex; 3], conservative: bool) -> bool {
         const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
         let [a, b, c] = tri;
@@ -262,6 +280,28 @@ mod tests {
         b.plot(1, f32::NAN, low(8), true);
         assert_eq!(patch(&b, 0), 0);
         assert_eq!(b.keys()[1], 0);
+    }
+
+    #[test]
+    fn drain_reports_every_fragment_and_leaves_the_buffer_empty() {
+        const PATCHES: u32 = 5;
+        // 13² pixels: the last run of eight is partial.
+        let mut b = KeyBuffer::new(13);
+        let pixels = [0, 7, 8, 100, 168];
+        for (k, &i) in pixels.iter().enumerate() {
+            b.plot(i, 0.5, low_half(k as u32, PATCHES), true);
+        }
+        let mut seen = Vec::new();
+        b.drain(|key| {
+            if key != 0 {
+                seen.push(patch_slot(key, PATCHES));
+            }
+        });
+        assert_eq!(seen, [0, 1, 2, 3, 4]);
+        assert!(b.keys().iter().all(|&k| k == 0));
+        let mut calls = 0;
+        b.drain(|_| calls += 1);
+        assert_eq!(calls, 0, "an empty buffer has no run to report");
     }
 
     #[test]

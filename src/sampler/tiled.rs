@@ -290,6 +290,7 @@ struct ViewContext<'a> {
 
 /// One view's buffers.
 struct ViewScratch {
+    /// Empty between views: resolving a view drains it.
     keys: KeyBuffer,
     /// The patches of the first pass.
     drawn: Vec<u64>,
@@ -492,7 +493,6 @@ impl ViewContext<'_> {
         } = scratch;
         let views = &mut views[..count];
         for (i, view) in views.iter_mut().enumerate() {
-            view.keys.clear();
             view.deferred.clear();
             // A hinted patch that wholly faces away makes a poor occluder and is often
             // hidden: it is left to the tested pass. Always-visible patches are always drawn
@@ -552,8 +552,13 @@ impl ViewContext<'_> {
                 }
             });
         }
-        for ((camera, view), row) in cameras.iter().zip(views.iter()).zip(rows.chunks_mut(words)) {
-            self.resolve(camera, &view.keys, resolve, row);
+        // Resolving empties each key buffer for the worker's next batch.
+        for ((camera, view), row) in cameras
+            .iter()
+            .zip(views.iter_mut())
+            .zip(rows.chunks_mut(words))
+        {
+            self.resolve(camera, &mut view.keys, resolve, row);
         }
     }
 
@@ -672,11 +677,11 @@ impl ViewContext<'_> {
     }
 
     /// Turns the key buffer into the view's row: pixel counts, `min_pixels`, dilation and the
-    /// always-visible patches.
+    /// always-visible patches; leaves the buffer empty ([`KeyBuffer::drain`]).
     fn resolve(
         &self,
         camera: &Camera,
-        keys: &KeyBuffer,
+        keys: &mut KeyBuffer,
         scratch: &mut ResolveScratch,
         row: &mut [u64],
     ) {
@@ -692,18 +697,14 @@ impl ViewContext<'_> {
             // A slice of its own: through the vector, its pointer and length were reloaded
             // from the stack on every pixel.
             let hit: &mut [u8] = &mut scratch.hit;
-            for &key in keys.keys() {
-                hit[slot(key)] = 1;
-            }
+            keys.drain(|key| hit[slot(key)] = 1);
             for (p, h) in hit[..patch_count].iter_mut().enumerate() {
                 seen[p / 64] |= u64::from(*h) << (p % 64);
                 *h = 0;
             }
         } else {
             let pixels = &mut scratch.pixels;
-            for &key in keys.keys() {
-                pixels[slot(key)] += 1;
-            }
+            keys.drain(|key| pixels[slot(key)] += 1);
             for (p, count) in pixels[..patch_count].iter_mut().enumerate() {
                 if *count >= min_pixels {
                     seen[p / 64] |= 1 << (p % 64);
