@@ -411,6 +411,27 @@ pub(crate) fn scan_triangle(
     tri: [ScreenVertex; 3],
     resolution: u32,
     paths: ScanPaths,
+    plot: impl FnMut(usize, f32, bool),
+) {
+    scan_triangle_with_area(tri, signed_area(tri), resolution, paths, plot);
+}
+
+/// The signed area `(b − a) × (c − a)` of screen triangle `tri` (twice its area, in
+/// sub-pixel units squared, y down): its sign is its winding.
+#[inline(always)]
+pub(crate) fn signed_area(tri: [ScreenVertex; 3]) -> i64 {
+    let [a, b, c] = tri.map(|v| (v.x as i64, v.y as i64));
+    (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)
+}
+
+/// [`scan_triangle`] given `tri`'s [`signed_area`], for callers that computed it already
+/// (the tiled sampler, to tell front from back faces).
+#[inline(always)]
+pub(crate) fn scan_triangle_with_area(
+    tri: [ScreenVertex; 3],
+    signed_area: i64,
+    resolution: u32,
+    paths: ScanPaths,
     mut plot: impl FnMut(usize, f32, bool),
 ) {
     let [a, b, c] = tri;
@@ -428,8 +449,6 @@ pub(crate) fn scan_triangle(
     if x0 > x1 || y0 > y1 {
         return;
     }
-    let (ax, ay) = (a.x as i64, a.y as i64);
-    let signed_area = (b.x as i64 - ax) * (c.y as i64 - ay) - (b.y as i64 - ay) * (c.x as i64 - ax);
     if signed_area == 0 {
         return;
     }

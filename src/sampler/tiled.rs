@@ -50,7 +50,7 @@ use super::patch_graph::{PatchGraph, may_face};
 use super::patch_mesh::{PatchMesh, Storage};
 use super::raster::{
     DEFAULT_PATHS, ProjectedVertex, ScreenBatch, ScreenVertex, draw_triangle, project,
-    scan_triangle, sphere_needs_no_clip, view_planes,
+    scan_triangle_with_area, signed_area, sphere_needs_no_clip, view_planes,
 };
 use super::{SamplingParams, VisibilityMatrix};
 use crate::ooc::Mesh;
@@ -357,14 +357,6 @@ enum Pass {
     Tested,
 }
 
-/// The sign (−1, 0, 1) of a screen triangle's signed area `(b − a) × (c − a)`, in the
-/// rasterizer's y-down pixel frame.
-#[inline(always)]
-fn winding(tri: [ScreenVertex; 3]) -> i64 {
-    let [a, b, c] = tri.map(|v| (v.x as i64, v.y as i64));
-    ((b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)).signum()
-}
-
 /// The screen winding of the triangles that face away from the eye on a consistently wound
 /// closed mesh: with outward normals `(b − a) × (c − a)` (positive signed volume) a front
 /// face winds counter-clockwise seen from the eye, which the y-down pixel frame turns into a
@@ -437,11 +429,13 @@ impl Placer<'_, '_> {
         tri: [ScreenVertex; 3],
     ) {
         let context = self.context;
+        // Its sign is the winding; the scan needs it too.
+        let area = signed_area(tri);
         match self.pass {
             Pass::First => {
                 // Past the cap a back face is drawn at once: slower (no tile test), same
                 // result, and the heap stays bounded.
-                if winding(tri) == context.back_winding && deferred.len() < context.max_deferred {
+                if area.signum() == context.back_winding && deferred.len() < context.max_deferred {
                     deferred.push((tri, self.low));
                     return;
                 }
@@ -452,7 +446,7 @@ impl Placer<'_, '_> {
                 }
             }
         }
-        context.scan(tri, self.low, self.resolution, keys);
+        context.scan(tri, area, self.low, self.resolution, keys);
     }
 }
 
@@ -527,7 +521,8 @@ impl ViewContext<'_> {
             let ViewScratch { keys, deferred, .. } = view;
             for &(screen, low) in deferred.iter() {
                 if !keys.triangle_hidden(screen, conservative) {
-                    self.scan(screen, low, camera.resolution(), keys);
+                    let area = signed_area(screen);
+                    self.scan(screen, area, low, camera.resolution(), keys);
                 }
             }
         }
@@ -667,12 +662,19 @@ impl ViewContext<'_> {
 
     /// Rasterizes one screen triangle with key low half `low` into `keys`.
     #[inline(always)]
-    fn scan(&self, screen: [ScreenVertex; 3], low: u32, resolution: u32, keys: &mut KeyBuffer) {
+    fn scan(
+        &self,
+        screen: [ScreenVertex; 3],
+        area: i64,
+        low: u32,
+        resolution: u32,
+        keys: &mut KeyBuffer,
+    ) {
         let plot = |index, q, covered| keys.plot(index, q, low, covered);
         if self.options.conservative {
             scan_triangle_conservative(screen, resolution, plot);
         } else {
-            scan_triangle(screen, resolution, DEFAULT_PATHS, plot);
+            scan_triangle_with_area(screen, area, resolution, DEFAULT_PATHS, plot);
         }
     }
 
