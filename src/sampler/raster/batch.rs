@@ -22,20 +22,31 @@ use wide::{CmpEq, CmpGt, f32x4, i32x4};
 /// indexes it without a bounds check (one per corner cost a third of the triangle loop on
 /// sub-pixel meshes). Entries past the section's vertices hold earlier sections' values.
 /// Beside each vertex sits its centre code ([`codes_hold_no_centre`]), which is all that the
-/// sub-pixel test of a triangle reads.
+/// sub-pixel test of a triangle reads. Each value has a table of its own, so that four lanes
+/// of the projection go out in one store per value (as `ScreenVertex` records they took a
+/// dozen stores and shuffles per four vertices, a tenth of the projection); only the
+/// triangles that hold a pixel centre gather their corners' values.
 #[derive(Debug)]
 pub(crate) struct ScreenBatch {
-    vertices: Box<[ScreenVertex; SECTION_VERTICES]>,
+    xs: Box<[i32; SECTION_VERTICES]>,
+    ys: Box<[i32; SECTION_VERTICES]>,
+    qs: Box<[f32; SECTION_VERTICES]>,
     codes: Box<[u64; SECTION_VERTICES]>,
+}
+
+/// A zeroed table of [`SECTION_VERTICES`] values, allocated on the heap directly.
+fn table<T: Copy + Default + std::fmt::Debug>() -> Box<[T; SECTION_VERTICES]> {
+    let values = vec![T::default(); SECTION_VERTICES].into_boxed_slice();
+    values.try_into().expect("the table's length")
 }
 
 impl Default for ScreenBatch {
     fn default() -> ScreenBatch {
-        let table = vec![ScreenVertex::default(); SECTION_VERTICES].into_boxed_slice();
-        let codes = vec![0; SECTION_VERTICES].into_boxed_slice();
         ScreenBatch {
-            vertices: table.try_into().expect("the table's length"),
-            codes: codes.try_into().expect("the table's length"),
+            xs: table(),
+            ys: table(),
+            qs: table(),
+            codes: table(),
         }
     }
 }
@@ -60,33 +71,42 @@ impl ScreenBatch {
         let rows = camera.rows32().map(|r| r.map(f32x4::splat));
         let points = &points[start..];
         let end = start + points.len();
-        let (out, codes) = (&mut self.vertices[start..end], &mut self.codes[start..end]);
         let mut chunks = points.chunks_exact(LANES);
-        let mut slots = out.chunks_exact_mut(LANES);
-        let mut code_slots = codes.chunks_exact_mut(LANES);
-        for ((chunk, slot), code_slot) in (&mut chunks).zip(&mut slots).zip(&mut code_slots) {
+        let mut out = self.xs[start..end]
+            .chunks_exact_mut(LANES)
+            .zip(self.ys[start..end].chunks_exact_mut(LANES))
+            .zip(self.qs[start..end].chunks_exact_mut(LANES))
+            .zip(self.codes[start..end].chunks_exact_mut(LANES));
+        for (chunk, (((xs, ys), qs), codes)) in (&mut chunks).zip(&mut out) {
             let lanes: &[[f32; 3]; LANES] = chunk.try_into().expect("exact chunk");
-            let (screen, code) = project_lanes(&rows, lanes);
-            slot.copy_from_slice(&screen);
-            code_slot.copy_from_slice(&code);
+            let ((x, y, q), code) = project_lanes(&rows, lanes);
+            xs.copy_from_slice(&x);
+            ys.copy_from_slice(&y);
+            qs.copy_from_slice(&q);
+            codes.copy_from_slice(&code);
         }
-        let (rest, slot) = (chunks.remainder(), slots.into_remainder());
+        let rest = chunks.remainder();
         if let Some(&last) = rest.last() {
             let lanes: [[f32; 3]; LANES] =
                 std::array::from_fn(|i| rest.get(i).copied().unwrap_or(last));
-            let (screen, code) = project_lanes(&rows, &lanes);
-            slot.copy_from_slice(&screen[..rest.len()]);
-            code_slots
-                .into_remainder()
-                .copy_from_slice(&code[..rest.len()]);
+            let ((x, y, q), code) = project_lanes(&rows, &lanes);
+            let tail = end - rest.len()..end;
+            let n = rest.len();
+            self.xs[tail.clone()].copy_from_slice(&x[..n]);
+            self.ys[tail.clone()].copy_from_slice(&y[..n]);
+            self.qs[tail.clone()].copy_from_slice(&q[..n]);
+            self.codes[tail].copy_from_slice(&code[..n]);
         }
     }
 
     /// The screen triangle `tri` (indices into the projected points).
     #[inline(always)]
     pub(crate) fn triangle(&self, tri: [u16; 3]) -> [ScreenVertex; 3] {
-        let v = &*self.vertices;
-        [v[tri[0] as usize], v[tri[1] as usize], v[tri[2] as usize]]
+        tri.map(|i| ScreenVertex {
+            x: self.xs[i as usize],
+            y: self.ys[i as usize],
+            q: self.qs[i as usize],
+        })
     }
 
     /// Whether the bounding box of the screen triangle `tri` holds no pixel centre, from its
@@ -175,10 +195,7 @@ pub(crate) fn codes_hold_no_centre([a, b, c]: [u64; 3]) -> bool {
 /// NaN-careful `max`, `min` and saturating truncation cost a third of the projection where
 /// the plain instructions are exact (see `snap`).
 #[inline(always)]
-fn project_lanes(
-    rows: &[[f32x4; 4]; 3],
-    p: &[[f32; 3]; LANES],
-) -> ([ScreenVertex; LANES], [u64; LANES]) {
+fn project_lanes(rows: &[[f32x4; 4]; 3], p: &[[f32; 3]; LANES]) -> (ScreenLanes, [u64; LANES]) {
     let coordinate = |k: usize| f32x4::from([p[0][k], p[1][k], p[2][k], p[3][k]]);
     let (x, y, z) = (coordinate(0), coordinate(1), coordinate(2));
     snap_lanes(rows.map(|r| r[0] * x + r[1] * y + r[2] * z + r[3]))
@@ -187,7 +204,7 @@ fn project_lanes(
 /// [`super::snap32`] of four clip-space points `[cx, cy, w]`, lane by lane, and their centre
 /// codes ([`codes_hold_no_centre`]).
 #[inline(always)]
-fn snap_lanes([cx, cy, w]: [f32x4; 3]) -> ([ScreenVertex; LANES], [u64; LANES]) {
+fn snap_lanes([cx, cy, w]: [f32x4; 3]) -> (ScreenLanes, [u64; LANES]) {
     let inv_w = f32x4::splat(1.0) / w;
     let limit = f32x4::splat(COORD_LIMIT32);
     let snap = |v: f32x4| -> i32x4 {
@@ -215,15 +232,12 @@ fn snap_lanes([cx, cy, w]: [f32x4; 3]) -> ([ScreenVertex; LANES], [u64; LANES]) 
     };
     let (x, y) = (snap(cx), snap(cy));
     let (fx, fy) = (field(x), field(y));
-    let (x, y, q) = (x.to_array(), y.to_array(), inv_w.to_array());
-    let screen = std::array::from_fn(|i| ScreenVertex {
-        x: x[i],
-        y: y[i],
-        q: q[i],
-    });
     let codes = std::array::from_fn(|i| u64::from(fx[i] as u32) | u64::from(fy[i] as u32) << 32);
-    (screen, codes)
+    ((x.to_array(), y.to_array(), inv_w.to_array()), codes)
 }
+
+/// Four snapped points: `x`, `y` and `q`, a lane each.
+type ScreenLanes = ([i32; LANES], [i32; LANES], [f32; LANES]);
 
 /// The lanes of a compare mask (all ones or all zeros) as integers (−1 or 0).
 #[inline(always)]
@@ -277,11 +291,11 @@ mod tests {
             cy in proptest::array::uniform4(lane_value()),
             w in proptest::array::uniform4(prop_oneof![1e-3f32..1e3, Just(f32::NAN), Just(1e-30)]),
         ) {
-            let (lanes, codes) = snap_lanes([cx, cy, w].map(f32x4::from));
+            let ((x, y, q), codes) = snap_lanes([cx, cy, w].map(f32x4::from));
             for i in 0..LANES {
                 let one = snap32([cx[i], cy[i], w[i]]);
                 prop_assert_eq!(
-                    (lanes[i].x, lanes[i].y, lanes[i].q.to_bits()),
+                    (x[i], y[i], q[i].to_bits()),
                     (one.x, one.y, one.q.to_bits())
                 );
                 prop_assert_eq!(codes[i], centre_code(one.x, one.y));
