@@ -87,6 +87,32 @@ pub(crate) fn may_face(patch: &Patch, eye: [f64; 3]) -> bool {
     theta - cone - spread < std::f64::consts::FRAC_PI_2
 }
 
+/// Whether every point of `patch` faces away from `eye`: [`may_face`] turned round, by the
+/// same bound (angle to the eye beyond 90° plus the cone's half-angle plus the sphere's
+/// angular radius) written without trigonometry, for the sampler's per-view steering of
+/// hundreds of patches. Rounding may tip it either way at the boundary, so it only steers,
+/// never decides a result.
+pub(crate) fn faces_away(patch: &Patch, eye: [f64; 3]) -> bool {
+    let cos_a = f64::from(patch.cone_cos);
+    if cos_a <= 0.0 {
+        return false;
+    }
+    let v: [f64; 3] = std::array::from_fn(|k| eye[k] - f64::from(patch.center[k]));
+    let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    let r = f64::from(patch.radius);
+    if d2 <= r * r {
+        return false;
+    }
+    // With the half-angle α and the angular radius β (sin β = r / d): θ > 90° + α + β holds
+    // when α + β ≤ 90° and cos θ < −sin(α + β) = −(sin α · cos β + cos α · sin β); the axis is
+    // a unit vector, so `d · cos θ` is its dot product with `v`.
+    let r_cos_b = (d2 - r * r).sqrt();
+    let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
+    let axis = patch.cone_axis.map(f64::from);
+    let along = axis[0] * v[0] + axis[1] * v[1] + axis[2] * v[2];
+    cos_a * r_cos_b >= sin_a * r && along < -(sin_a * r_cos_b + cos_a * r)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -101,6 +127,47 @@ mod tests {
             cone_axis,
             cone_cos,
         }
+    }
+
+    #[test]
+    fn faces_away_agrees_with_may_face_away_from_the_boundary() {
+        let mut rng = 12345u64;
+        let mut next = || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            (rng >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        for _ in 0..20_000 {
+            let axis = [next(), next(), next()];
+            let len = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
+            let cos = next() as f32;
+            let mut p = patch(axis.map(|a| (a / len) as f32), cos);
+            p.radius = (next().abs() * 0.5) as f32;
+            let eye = [next() * 4.0, next() * 4.0, next() * 4.0];
+            let away = faces_away(&p, eye);
+            // Either says the opposite of the other only where rounding could tip it.
+            assert!(
+                !(away && may_face(&p, eye)) || margin(&p, eye) < 1e-9,
+                "{p:?} {eye:?}"
+            );
+            if !away && !may_face(&p, eye) {
+                assert!(margin(&p, eye) < 1e-9, "{p:?} {eye:?}");
+            }
+        }
+    }
+
+    /// How far `eye` is from the boundary of [`may_face`]'s test, in radians.
+    fn margin(p: &Patch, eye: [f64; 3]) -> f64 {
+        let v: [f64; 3] = std::array::from_fn(|k| eye[k] - f64::from(p.center[k]));
+        let d = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        let a = p.cone_axis.map(f64::from);
+        let theta = ((a[0] * v[0] + a[1] * v[1] + a[2] * v[2]) / d)
+            .clamp(-1.0, 1.0)
+            .acos();
+        let cone = f64::from(p.cone_cos).acos();
+        let spread = (f64::from(p.radius) / d).min(1.0).asin();
+        (theta - cone - spread - std::f64::consts::FRAC_PI_2).abs()
     }
 
     #[test]

@@ -46,7 +46,7 @@ use super::checkpoint;
 use super::conservative::scan_triangle_conservative;
 use super::key_buffer::{KeyBuffer, low_half, patch_slot};
 use super::patch_box::{PatchBox, patch_boxes};
-use super::patch_graph::{PatchGraph, may_face};
+use super::patch_graph::{PatchGraph, faces_away, may_face};
 use super::patch_mesh::{PatchMesh, Storage};
 use super::raster::{
     DEFAULT_PATHS, ProjectedVertex, ScreenBatch, ScreenVertex, draw_triangle, project,
@@ -497,7 +497,7 @@ impl ViewContext<'_> {
                 let hinted = hint.map_or(u64::MAX, |[a, b]| a[w] | b[w]) & valid(w);
                 let mut away = 0u64;
                 for_each_bit(std::iter::once(hinted), |k| {
-                    if !may_face(&self.tiling.patches[w * 64 + k], eye) {
+                    if faces_away(&self.tiling.patches[w * 64 + k], eye) {
                         away |= 1 << k;
                     }
                 });
