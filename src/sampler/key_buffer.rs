@@ -124,11 +124,24 @@ impl KeyBuffer {
     /// A triangle touching no pixel is hidden too.
     #[inline(always)]
     pub(crate) fn triangle_hidden(&self, tri: [ScreenVertex; 3], conservative: bool) -> bool {
-        const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
         let [a, b, c] = tri;
+        let extent = [
+            a.x.min(b.x).min(c.x),
+            a.x.max(b.x).max(c.x),
+            a.y.min(b.y).min(c.y),
+            a.y.max(b.y).max(c.y),
+        ];
+        self.extent_hidden(extent, a.q.max(b.q).max(c.q), conservative)
+    }
+
+    /// Whether triangles with every corner within the snapped screen rectangle `[min_x,
+    /// max_x, min_y, max_y]` and no corner depth above `q_max` provably change no pixel:
+    /// [`Self::triangle_hidden`] for all of them at once.
+    #[inline(always)]
+    pub(crate) fn extent_hidden(&self, extent: [i32; 4], q_max: f32, conservative: bool) -> bool {
+        const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
         let last = self.resolution as i64 - 1;
-        let (min_x, max_x) = (a.x.min(b.x).min(c.x) as i64, a.x.max(b.x).max(c.x) as i64);
-        let (min_y, max_y) = (a.y.min(b.y).min(c.y) as i64, a.y.max(b.y).max(c.y) as i64);
+        let [min_x, max_x, min_y, max_y] = extent.map(i64::from);
         // As in `scan_triangle` (centres `p · 256 + 128`) or, conservatively, a superset of
         // the squares `scan_triangle_conservative` touches.
         let (lo_bias, hi_bias) = if conservative {
@@ -143,7 +156,7 @@ impl KeyBuffer {
         if x0 > x1 || y0 > y1 {
             return true;
         }
-        let q = a.q.max(b.q).max(c.q) * (1.0 + TRIANGLE_DEPTH_SLACK);
+        let q = q_max * (1.0 + TRIANGLE_DEPTH_SLACK);
         if !(q.is_finite() && q > 0.0) {
             return false;
         }

@@ -608,6 +608,16 @@ impl ViewContext<'_> {
                         screen.project_from(camera, &section.vertices[..vertex_end], projected_to);
                         projected_to = vertex_end;
                     }
+                    // A tested section of one cluster (most patches of meshes not much finer
+                    // than the image) is tested by the exact rectangle and largest depth of its
+                    // projected vertices before its triangles one by one: its sphere's
+                    // rectangle passed, but it lies mostly just behind a silhouette.
+                    if pass == Pass::Tested && section.clusters.len() == 1 {
+                        let (extent, q_max) = screen.extent(0..vertex_end);
+                        if keys.extent_hidden(extent, q_max, conservative) {
+                            continue;
+                        }
+                    }
                     if conservative {
                         for &tri in run {
                             placer.place(keys, deferred, screen.triangle(tri));

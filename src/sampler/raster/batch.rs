@@ -109,6 +109,23 @@ impl ScreenBatch {
         })
     }
 
+    /// The snapped screen rectangle `[min_x, max_x, min_y, max_y]` and the largest depth of
+    /// the projected points `range` (a depth that is NaN is passed over: a fragment
+    /// interpolated from it is never drawn).
+    pub(crate) fn extent(&self, range: std::ops::Range<usize>) -> ([i32; 4], f32) {
+        let (xs, ys) = (&self.xs[range.clone()], &self.ys[range.clone()]);
+        let bounds = |v: &[i32]| {
+            let lo = v.iter().copied().fold(i32::MAX, i32::min);
+            (lo, v.iter().copied().fold(i32::MIN, i32::max))
+        };
+        let ((min_x, max_x), (min_y, max_y)) = (bounds(xs), bounds(ys));
+        let q = self.qs[range]
+            .iter()
+            .copied()
+            .fold(f32::NEG_INFINITY, f32::max);
+        ([min_x, max_x, min_y, max_y], q)
+    }
+
     /// Whether the bounding box of the screen triangle `tri` holds no pixel centre, from its
     /// corners' codes alone ([`codes_hold_no_centre`]).
     #[inline(always)]
