@@ -139,6 +139,21 @@ fn tiled_equals_brute_force_on_the_bunny() {
 }
 
 #[test]
+fn tiled_equals_brute_force_on_the_bunny_in_small_patches() {
+    // About fifty triangles per patch: nearly every section is one cluster, so the tested
+    // pass tries the exact rectangle of a section's projected vertices before its triangles.
+    let mesh = bunny();
+    let tiling = crate::tiling::tile(&mesh, 2000).unwrap();
+    let count = tiling.patches.len() as u32;
+    let p = params_for(&mesh, 1, 256);
+    let brute = sample(&mesh, &tiling.patch_of, count, &p, &NoProgress);
+    assert_same(
+        &tiled(&mesh, &tiling, &p, &SamplingOptions::default()),
+        &brute,
+    );
+}
+
+#[test]
 fn a_tiny_memory_budget_maps_the_mesh_and_changes_nothing() {
     // A 1-byte budget puts the regrouped mesh and the key table in mapped files.
     let mesh = bunny();
