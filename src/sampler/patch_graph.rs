@@ -131,13 +131,8 @@ mod tests {
 
     #[test]
     fn faces_away_agrees_with_may_face_away_from_the_boundary() {
-        let mut rng = 12345u64;
-        let mut next = || {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            (rng >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut rng = crate::sampler::test_meshes::Rng(12345);
+        let mut next = || f64::from(rng.signed());
         for _ in 0..20_000 {
             let axis = [next(), next(), next()];
             let len = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();

@@ -251,7 +251,7 @@ enum BoxTest {
     /// batch, then the batch is drawn.
     BranchFree,
     /// Much smaller triangles rarely hold one (7 % on the 6.4M bunny): a tight search loop
-    /// skips to the next that does, so the test keeps its registers to itself (6.4M −5 %).
+    /// skips to the next that does, so the test keeps its registers to itself (6.4M −4 %).
     Search,
 }
 
@@ -429,23 +429,25 @@ impl Placer<'_, '_> {
         tri: [ScreenVertex; 3],
     ) {
         let context = self.context;
-        // Its sign is the winding; the scan needs it too.
-        let area = signed_area(tri);
-        match self.pass {
+        let area = match self.pass {
             Pass::First => {
+                // Its sign is the winding; the scan needs it too.
+                let area = signed_area(tri);
                 // Past the cap a back face is drawn at once: slower (no tile test), same
                 // result, and the heap stays bounded.
                 if area.signum() == context.back_winding && deferred.len() < context.max_deferred {
                     deferred.push((tri, self.low));
                     return;
                 }
+                area
             }
             Pass::Tested => {
                 if keys.triangle_hidden(tri, context.options.conservative) {
                     return;
                 }
+                signed_area(tri)
             }
-        }
+        };
         context.scan(tri, area, self.low, self.resolution, keys);
     }
 }
