@@ -91,7 +91,10 @@ impl PatchBox {
 pub(crate) fn patch_boxes(mesh: &PatchMesh, tiling: &Tiling) -> Vec<PatchBox> {
     (0..mesh.patch_count())
         .into_par_iter()
-        .map(|p| PatchBox::around(mesh.vertices(p), tiling.patches[p].cone_axis))
+        .map(|p| {
+            let points: Vec<[f32; 3]> = mesh.vertices(p).collect();
+            PatchBox::around(&points, tiling.patches[p].cone_axis)
+        })
         .collect()
 }
 

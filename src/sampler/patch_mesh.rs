@@ -8,6 +8,12 @@
 //! `2·sqrt(triangles per patch)` extra per patch); both copies hold the same `f32` position,
 //! so they project to bit-identical screen vertices and the mesh stays watertight.
 //!
+//! **Blocks.** A section's vertices are stored four to a block, `[x0..x3, y0..y3, z0..z3]`
+//! ([`PointBlock`], the last block filled with copies of the last vertex), so that the
+//! projection's four lanes of a coordinate are one plain load: as `[f32; 3]` records they
+//! took twelve single loads and nine shuffles per four vertices (6.4M −4 %, 1.6M −8 %;
+//! BENCHMARKS.md, "Ninth pass").
+//!
 //! **Sections.** A patch's triangles are cut, in the tiling's order, into *sections* of at
 //! most [`SECTION_VERTICES`] distinct vertices (65,536: one section per patch unless a patch
 //! holds more than about 130,000 triangles), each with its own vertex run, so that a corner
@@ -30,7 +36,7 @@
 //! same slices either way, patch by patch in file order, so a view's reads are sequential
 //! runs of the file.
 //!
-//! This file's only `unsafe` code views the mapped bytes as `[f32; 3]` / `[u16; 3]`.
+//! This file's only `unsafe` code views the mapped bytes as `[f32; 12]` / `[u16; 3]`.
 //! Cost: one pass over the triangles plus a sort per patch.
 
 use std::fs::File;
@@ -82,7 +88,7 @@ pub(crate) fn estimated_bytes(triangles: u64) -> u64 {
     triangles.saturating_mul(12)
 }
 
-/// Records of one kind (`[f32; 3]` or `[u16; 3]`) on the heap or in a mapped file.
+/// Records of one kind ([`PointBlock`] or `[u16; 3]`) on the heap or in a mapped file.
 #[derive(Debug)]
 enum Records<T: Plain> {
     Heap(Vec<T>),
@@ -94,12 +100,13 @@ enum Records<T: Plain> {
     },
 }
 
-/// Three 32-bit or 16-bit numbers: no padding, alignment at most 4, every bit pattern valid.
+/// Three or twelve 32-bit or three 16-bit numbers: no padding, alignment at most 4, every
+/// bit pattern valid.
 trait Plain: Copy + Default + std::fmt::Debug {
     fn write_to(&self, out: &mut impl Write) -> io::Result<()>;
 }
 
-impl Plain for [f32; 3] {
+impl Plain for PointBlock {
     fn write_to(&self, out: &mut impl Write) -> io::Result<()> {
         for x in self {
             out.write_all(&x.to_ne_bytes())?;
@@ -125,7 +132,7 @@ impl<T: Plain> Deref for Records<T> {
             Records::Heap(v) => v,
             Records::Mapped { map, len } => {
                 let bytes: &[u8] = &map[..len * std::mem::size_of::<T>()];
-                // SAFETY: `T` is `[f32; 3]` or `[u16; 3]` (the sealed `Plain`): no padding,
+                // SAFETY: `T` is `[f32; 12]` or `[u16; 3]` (the sealed `Plain`): no padding,
                 // align 4 or 2, every bit pattern valid. A mapping starts on a page boundary, so
                 // the pointer is aligned; `bytes` holds exactly `len` records, written in
                 // native byte order by `Sink::push`; the slice borrows `self`, so the map
@@ -241,10 +248,11 @@ fn clusters(positions: &[[f32; 3]], triangles: &[[u16; 3]]) -> Vec<Cluster> {
 /// the tiling's order, across its sections) is input triangle `order[first + k]`.
 #[derive(Debug)]
 pub(crate) struct PatchMesh {
-    /// Distinct vertices of every section, section after section, patch after patch.
-    positions: Records<[f32; 3]>,
-    /// `positions[vertex_start[s]..vertex_start[s + 1]]` are section `s`'s vertices.
-    vertex_start: Vec<usize>,
+    /// Distinct vertices of every section, four to a block, section after section, patch
+    /// after patch.
+    positions: Records<PointBlock>,
+    /// `positions[block_start[s]..block_start[s + 1]]` are section `s`'s vertices.
+    block_start: Vec<usize>,
     /// Corners of reordered triangle `i`, as indices into its section's vertex run.
     triangles: Records<[u16; 3]>,
     /// `triangle_start[s]..triangle_start[s + 1]` are section `s`'s reordered triangles.
@@ -258,11 +266,57 @@ pub(crate) struct PatchMesh {
     cluster_start: Vec<usize>,
 }
 
+/// Four points as `[x0, x1, x2, x3, y0, …, z3]`: the projection's lanes are three plain
+/// loads.
+pub(crate) type PointBlock = [f32; 12];
+
+/// `points` four to a block, the last block filled up with copies of the last point.
+pub(crate) fn to_blocks(points: &[[f32; 3]]) -> Vec<PointBlock> {
+    points
+        .chunks(4)
+        .map(|chunk| {
+            let at = |i: usize| chunk[i.min(chunk.len() - 1)];
+            std::array::from_fn(|k| at(k % 4)[k / 4])
+        })
+        .collect()
+}
+
+/// A section's vertices, four to a [`PointBlock`]; its length is a whole number of blocks
+/// (the copies at the end are never a triangle's corner).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Points<'a> {
+    blocks: &'a [PointBlock],
+}
+
+impl<'a> Points<'a> {
+    /// The vertices in blocks of four.
+    pub(crate) fn blocks(self) -> &'a [PointBlock] {
+        self.blocks
+    }
+
+    /// How many vertices, a multiple of 4.
+    pub(crate) fn len(self) -> usize {
+        self.blocks.len() * 4
+    }
+
+    /// Vertex `i`.
+    #[inline]
+    pub(crate) fn get(self, i: usize) -> [f32; 3] {
+        let (block, lane) = (&self.blocks[i / 4], i % 4);
+        [block[lane], block[4 + lane], block[8 + lane]]
+    }
+
+    /// Every vertex, in order.
+    pub(crate) fn iter(self) -> impl Iterator<Item = [f32; 3]> + 'a {
+        (0..self.len()).map(move |i| self.get(i))
+    }
+}
+
 /// One section of a patch: its vertices and its triangles' corners, indices into them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Section<'a> {
     /// The section's distinct vertices (at most [`SECTION_VERTICES`]).
-    pub(crate) vertices: &'a [[f32; 3]],
+    pub(crate) vertices: Points<'a>,
     /// The section's triangles.
     pub(crate) triangles: &'a [[u16; 3]],
     /// The section's clusters, in order (every triangle in one).
@@ -370,11 +424,11 @@ impl PatchMesh {
         let patch_count = tiling.patches.len();
         let mut positions = Sink::new(storage)?;
         let mut triangles = Sink::new(storage)?;
-        let mut vertex_start = Vec::with_capacity(patch_count + 1);
+        let mut block_start = Vec::with_capacity(patch_count + 1);
         let mut triangle_start = Vec::with_capacity(patch_count + 1);
         let mut section_start = Vec::with_capacity(patch_count + 1);
         let (mut clusters, mut cluster_start) = (Vec::new(), vec![0]);
-        vertex_start.push(0);
+        block_start.push(0);
         triangle_start.push(0);
         section_start.push(0);
         let mut first = 0;
@@ -393,20 +447,20 @@ impl PatchMesh {
             let parts: Vec<PatchPart> = (first..end).into_par_iter().map(part).collect();
             for sections in parts {
                 for (p, t, c) in sections {
-                    positions.push(&p)?;
+                    positions.push(&to_blocks(&p))?;
                     triangles.push(&t)?;
                     clusters.extend_from_slice(&c);
                     cluster_start.push(clusters.len());
-                    vertex_start.push(positions.len());
+                    block_start.push(positions.len());
                     triangle_start.push(triangles.len());
                 }
-                section_start.push(vertex_start.len() - 1);
+                section_start.push(block_start.len() - 1);
             }
             first = end;
         }
         Ok(PatchMesh {
             positions: positions.finish()?,
-            vertex_start,
+            block_start,
             triangles: triangles.finish()?,
             triangle_start,
             section_start,
@@ -420,16 +474,18 @@ impl PatchMesh {
         self.section_start.len() - 1
     }
 
-    /// Patch `p`'s vertices: its sections' runs, one after the other.
-    pub(crate) fn vertices(&self, p: usize) -> &[[f32; 3]] {
-        let (s0, s1) = (self.section_start[p], self.section_start[p + 1]);
-        &self.positions[self.vertex_start[s0]..self.vertex_start[s1]]
+    /// Patch `p`'s vertices: its sections' runs, one after the other (each with the
+    /// copies that fill its last block).
+    pub(crate) fn vertices(&self, p: usize) -> impl Iterator<Item = [f32; 3]> + '_ {
+        self.sections(p).flat_map(|s| s.vertices.iter())
     }
 
     /// Patch `p`'s sections, in order.
     pub(crate) fn sections(&self, p: usize) -> impl Iterator<Item = Section<'_>> {
         (self.section_start[p]..self.section_start[p + 1]).map(|s| Section {
-            vertices: &self.positions[self.vertex_start[s]..self.vertex_start[s + 1]],
+            vertices: Points {
+                blocks: &self.positions[self.block_start[s]..self.block_start[s + 1]],
+            },
             triangles: &self.triangles[self.triangle_start[s]..self.triangle_start[s + 1]],
             clusters: &self.clusters[self.cluster_start[s]..self.cluster_start[s + 1]],
         })
@@ -444,13 +500,13 @@ impl PatchMesh {
     /// Bytes of the regrouped mesh, wherever it lives.
     #[cfg(test)]
     pub(crate) fn bytes(&self) -> usize {
-        self.positions.len() * 12 + self.triangles.len() * 6 + self.offset_bytes()
+        self.positions.len() * 48 + self.triangles.len() * 6 + self.offset_bytes()
     }
 
     /// Heap bytes of the per-section and per-patch offsets and of the clusters.
     #[cfg(test)]
     fn offset_bytes(&self) -> usize {
-        (self.vertex_start.len() + self.triangle_start.len() + self.section_start.len()) * 8
+        (self.block_start.len() + self.triangle_start.len() + self.section_start.len()) * 8
             + self.cluster_start.len() * 8
             + self.clusters.len() * std::mem::size_of::<Cluster>()
     }
@@ -461,7 +517,7 @@ impl PatchMesh {
         let offsets = self.offset_bytes();
         match (&self.positions, &self.triangles) {
             (Records::Heap(_), Records::Heap(_)) => self.bytes(),
-            (Records::Heap(p), _) => offsets + p.len() * 12,
+            (Records::Heap(p), _) => offsets + p.len() * 48,
             (_, Records::Heap(t)) => offsets + t.len() * 6,
             _ => offsets,
         }
@@ -496,7 +552,7 @@ mod tests {
         assert_eq!(mapped.bytes(), heap.bytes());
         let mut multi_section = 0;
         for p in 0..heap.patch_count() {
-            assert_eq!(heap.vertices(p), mapped.vertices(p));
+            assert!(heap.vertices(p).eq(mapped.vertices(p)));
             assert!(heap.sections(p).eq(mapped.sections(p)));
             multi_section += usize::from(heap.sections(p).count() > 1);
             // The regrouped triangles are the tiling's, corner for corner, across sections.
@@ -508,7 +564,7 @@ mod tests {
                 assert!(s.vertices.len() <= 100);
                 s.triangles
                     .iter()
-                    .map(move |t| t.map(|v| s.vertices[v as usize]))
+                    .map(move |t| t.map(|v| s.vertices.get(v as usize)))
             });
             let input = (first..).map(|k| mesh.triangle(tiling.order[k]).map(|v| mesh.position(v)));
             let count = tiling.patches[p].count as usize;
@@ -534,7 +590,7 @@ mod tests {
                 .map(|&i| u32::from(i) + 1);
             assert_eq!(used.max(), Some(c.vertex_end));
             for &i in s.triangles[start..end].iter().flatten() {
-                let q = s.vertices[usize::from(i)];
+                let q = s.vertices.get(usize::from(i));
                 let d2: f32 = (0..3).map(|k| (q[k] - c.center[k]).powi(2)).sum();
                 assert!(d2 <= c.radius * c.radius);
             }

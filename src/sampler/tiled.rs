@@ -607,7 +607,8 @@ impl ViewContext<'_> {
                     }
                     let vertex_end = cluster.vertex_end as usize;
                     if vertex_end > projected_to {
-                        screen.project_from(camera, &section.vertices[..vertex_end], projected_to);
+                        let blocks = section.vertices.blocks();
+                        screen.project_from(camera, blocks, projected_to, vertex_end);
                         projected_to = vertex_end;
                     }
                     // A tested section of one cluster (most patches of meshes not much finer
@@ -659,11 +660,11 @@ impl ViewContext<'_> {
         for section in self.mesh.sections(p) {
             let vertices = section.vertices;
             projected.clear();
-            projected.extend(vertices.iter().map(|&v| project(camera, &planes, v)));
+            projected.extend(vertices.iter().map(|v| project(camera, &planes, v)));
             for tri in section.triangles {
                 draw_triangle(
                     tri.map(|i| projected[usize::from(i)]),
-                    || tri.map(|i| vertices[usize::from(i)]),
+                    || tri.map(|i| vertices.get(usize::from(i))),
                     camera,
                     &planes,
                     |tri| placer.place(keys, deferred, tri),

@@ -1,8 +1,9 @@
 //! A patch's vertices projected together for the sub-pixel fast path of tiled sampling.
 //!
 //! Technique: the same transform and snapping as [`super::project`], bit for bit, over a
-//! whole patch, four points at a time: the transform in lane arrays the compiler packs into
-//! SSE2 `f32` registers, the division and rounding in `wide`'s `f32x4` (safe code).
+//! whole patch, four points at a time: each coordinate's four lanes one plain load from the
+//! regrouped mesh's blocks (`patch_mesh::PointBlock`), the transform, division and rounding
+//! in `wide`'s `f32x4` (SSE2, safe code).
 //! Only patches that need no clipping come here (see [`super::sphere_needs_no_clip`]), so
 //! outcodes are not computed: they only reject triangles wholly beyond one image edge early,
 //! and such a triangle has no pixel centre in its clamped bounding box, so
@@ -14,7 +15,7 @@
 
 use super::{COORD_LIMIT32, HALF_PIXEL, SUBPIXEL, SUBPIXEL_BITS, ScreenVertex};
 use crate::sampler::camera::Camera;
-use crate::sampler::patch_mesh::SECTION_VERTICES;
+use crate::sampler::patch_mesh::{PointBlock, SECTION_VERTICES};
 use wide::{CmpEq, CmpGt, f32x4, i32x4};
 
 /// Screen positions of one patch section's vertices: snapped `x`, `y` in sub-pixel units
@@ -61,41 +62,42 @@ impl ScreenBatch {
     /// must need no clipping (it lies in a ball [`super::sphere_needs_no_clip`] accepted).
     #[cfg(test)]
     pub(crate) fn project(&mut self, camera: &Camera, points: &[[f32; 3]]) {
-        self.project_from(camera, points, 0);
+        let blocks = crate::sampler::patch_mesh::to_blocks(points);
+        self.project_from(camera, &blocks, 0, points.len());
     }
 
-    /// Projects `points[start..]` (`points` at most [`SECTION_VERTICES`]) into the same
-    /// entries; the ones before `start` keep what they hold. Every point must need no
-    /// clipping (it lies in a ball [`super::sphere_needs_no_clip`] accepted).
-    pub(crate) fn project_from(&mut self, camera: &Camera, points: &[[f32; 3]], start: usize) {
+    /// Projects the points `start..end` of `blocks` (at most [`SECTION_VERTICES`] points)
+    /// into the same entries, whole blocks at a time (the other points of a block land on
+    /// their own entries, with the values they would get anyway); the entries before its
+    /// first block keep what they hold. Every point must need no clipping (it lies in a ball
+    /// [`super::sphere_needs_no_clip`] accepted).
+    #[inline(always)]
+    pub(crate) fn project_from(
+        &mut self,
+        camera: &Camera,
+        blocks: &[PointBlock],
+        start: usize,
+        end: usize,
+    ) {
         let rows = camera.rows32().map(|r| r.map(f32x4::splat));
-        let points = &points[start..];
-        let end = start + points.len();
-        let mut chunks = points.chunks_exact(LANES);
-        let mut out = self.xs[start..end]
+        let blocks = &blocks[start / LANES..end.div_ceil(LANES).min(blocks.len())];
+        let first = start / LANES * LANES;
+        let entries = first..first + blocks.len() * LANES;
+        let out = self.xs[entries.clone()]
             .chunks_exact_mut(LANES)
-            .zip(self.ys[start..end].chunks_exact_mut(LANES))
-            .zip(self.qs[start..end].chunks_exact_mut(LANES))
-            .zip(self.codes[start..end].chunks_exact_mut(LANES));
-        for (chunk, (((xs, ys), qs), codes)) in (&mut chunks).zip(&mut out) {
-            let lanes: &[[f32; 3]; LANES] = chunk.try_into().expect("exact chunk");
-            let ((x, y, q), code) = project_lanes(&rows, lanes);
+            .zip(self.ys[entries.clone()].chunks_exact_mut(LANES))
+            .zip(self.qs[entries.clone()].chunks_exact_mut(LANES))
+            .zip(self.codes[entries].chunks_exact_mut(LANES));
+        for (block, (((xs, ys), qs), codes)) in blocks.iter().zip(out) {
+            let lanes = |k: usize| {
+                f32x4::from(<[f32; LANES]>::try_from(&block[4 * k..][..4]).expect("a block's lane"))
+            };
+            let ((x, y, q), code) =
+                snap_lanes(transform_lanes(&rows, [lanes(0), lanes(1), lanes(2)]));
             xs.copy_from_slice(&x);
             ys.copy_from_slice(&y);
             qs.copy_from_slice(&q);
             codes.copy_from_slice(&code);
-        }
-        let rest = chunks.remainder();
-        if let Some(&last) = rest.last() {
-            let lanes: [[f32; 3]; LANES] =
-                std::array::from_fn(|i| rest.get(i).copied().unwrap_or(last));
-            let ((x, y, q), code) = project_lanes(&rows, &lanes);
-            let tail = end - rest.len()..end;
-            let n = rest.len();
-            self.xs[tail.clone()].copy_from_slice(&x[..n]);
-            self.ys[tail.clone()].copy_from_slice(&y[..n]);
-            self.qs[tail.clone()].copy_from_slice(&q[..n]);
-            self.codes[tail].copy_from_slice(&code[..n]);
         }
     }
 
@@ -205,17 +207,15 @@ pub(crate) fn codes_hold_no_centre([a, b, c]: [u64; 3]) -> bool {
     (differ as u32 == 0) | (differ >> 32 == 0)
 }
 
-/// [`Camera::clip32`] then [`super::snap32`] of four points in SSE2 registers (`wide`), and
-/// their centre codes, `rows` being the camera's binary32 rows splatted: the same IEEE
-/// operations in the same order as the scalar code, so the same bits. Written on `f32x4`
-/// values throughout: as arrays, the transform was left an out-of-line call, and `wide`'s
+/// [`Camera::clip32`] of four points given by their coordinate lanes `[x, y, z]`, `rows`
+/// being the camera's binary32 rows splatted: the same IEEE operations in the same order as
+/// the scalar code, so the same bits (then [`snap_lanes`]). Written on `f32x4` values
+/// throughout: as arrays, the transform was left an out-of-line call, and `wide`'s
 /// NaN-careful `max`, `min` and saturating truncation cost a third of the projection where
 /// the plain instructions are exact (see `snap`).
 #[inline(always)]
-fn project_lanes(rows: &[[f32x4; 4]; 3], p: &[[f32; 3]; LANES]) -> (ScreenLanes, [u64; LANES]) {
-    let coordinate = |k: usize| f32x4::from([p[0][k], p[1][k], p[2][k], p[3][k]]);
-    let (x, y, z) = (coordinate(0), coordinate(1), coordinate(2));
-    snap_lanes(rows.map(|r| r[0] * x + r[1] * y + r[2] * z + r[3]))
+fn transform_lanes(rows: &[[f32x4; 4]; 3], [x, y, z]: [f32x4; 3]) -> [f32x4; 3] {
+    rows.map(|r| r[0] * x + r[1] * y + r[2] * z + r[3])
 }
 
 /// [`super::snap32`] of four clip-space points `[cx, cy, w]`, lane by lane, and their centre
