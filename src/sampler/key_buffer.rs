@@ -195,24 +195,17 @@ impl KeyBuffer {
     /// pixel (no early exit, which would branch per pixel on these few); the tiles' fallback
     /// ([`Self::pixels_occlude`], up to 64 pixels) stops at the first farther one instead
     /// (sharing this loop there measured +1–3 % on the bunny and 6.4M).
-    /// Rectangles one to three pixels wide (most triangles') read each row as an array of
-    /// that width, unrolled, with one bounds check per row instead of a loop over it.
+    /// The rectangle is narrower than [`SMALL_RECT`] (4) pixels: each row is read as an array
+    /// of its width, unrolled, with one bounds check per row instead of a loop over it.
     #[inline(always)]
     fn pixels_all_nearer(&self, rect: [usize; 4], q_bits: u32) -> bool {
         let [x0, y0, x1, y1] = rect;
+        debug_assert!(x1 - x0 < SMALL_RECT as usize);
         match x1 - x0 {
             0 => self.rows_all_nearer::<1>(x0, y0..=y1, q_bits),
             1 => self.rows_all_nearer::<2>(x0, y0..=y1, q_bits),
             2 => self.rows_all_nearer::<3>(x0, y0..=y1, q_bits),
-            _ => {
-                let mut nearer = true;
-                for y in y0..=y1 {
-                    for &k in &self.keys[y * self.resolution..][x0..=x1] {
-                        nearer &= (k >> 32) as u32 > q_bits;
-                    }
-                }
-                nearer
-            }
+            _ => self.rows_all_nearer::<4>(x0, y0..=y1, q_bits),
         }
     }
 
