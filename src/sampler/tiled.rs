@@ -49,7 +49,7 @@ use super::patch_box::{PatchBox, patch_boxes};
 use super::patch_graph::{PatchGraph, faces_away, may_face};
 use super::patch_mesh::{PatchMesh, Storage};
 use super::raster::{
-    DEFAULT_PATHS, ProjectedVertex, ScreenBatch, ScreenVertex, draw_triangle, project,
+    DEFAULT_PATHS, ProjectedVertex, ScreenBatch, ScreenVertex, draw_triangle, prefetch, project,
     scan_triangle_with_area, signed_area, sphere_needs_no_clip, view_planes,
 };
 use super::{SamplingParams, VisibilityMatrix};
@@ -397,6 +397,16 @@ fn hidden(bounds: SphereBounds, keys: &KeyBuffer) -> bool {
     }
 }
 
+/// Prefetches every cache line of `triangles` (see [`prefetch`]): a cluster's triangles
+/// while the one before it is drawn, since a view streams them from memory (6.4M −2 %).
+#[inline(always)]
+fn prefetch_run(triangles: &[[u16; 3]]) {
+    for at in (0..triangles.len()).step_by(64 / 6) {
+        prefetch(triangles, at);
+    }
+    prefetch(triangles, triangles.len().saturating_sub(1));
+}
+
 /// Calls `f` with every set bit of `words`.
 fn for_each_bit(words: impl Iterator<Item = u64>, mut f: impl FnMut(usize)) {
     for (w, mut bits) in words.enumerate() {
@@ -595,10 +605,14 @@ impl ViewContext<'_> {
             for section in self.mesh.sections(p) {
                 let mut projected_to = 0;
                 let mut start = 0;
-                for cluster in section.clusters {
+                prefetch_run(&section.triangles[..section.clusters[0].triangle_end as usize]);
+                for (c, cluster) in section.clusters.iter().enumerate() {
                     let end = cluster.triangle_end as usize;
                     let run = &section.triangles[start..end];
                     start = end;
+                    if let Some(next) = section.clusters.get(c + 1) {
+                        prefetch_run(&section.triangles[end..next.triangle_end as usize]);
+                    }
                     if pass == Pass::Tested
                         && section.clusters.len() > 1
                         && hidden(camera.sphere_bounds(cluster.center, cluster.radius), keys)

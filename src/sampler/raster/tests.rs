@@ -325,24 +325,30 @@ fn unclipped_projection_is_used_only_where_it_equals_the_full_one() {
 #[test]
 fn batched_projection_equals_the_single_one_bit_for_bit() {
     let mut rng = Rng(11);
-    let mut batch = ScreenBatch::default();
-    for (eye, resolution) in [([0.0, 0.0, 5.0], 64), ([3.0, -2.0, 4.0], 512)] {
-        let camera = Camera::look_at(eye, [0.0, 0.0, 0.0], 45.0, resolution);
-        for len in 0..=9 {
-            let mut points: Vec<[f32; 3]> = (0..len)
-                .map(|_| [rng.signed(), rng.signed(), rng.signed()])
-                .collect();
-            // The image centre: a half-pixel tie of the rounding.
-            points.push([0.0, 0.0, 0.0]);
-            batch.project(&camera, &points);
-            for (i, &p) in points.iter().enumerate() {
-                let i = i as u16;
-                let single = project_unclipped(&camera, p).screen;
-                let [v, ..] = batch.triangle([i; 3]);
-                assert_eq!(
-                    (v.x, v.y, v.q.to_bits()),
-                    (single.x, single.y, single.q.to_bits())
-                );
+    // Eight lanes where the CPU has AVX2, and four lanes always.
+    for mut batch in [ScreenBatch::default(), ScreenBatch::default().four_lanes()] {
+        for (eye, resolution) in [([0.0, 0.0, 5.0], 64), ([3.0, -2.0, 4.0], 512)] {
+            let camera = Camera::look_at(eye, [0.0, 0.0, 0.0], 45.0, resolution);
+            for len in 0..=21 {
+                let mut points: Vec<[f32; 3]> = (0..len)
+                    .map(|_| [rng.signed(), rng.signed(), rng.signed()])
+                    .collect();
+                // The image centre: a half-pixel tie of the rounding.
+                points.push([0.0, 0.0, 0.0]);
+                batch.project(&camera, &points);
+                for (i, &p) in points.iter().enumerate() {
+                    let i = i as u16;
+                    let single = project_unclipped(&camera, p).screen;
+                    let [v, ..] = batch.triangle([i; 3]);
+                    assert_eq!(
+                        (v.x, v.y, v.q.to_bits()),
+                        (single.x, single.y, single.q.to_bits())
+                    );
+                    assert_eq!(
+                        batch.holds_no_centre([i; 3]),
+                        codes_hold_no_centre([centre_code(single.x, single.y); 3])
+                    );
+                }
             }
         }
     }
