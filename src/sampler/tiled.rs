@@ -19,14 +19,16 @@
 //! ([`super::sample`]) bit for bit. The mesh is regrouped by patch (`patch_mesh.rs`), so a
 //! view transforms only the vertices of the patches it draws, and patches far from the near
 //! plane and guard band (all of them, in sampling views) skip the clip-plane tests: their
-//! vertices are projected four at a time (`raster/batch.rs`), and a triangle whose bounding
+//! vertices are projected four or eight at a time (`raster/batch.rs`), and a triangle whose bounding
 //! box holds no pixel centre (most of them on meshes much finer than the image) is dropped
 //! after a box test on its corners' centre codes (made with the projection), before its
 //! coordinates are read, winding, deferral or edge setup; in patches whose triangles are
 //! a little smaller than a pixel, where its outcome is a coin toss, that test is branch-free
-//! (a batch of kept triangles is drawn after). On meshes much finer than the image a worker
-//! renders a batch of views together, patch by patch, so that a patch streams from memory
-//! once per batch ([`VIEW_BATCH`]).
+//! (a batch of kept triangles is drawn after). A view streams the patches it draws from
+//! memory (about 55 MB per view at 6.4M triangles), so their vertices and triangles are
+//! prefetched a little ahead of use. (Rendering a batch of views together, patch by patch,
+//! so that a patch streams from memory once per batch, paid before the prefetching: 6.4M
+//! −14 %. With it, it costs: 6.4M +6 %, 20M ±2 %; BENCHMARKS.md, "Tenth pass".)
 //!
 //! Options: `min_pixels` (a patch counts only if it covers that many pixels), `dilate` (also
 //! mark edge neighbours of visible patches that may face the eye), `always_visible` (patches
@@ -34,7 +36,7 @@
 //! checkpoint written after each level (`checkpoint.rs`).
 //! Cost per view: a sphere test per patch, the triangles of the drawn patches (a tile test
 //! for those drawn after the tiles), one pass over the pixels. Memory: one
-//! `resolution² × 8`-byte buffer per thread and view of its batch, the result (one bit per
+//! `resolution² × 8`-byte buffer per thread, the result (one bit per
 //! view and patch), and the regrouped mesh (about 12 bytes per triangle) — on the heap, or in
 //! a mapped temporary file when it would take more than a quarter of
 //! [`SamplingOptions::memory_budget`], so that the heap stays independent of the mesh size.
@@ -155,7 +157,6 @@ pub fn sample_tiled(
     }
     let storage = Storage::for_budget(u64::from(mesh.triangle_count()), options.memory_budget);
     let patch_mesh = PatchMesh::new(mesh, tiling, storage).map_err(SamplingError::TempFile)?;
-    let batch = views_per_batch(tiling, params);
     let context = ViewContext {
         boxes: patch_boxes(&patch_mesh, tiling),
         mesh: patch_mesh,
@@ -164,7 +165,6 @@ pub fn sample_tiled(
         options,
         always,
         back_winding: back_winding(mesh),
-        max_deferred: MAX_DEFERRED / batch,
         graph: options
             .dilate
             .then(|| PatchGraph::new(mesh, &tiling.patch_of, patch_count)),
@@ -178,20 +178,17 @@ pub fn sample_tiled(
         let done: &[u64] = done;
         let new_rows = (view_count(level) - first_view) as usize * words_per_row;
         rest[..new_rows]
-            .par_chunks_mut(words_per_row * batch)
+            .par_chunks_mut(words_per_row)
             .enumerate()
             .for_each_init(
-                || WorkerScratch::new(params.resolution, patch_count, batch),
-                |scratch, (b, rows)| {
-                    let first = first_view + (b * batch) as u32;
-                    let views = rows.len() / words_per_row;
-                    let hints = |view: u32| {
-                        parents(view).map(|pair| {
-                            pair.map(|p| &done[p as usize * words_per_row..][..words_per_row])
-                        })
-                    };
-                    context.render_views(first, hints, scratch, rows);
-                    progress.inc(views as u64);
+                || WorkerScratch::new(params.resolution, patch_count),
+                |scratch, (i, row)| {
+                    let view = first_view + i as u32;
+                    let hint = parents(view).map(|pair| {
+                        pair.map(|p| &done[p as usize * words_per_row..][..words_per_row])
+                    });
+                    context.render_view(view, hint, scratch, row);
+                    progress.inc(1);
                 },
             );
         if let (Some(path), Some(hash)) = (&options.checkpoint, hash) {
@@ -202,38 +199,8 @@ pub fn sample_tiled(
     Ok(matrix)
 }
 
-/// Views one worker renders together on meshes much finer than the image, patch by patch:
-/// each patch's vertices and triangles are read from memory once for all of them and from
-/// the cache for the others. There a view is bound by streaming the patches it draws (about
-/// 55 MB per view at 6.4M triangles), and the views of a batch, consecutive in their level,
-/// draw many of the same patches. Costs one key buffer (`resolution² × 8` bytes) per view
-/// of the batch and thread. Tuned at 6.4M triangles, level 4, 512² (BENCHMARKS.md, "Seventh
-/// pass"): 1 → 4 views −14 %, 8 and 16 within noise of 4.
-const VIEW_BATCH: usize = 4;
-
-/// Below this many pixels of surface per triangle (the mesh's mean at the model centre's
-/// depth, both sides counted) a worker renders [`VIEW_BATCH`] views together, above it one:
-/// where many triangles hold a pixel centre, the key buffers are the working set, and
-/// several of them at once cost more cache than the shared patches save. Measured: the bunny
-/// (2.9 px per triangle) +5 % batched, 1.6M (0.18) +8 %, 6.4M (0.046) −14 %; the threshold
-/// sits between the last two.
-const BATCH_BELOW_PIXELS_PER_TRIANGLE: f64 = 0.1;
-
-/// How many views a worker renders together (see [`VIEW_BATCH`]); always a batch in tests,
-/// so that every test runs whole and partial batches.
-fn views_per_batch(tiling: &Tiling, params: &SamplingParams) -> usize {
-    let scale = Camera::sampling_view(params, 0).pixels_per_unit_at(params.center);
-    let area: f64 = tiling.patches.iter().map(|p| p.area).sum();
-    let triangles = tiling.order.len().max(1) as f64;
-    if cfg!(test) || area * scale * scale / triangles < BATCH_BELOW_PIXELS_PER_TRIANGLE {
-        VIEW_BATCH
-    } else {
-        1
-    }
-}
-
-/// Most back faces a worker's views put off until their occlusion tiles exist (about 40
-/// bytes each, so 10 MiB per thread): on a 20M-triangle mesh the hinted patches hold
+/// Most back faces a view puts off until its occlusion tiles exist (about 40 bytes each, so
+/// 10 MiB per thread): on a 20M-triangle mesh the hinted patches hold
 /// millions of back faces, which would otherwise make the heap grow with the mesh. Tests use
 /// a small cap, so that both ways (put off, drawn at once) run in every test view.
 const MAX_DEFERRED: usize = if cfg!(test) { 64 } else { 1 << 18 };
@@ -284,8 +251,6 @@ struct ViewContext<'a> {
     graph: Option<PatchGraph>,
     /// [`back_winding`] of the mesh.
     back_winding: i64,
-    /// Most back faces one view puts off: [`MAX_DEFERRED`] shared by a worker's views.
-    max_deferred: usize,
 }
 
 /// One view's buffers.
@@ -298,7 +263,7 @@ struct ViewScratch {
     deferred: Vec<([ScreenVertex; 3], u32)>,
 }
 
-/// What drawing one patch needs besides its view's buffers, shared by a worker's views.
+/// What drawing one patch needs besides its view's buffers.
 struct DrawScratch {
     /// Positions in a run of the triangles that hold a pixel centre (`CANDIDATE_BATCH` slots).
     candidates: Box<[u32; CANDIDATE_BATCH]>,
@@ -316,24 +281,22 @@ struct ResolveScratch {
     seen: Vec<u64>,
 }
 
-/// One worker's buffers: a batch of views and what they share.
+/// One worker's buffers, reused view after view.
 struct WorkerScratch {
-    views: Vec<ViewScratch>,
+    view: ViewScratch,
     draw: DrawScratch,
     resolve: ResolveScratch,
 }
 
 impl WorkerScratch {
-    fn new(resolution: u32, patch_count: u32, batch: usize) -> WorkerScratch {
+    fn new(resolution: u32, patch_count: u32) -> WorkerScratch {
         let words = (patch_count as usize).div_ceil(64);
         WorkerScratch {
-            views: (0..batch)
-                .map(|_| ViewScratch {
-                    keys: KeyBuffer::new(resolution),
-                    drawn: vec![0; words],
-                    deferred: Vec::new(),
-                })
-                .collect(),
+            view: ViewScratch {
+                keys: KeyBuffer::new(resolution),
+                drawn: vec![0; words],
+                deferred: Vec::new(),
+            },
             draw: DrawScratch {
                 candidates: Box::new([0; CANDIDATE_BATCH]),
                 projected: Vec::new(),
@@ -445,7 +408,7 @@ impl Placer<'_, '_> {
                 let area = signed_area(tri);
                 // Past the cap a back face is drawn at once: slower (no tile test), same
                 // result, and the heap stays bounded.
-                if area.signum() == context.back_winding && deferred.len() < context.max_deferred {
+                if area.signum() == context.back_winding && deferred.len() < MAX_DEFERRED {
                     deferred.push((tri, self.low));
                     return;
                 }
@@ -463,28 +426,22 @@ impl Placer<'_, '_> {
 }
 
 impl ViewContext<'_> {
-    /// Renders the views `first..` into `rows` (one row per view, at most the worker's batch),
-    /// `hints(view)` giving a view's parents' rows (`None` in the first level). Per view: the
-    /// patches its hints show (every patch in the first level) are drawn first, except their
-    /// triangles that face away from the eye, which are put off; then the occlusion tiles are
-    /// built, and the put-off triangles and the other patches are drawn unless the tiles
-    /// prove them hidden (patches by their bounding sphere and box, then each cluster by its
-    /// sphere, then each triangle by its bounding box). Each pass goes patch by patch over
-    /// all the views, so that a patch is read from memory once per batch; a view's keys do
-    /// not depend on drawing order, so its row is the same as if it were rendered alone.
-    fn render_views<'h>(
+    /// Renders view `index` into `row`, `hint` giving its parents' rows (`None` in the first
+    /// level). The patches its hints show (every patch in the first level) are drawn first,
+    /// except their triangles that face away from the eye, which are put off; then the
+    /// occlusion tiles are built, and the put-off triangles and the other patches are drawn
+    /// unless the tiles prove them hidden (patches by their bounding sphere and box, then each
+    /// cluster by its sphere, then each triangle by its bounding box). The keys do not depend
+    /// on drawing order, so the row equals a brute-force render's.
+    fn render_view(
         &self,
-        first: u32,
-        hints: impl Fn(u32) -> Option<[&'h [u64]; 2]>,
+        index: u32,
+        hint: Option<[&[u64]; 2]>,
         scratch: &mut WorkerScratch,
-        rows: &mut [u64],
+        row: &mut [u64],
     ) {
         let patch_count = self.mesh.patch_count();
-        let words = patch_count.div_ceil(64);
-        let count = rows.len() / words;
-        let cameras: Vec<Camera> = (0..count)
-            .map(|i| Camera::sampling_view(self.params, first + i as u32))
-            .collect();
+        let camera = Camera::sampling_view(self.params, index);
         let valid = |w: usize| {
             if (w + 1) * 64 <= patch_count {
                 u64::MAX
@@ -493,80 +450,51 @@ impl ViewContext<'_> {
             }
         };
         let WorkerScratch {
-            views,
+            view,
             draw,
             resolve,
         } = scratch;
-        let views = &mut views[..count];
-        for (i, view) in views.iter_mut().enumerate() {
-            view.deferred.clear();
-            // A hinted patch that wholly faces away makes a poor occluder and is often
-            // hidden: it is left to the tested pass. Always-visible patches are always drawn
-            // first.
-            let eye = cameras[i].eye();
-            let hint = hints(first + i as u32);
-            for (w, d) in view.drawn.iter_mut().enumerate() {
-                let hinted = hint.map_or(u64::MAX, |[a, b]| a[w] | b[w]) & valid(w);
-                let mut away = 0u64;
-                for_each_bit(std::iter::once(hinted), |k| {
-                    if faces_away(&self.tiling.patches[w * 64 + k], eye) {
-                        away |= 1 << k;
-                    }
-                });
-                *d = (hinted & !away) | (self.always[w] & valid(w));
-            }
-        }
-        for w in 0..words {
-            let union = views.iter().fold(0, |acc, v| acc | v.drawn[w]);
-            for_each_bit(std::iter::once(union), |k| {
-                let p = w * 64 + k;
-                for (camera, view) in cameras.iter().zip(views.iter_mut()) {
-                    if view.drawn[w] >> k & 1 == 1 {
-                        self.draw_patch(p, camera, view, draw, Pass::First);
-                    }
+        view.deferred.clear();
+        // A hinted patch that wholly faces away makes a poor occluder and is often hidden: it
+        // is left to the tested pass. Always-visible patches are always drawn first.
+        let eye = camera.eye();
+        for (w, d) in view.drawn.iter_mut().enumerate() {
+            let hinted = hint.map_or(u64::MAX, |[a, b]| a[w] | b[w]) & valid(w);
+            let mut away = 0u64;
+            for_each_bit(std::iter::once(hinted), |k| {
+                if faces_away(&self.tiling.patches[w * 64 + k], eye) {
+                    away |= 1 << k;
                 }
             });
+            *d = (hinted & !away) | (self.always[w] & valid(w));
         }
-        let conservative = self.options.conservative;
-        for (camera, view) in cameras.iter().zip(views.iter_mut()) {
-            view.keys.build_tiles();
-            let ViewScratch { keys, deferred, .. } = view;
-            for &(screen, low) in deferred.iter() {
-                if !keys.triangle_hidden(screen, conservative) {
-                    let area = signed_area(screen);
-                    self.scan(screen, area, low, camera.resolution(), keys);
-                }
+        for w in 0..view.drawn.len() {
+            for_each_bit(std::iter::once(view.drawn[w]), |k| {
+                self.draw_patch(w * 64 + k, &camera, view, draw, Pass::First);
+            });
+        }
+        view.keys.build_tiles();
+        let ViewScratch { keys, deferred, .. } = &mut *view;
+        for &(screen, low) in deferred.iter() {
+            if !keys.triangle_hidden(screen, self.options.conservative) {
+                let area = signed_area(screen);
+                self.scan(screen, area, low, camera.resolution(), keys);
             }
         }
-        for w in 0..words {
-            let rest = views
-                .iter()
-                .fold(0, |acc, v| acc | (!v.drawn[w] & valid(w)));
-            for_each_bit(std::iter::once(rest), |k| {
+        for w in 0..view.drawn.len() {
+            for_each_bit(std::iter::once(!view.drawn[w] & valid(w)), |k| {
                 let p = w * 64 + k;
                 let patch = &self.tiling.patches[p];
-                for (camera, view) in cameras.iter().zip(views.iter_mut()) {
-                    if view.drawn[w] >> k & 1 == 1 {
-                        continue;
-                    }
-                    // The sphere first (cheap), then the tighter box (8 projections).
-                    let visible =
-                        !hidden(camera.sphere_bounds(patch.center, patch.radius), &view.keys)
-                            && !hidden(camera.hull_bounds(&self.boxes[p].corners()), &view.keys);
-                    if visible {
-                        self.draw_patch(p, camera, view, draw, Pass::Tested);
-                    }
+                // The sphere first (cheap), then the tighter box (8 projections).
+                let visible = !hidden(camera.sphere_bounds(patch.center, patch.radius), &view.keys)
+                    && !hidden(camera.hull_bounds(&self.boxes[p].corners()), &view.keys);
+                if visible {
+                    self.draw_patch(p, &camera, view, draw, Pass::Tested);
                 }
             });
         }
-        // Resolving empties each key buffer for the worker's next batch.
-        for ((camera, view), row) in cameras
-            .iter()
-            .zip(views.iter_mut())
-            .zip(rows.chunks_mut(words))
-        {
-            self.resolve(camera, &mut view.keys, resolve, row);
-        }
+        // Resolving empties the key buffer for the worker's next view.
+        self.resolve(&camera, &mut view.keys, resolve, row);
     }
 
     /// Draws the triangles of patch `p` into `view`'s key buffer: in the first pass all but

@@ -5,7 +5,7 @@
 //! regrouped mesh's blocks (`patch_mesh::PointBlock`), the transform, division and rounding
 //! in `wide`'s `f32x4` (SSE2, safe code); eight at a time in AVX2 registers where the CPU
 //! has them (`wide8`, chosen at run time; same operations, same bits). The blocks are
-//! streamed from memory (each patch once per batch of views), so they are prefetched a
+//! streamed from memory (a view reads every patch it draws), so they are prefetched a
 //! little ahead of use.
 //! Only patches that need no clipping come here (see [`super::sphere_needs_no_clip`]), so
 //! outcodes are not computed: they only reject triangles wholly beyond one image edge early,
