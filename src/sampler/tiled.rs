@@ -19,10 +19,10 @@
 //! ([`super::sample`]) bit for bit. The mesh is regrouped by patch (`patch_mesh.rs`), so a
 //! view transforms only the vertices of the patches it draws, and patches far from the near
 //! plane and guard band (all of them, in sampling views) skip the clip-plane tests: their
-//! vertices are projected four or eight at a time (`raster/batch.rs`), and a triangle whose bounding
-//! box holds no pixel centre (most of them on meshes much finer than the image) is dropped
-//! after a box test on its corners' centre codes (made with the projection), before its
-//! coordinates are read, winding, deferral or edge setup; in patches whose triangles are
+//! vertices are projected four or eight at a time (`raster/batch.rs`), and a triangle whose
+//! bounding box holds no pixel centre (most of them on meshes much finer than the image) is
+//! dropped after a box test on its corners' centre codes (made with the projection), before
+//! its coordinates are read, winding, deferral or edge setup; in patches whose triangles are
 //! a little smaller than a pixel, where its outcome is a coin toss, that test is branch-free
 //! (a batch of kept triangles is drawn after). A view streams the patches it draws from
 //! memory (about 55 MB per view at 6.4M triangles), so their vertices and triangles are
@@ -36,8 +36,8 @@
 //! checkpoint written after each level (`checkpoint.rs`).
 //! Cost per view: a sphere test per patch, the triangles of the drawn patches (a tile test
 //! for those drawn after the tiles), one pass over the pixels. Memory: one
-//! `resolution² × 8`-byte buffer per thread, the result (one bit per
-//! view and patch), and the regrouped mesh (about 12 bytes per triangle) — on the heap, or in
+//! `resolution² × 8`-byte buffer per thread, the result (one bit per view and patch), and
+//! the regrouped mesh (about 12 bytes per triangle) — on the heap, or in
 //! a mapped temporary file when it would take more than a quarter of
 //! [`SamplingOptions::memory_budget`], so that the heap stays independent of the mesh size.
 //! **Invariant**: the result is the same for any number of threads, and with or without a
@@ -200,9 +200,9 @@ pub fn sample_tiled(
 }
 
 /// Most back faces a view puts off until its occlusion tiles exist (about 40 bytes each, so
-/// 10 MiB per thread): on a 20M-triangle mesh the hinted patches hold
-/// millions of back faces, which would otherwise make the heap grow with the mesh. Tests use
-/// a small cap, so that both ways (put off, drawn at once) run in every test view.
+/// 10 MiB per thread): on a 20M-triangle mesh the hinted patches hold millions of back
+/// faces, which would otherwise make the heap grow with the mesh. Tests use a small cap, so
+/// that both ways (put off, drawn at once) run in every test view.
 const MAX_DEFERRED: usize = if cfg!(test) { 64 } else { 1 << 18 };
 
 /// How a patch's triangle loop finds the triangles whose bounding box holds a pixel centre

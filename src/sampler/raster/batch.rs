@@ -508,7 +508,8 @@ mod tests {
             // operands of an addition, and x86 passes on the first NaN operand); every NaN
             // depth draws nothing, so any NaN is as good as another.
             let bits = |q: &[f32]| {
-                q.iter().map(|v| if v.is_nan() { u32::MAX } else { v.to_bits() }).collect::<Vec<_>>()
+                let bits = |v: &f32| if v.is_nan() { u32::MAX } else { v.to_bits() };
+                q.iter().map(bits).collect::<Vec<_>>()
             };
             prop_assert_eq!(&four.0, &eight.0);
             prop_assert_eq!(&four.1, &eight.1);
