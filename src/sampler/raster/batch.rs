@@ -14,7 +14,8 @@
 //! Beside each snapped vertex goes its centre code (`codes_hold_no_centre`), from which the
 //! triangle loop tells sub-pixel triangles that hold no pixel centre (at 6.4M triangles 93 %
 //! of those looped) without reading their coordinates.
-//! Cost: per vertex one `f32` transform, a division and two roundings, four lanes at a time.
+//! Cost: per vertex one `f32` transform, a division and two roundings, four or eight lanes at
+//! a time.
 
 use super::{COORD_LIMIT32, HALF_PIXEL, SUBPIXEL, SUBPIXEL_BITS, ScreenVertex};
 use crate::sampler::camera::Camera;
@@ -61,8 +62,8 @@ impl Default for ScreenBatch {
 /// How many blocks (48 bytes each) ahead of the projection its vertex blocks are
 /// prefetched. Without it the loads of the blocks were a quarter of the projection's time
 /// (memory latency: the hardware prefetcher starts late on runs of a few kB). Tuned at 6.4M
-/// triangles, level 4, 512²: 8, 16 and 32 within noise of each other, 32 best in both rounds;
-/// all of them −6 % against none (BENCHMARKS.md, "Tenth pass").
+/// triangles, level 4, 512²: 16 was −6 % against none; 8, 16 and 32 within noise of each
+/// other, 32 best in both rounds (BENCHMARKS.md, "Tenth pass").
 const BLOCKS_AHEAD: usize = 32;
 
 /// Asks the CPU to bring the cache line holding `items[at]` into its caches, ahead of use;
