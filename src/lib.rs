@@ -25,6 +25,8 @@ pub mod format;
 #[cfg(feature = "bake")]
 pub mod generate;
 #[cfg(feature = "bake")]
+pub mod heap;
+#[cfg(feature = "bake")]
 pub mod ooc;
 #[cfg(feature = "bake")]
 pub mod progress;

@@ -10,7 +10,7 @@ use cli::args::{Cli, Command};
 use std::process::ExitCode;
 
 #[global_allocator]
-static ALLOC: cli::alloc::CountingAlloc = cli::alloc::CountingAlloc;
+static ALLOC: patchvis::heap::CountingAlloc = patchvis::heap::CountingAlloc;
 
 fn main() -> ExitCode {
     let parsed = match Cli::try_parse() {

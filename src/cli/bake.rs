@@ -3,7 +3,8 @@
 
 use super::args::{BackendArg, BakeArgs, EncodingArg, FoldCornersArg, PatchOrderArg, TilingArg};
 use super::progress::Bars;
-use super::{UsageError, alloc};
+use super::UsageError;
+use patchvis::heap;
 use anyhow::{Context, Result};
 use patchvis::format::{self, BakeContents};
 use patchvis::ooc::{Mesh, OpenOptions, default_cache_dir};
@@ -375,13 +376,13 @@ struct StageRecord {
 }
 
 fn stage<T>(records: &mut Vec<StageRecord>, name: &'static str, f: impl FnOnce() -> T) -> T {
-    alloc::reset_peak();
+    heap::reset_peak();
     let start = Instant::now();
     let out = f();
     records.push(StageRecord {
         name,
         seconds: start.elapsed().as_secs_f64(),
-        peak_heap_bytes: alloc::peak(),
+        peak_heap_bytes: heap::peak(),
     });
     out
 }

@@ -1,6 +1,5 @@
 //! The binary's modules: flags, the commands, and the process-wide helpers they need.
 
-pub mod alloc;
 pub mod args;
 pub mod bake;
 pub mod eval;

@@ -1,7 +1,12 @@
-//! A counting global allocator, so `--stats` can report peak heap per stage.
+//! A counting global allocator, so that a bake can report its peak heap per stage and tests
+//! can hold a stage to its memory budget.
 //!
 //! Wraps the system allocator with two relaxed atomics (current and peak bytes); the cost is
-//! a few nanoseconds per allocation, negligible next to what the stages allocate.
+//! a few nanoseconds per allocation, negligible next to what the stages allocate. A program
+//! opts in by installing it (`#[global_allocator] static A: patchvis::heap::CountingAlloc =
+//! patchvis::heap::CountingAlloc;`, as the `patchvis` binary does); without it, [`peak`] and
+//! [`current`] stay 0 and [`is_counting`] says so. The one `unsafe impl` forwards every call
+//! to `System` unchanged.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -62,4 +67,14 @@ pub fn reset_peak() {
 /// Highest live heap bytes since the last [`reset_peak`].
 pub fn peak() -> usize {
     PEAK.load(Ordering::Relaxed)
+}
+
+/// Live heap bytes now.
+pub fn current() -> usize {
+    CURRENT.load(Ordering::Relaxed)
+}
+
+/// Whether [`CountingAlloc`] is the global allocator (it has seen an allocation).
+pub fn is_counting() -> bool {
+    PEAK.load(Ordering::Relaxed) > 0 || CURRENT.load(Ordering::Relaxed) > 0
 }
