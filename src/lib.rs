@@ -19,13 +19,19 @@ pub mod runtime;
 pub mod sphere;
 
 #[cfg(feature = "bake")]
+pub mod bake;
+#[cfg(feature = "bake")]
 pub mod eval;
 #[cfg(feature = "bake")]
 pub mod format;
 #[cfg(feature = "bake")]
 pub mod generate;
+#[cfg(feature = "gpu")]
+pub mod gpu;
 #[cfg(feature = "bake")]
 pub mod heap;
+#[cfg(feature = "bake")]
+pub mod memory;
 #[cfg(feature = "bake")]
 pub mod ooc;
 #[cfg(feature = "bake")]
@@ -34,6 +40,8 @@ pub mod progress;
 pub mod sampler;
 #[cfg(feature = "bake")]
 pub mod tiling;
+#[cfg(feature = "bake")]
+pub mod visibility;
 
 #[cfg(all(feature = "bake", not(feature = "std")))]
 compile_error!("the `bake` feature needs `std`");

@@ -236,7 +236,7 @@ pub struct InfoArgs {
     #[arg(long)]
     pub json: bool,
     /// Also print the visibility payload's size next to the raw matrix and the raw matrix
-    /// compressed by `zstd -19` and `xz -9` (when those tools are installed).
+    /// compressed by `zstd -19` and `xz -9` (done in-process; no external tools needed).
     #[arg(long)]
     pub compare: bool,
 }
@@ -272,8 +272,10 @@ pub struct QueryArgs {
 /// `patchvis eval`.
 #[derive(Debug, clap::Args)]
 pub struct EvalArgs {
-    /// The mesh the file was baked from: the original input, not the --mesh-out PLY (the
-    /// triangle → patch map is re-derived by tiling it again, and checked against the file).
+    /// The mesh the file was baked from: the bake's --mesh-out PLY (in the file's patch
+    /// order; every patch's bounds are checked against the file), or the original input
+    /// (tiled again with --memory and --tiling, which must be the bake's when it tiled out of
+    /// core, and checked against the file).
     pub mesh: PathBuf,
     /// The .pvis file (not with --sweep, which bakes its own).
     #[arg(required_unless_present = "sweep", value_name = "FILE.pvis")]
@@ -349,6 +351,16 @@ pub struct EvalArgs {
     /// Print nothing but the report and errors; no progress.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Heap budget, e.g. 256MiB (default: half the available memory, at least 256 MiB): the
+    /// re-tiling of an original mesh and the views rendered at once keep within it.
+    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    pub memory: Option<u64>,
+    /// Tiling algorithm when the mesh must be tiled again (the bake's --tiling).
+    #[arg(long, value_enum, default_value_t = TilingArg::Auto, value_name = "MODE")]
+    pub tiling: TilingArg,
+    /// Write timings and peak heap per stage as JSON.
+    #[arg(long, value_name = "STATS.json", conflicts_with = "sweep")]
+    pub stats: Option<PathBuf>,
 }
 
 /// `eval --sweep-mode`.

@@ -3,23 +3,29 @@
 //! the worst views and SVG plots.
 
 use super::UsageError;
+use super::args::TilingArg;
 use super::args::{EvalArgs, SweepModeArg};
-use super::bake;
 use super::eval_frame::{FrameBackend, frame_json, print_frame};
 use super::progress::Bars;
 use anyhow::{Context, Result, anyhow};
+use patchvis::bake::{
+    BakeSettings, DEFAULT_FOLD_CORNERS, DEFAULT_FOLD_MIN_PIXELS, DEFAULT_VIEW_SUPERSAMPLE,
+    MemoryBudget, Stages,
+};
 use patchvis::eval::plot::{self, Axis, Chart, Series};
 use patchvis::eval::shade::RgbImage;
 use patchvis::eval::views::{self, PathCamera};
 use patchvis::eval::{
-    EvalSummary, Evaluator, SweepMode, SweepPoint, SweepSettings, ViewMetrics, metrics::Summary,
+    EvalOptions, EvalSummary, Evaluator, SweepPoint, SweepSettings, ViewMetrics, metrics::Summary,
     sampling_params,
 };
 use patchvis::format::write_atomic;
 use patchvis::ooc::Mesh;
 use patchvis::runtime::Pvis;
+use patchvis::sampler::FoldCorners;
 use patchvis::sampler::{Camera, MAX_RESOLUTION};
 use patchvis::sphere::{MAX_LEVEL, view_count};
+use patchvis::tiling::TilingMode;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -110,18 +116,36 @@ pub fn run(args: EvalArgs) -> Result<()> {
         .clone()
         .ok_or_else(|| UsageError("expected FILE.pvis (or --sweep)".into()))?;
 
+    if let Some(stats) = &args.stats {
+        super::bake::check_output_path(stats)?;
+    }
     let bars = Bars::new(!args.quiet && !args.json);
     let start = Instant::now();
-    let mesh = Mesh::open(&args.mesh)?;
-    let bytes = std::fs::read(&file).with_context(|| format!("{}: cannot read", file.display()))?;
-    let pvis = Pvis::parse(&bytes).map_err(|e| anyhow!("{}: {e}", file.display()))?;
-    let evaluator = Evaluator::new(&mesh, &pvis).map_err(|e| {
-        anyhow!(
-            "{} was not baked from {} with these settings: {e}",
-            file.display(),
-            args.mesh.display()
+    let options = EvalOptions {
+        memory: memory_budget(&args),
+        tiling: tiling_mode(args.tiling),
+    };
+    let mut stages = Stages::new();
+    let mesh = stages.run("input", || {
+        Mesh::open_with(
+            &args.mesh,
+            &patchvis::ooc::OpenOptions {
+                memory_budget: options.memory.split().input,
+                ..Default::default()
+            },
         )
     })?;
+    let bytes = std::fs::read(&file).with_context(|| format!("{}: cannot read", file.display()))?;
+    let pvis = Pvis::parse(&bytes).map_err(|e| anyhow!("{}: {e}", file.display()))?;
+    let evaluator = stages
+        .run("patches", || Evaluator::new(&mesh, &pvis, &options))
+        .map_err(|e| {
+            anyhow!(
+                "{} was not baked from {} with these settings: {e}",
+                file.display(),
+                args.mesh.display()
+            )
+        })?;
     // After the inputs are checked, so that their errors come first and alone (probing for
     // an adapter can make the driver write to stderr), before the long evaluation, so that a
     // missing GPU fails soon.
@@ -153,12 +177,30 @@ pub fn run(args: EvalArgs) -> Result<()> {
             path_cameras(path, &sampling.center, sampling.fov_deg, resolution)?
         }
     };
-    let metrics = evaluator.evaluate(&pvis, &cameras, &bars);
+    let metrics = stages.run("eval", || evaluator.evaluate(&pvis, &cameras, &bars));
     let summary = EvalSummary::of(&metrics);
     // After the CPU evaluation, never beside it: a software GPU shares its cores.
     let gpu = frame_backend.measure(&evaluator, &pvis, &cameras, &bars)?;
     let seconds = start.elapsed().as_secs_f64();
     let is_path = matches!(views, Views::Orbit { .. } | Views::PathFile(_));
+    if let Some(path) = &args.stats {
+        let report = json!({
+            "mesh": args.mesh.display().to_string(),
+            "file": file.display().to_string(),
+            "triangles": mesh.triangle_count(),
+            "patches_from": if evaluator.order().is_some() { "tiling" } else { "mesh order" },
+            "memory_budget_bytes": options.memory.total(),
+            "workers": evaluator.workers(resolution),
+            "seconds": seconds,
+            "peak_heap_bytes": stages.peak_heap_bytes(),
+            "stages": stages.records().iter().map(|r| json!({
+                "name": r.name, "seconds": r.seconds, "peak_heap_bytes": r.peak_heap_bytes,
+            })).collect::<Vec<_>>(),
+        });
+        let text = serde_json::to_string_pretty(&report)? + "\n";
+        write_atomic(path, text.as_bytes())
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+    }
 
     let mut written = Vec::new();
     if let Some(dir) = &args.png {
@@ -243,6 +285,21 @@ pub fn run(args: EvalArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// `--memory`, or half the available memory.
+fn memory_budget(args: &EvalArgs) -> MemoryBudget {
+    args.memory
+        .map_or_else(MemoryBudget::from_available_memory, MemoryBudget::new)
+}
+
+/// `--tiling`.
+fn tiling_mode(arg: TilingArg) -> TilingMode {
+    match arg {
+        TilingArg::Auto => TilingMode::Auto,
+        TilingArg::InCore => TilingMode::InCore,
+        TilingArg::OutOfCore => TilingMode::OutOfCore,
+    }
 }
 
 /// The picture directory: created if missing; anything else there is a usage error.
@@ -483,36 +540,34 @@ fn run_sweep(args: &EvalArgs) -> Result<()> {
             )
         },
     )?;
+    let memory = memory_budget(args);
     let settings = SweepSettings {
         patches: args.sweep_patches.clone(),
         levels: args.sweep_levels.clone(),
-        resolution: args.resolution.unwrap_or(DEFAULT_SWEEP_RESOLUTION),
-        fov_deg: args.fov,
+        bake: BakeSettings {
+            resolution: args.resolution.unwrap_or(DEFAULT_SWEEP_RESOLUTION),
+            fov_deg: args.fov,
+            // Plain: the stored views' own patches (`bake --view-supersample 0`); default:
+            // what a default `patchvis bake` writes at every level.
+            view_supersample: match args.sweep_mode {
+                SweepModeArg::Plain => Some(0),
+                SweepModeArg::Default => None,
+            },
+            tiling: tiling_mode(args.tiling),
+            memory,
+            ..BakeSettings::default()
+        },
         views: args.views,
         seed: args.seed,
         distance_scale: args.distance_scale,
-        mode: match args.sweep_mode {
-            SweepModeArg::Plain => SweepMode::Plain,
-            // A default `patchvis bake`, at every level (the fold's extra levels capped at
-            // MAX_LEVEL by the sweep, as by `bake`).
-            SweepModeArg::Default => SweepMode::Supersampled {
-                extra_levels: bake::DEFAULT_VIEW_SUPERSAMPLE,
-                fold_min_pixels: bake::DEFAULT_FOLD_MIN_PIXELS,
-                fold_corners: bake::DEFAULT_FOLD_CORNERS,
-            },
-        },
     };
-    let mode_name = match settings.mode {
-        SweepMode::Plain => "plain".to_string(),
-        SweepMode::Supersampled {
-            extra_levels,
-            fold_min_pixels,
-            fold_corners,
-        } => format!(
-            "as bake's default (--view-supersample {extra_levels} --fold-min-pixels {fold_min_pixels} --fold-corners {})",
-            match fold_corners {
-                patchvis::sampler::FoldCorners::All => "all",
-                patchvis::sampler::FoldCorners::One => "one",
+    let mode_name = match args.sweep_mode {
+        SweepModeArg::Plain => "plain".to_string(),
+        SweepModeArg::Default => format!(
+            "as bake's default (--view-supersample {DEFAULT_VIEW_SUPERSAMPLE} --fold-min-pixels {DEFAULT_FOLD_MIN_PIXELS} --fold-corners {})",
+            match DEFAULT_FOLD_CORNERS {
+                FoldCorners::All => "all",
+                FoldCorners::One => "one",
             }
         ),
     };
@@ -564,8 +619,8 @@ fn run_sweep(args: &EvalArgs) -> Result<()> {
         let report = json!({
             "mesh": args.mesh.display().to_string(),
             "triangles": mesh.triangle_count(),
-            "resolution": settings.resolution,
-            "fov_deg": settings.fov_deg,
+            "resolution": settings.bake.resolution,
+            "fov_deg": settings.bake.fov_deg,
             "views": settings.views,
             "seed": settings.seed,
             "distance_scale": settings.distance_scale,
@@ -582,7 +637,7 @@ fn run_sweep(args: &EvalArgs) -> Result<()> {
             mesh.triangle_count(),
             settings.views,
             settings.seed,
-            settings.resolution
+            settings.bake.resolution
         );
         println!(
             "| patches | level | views | file bytes | culling | ideal culling | identical views | views with a miss | missed px mean / p95 / max |"

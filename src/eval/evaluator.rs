@@ -12,14 +12,17 @@
 //! the pixels (to compare).
 
 use super::metrics;
-use super::shade::{RgbImage, Shader, face_normals};
+use super::shade::{RgbImage, Shader, face_normal};
+use crate::bake::BakeError;
+use crate::memory::MemoryBudget;
 use crate::ooc::Mesh;
 use crate::progress::Progress;
 use crate::runtime::Pvis;
 use crate::sampler::{Camera, IdBuffer, NO_PATCH, Rasterizer, SamplingParams};
-use crate::tiling::{self, PatchId, Tiling};
+use crate::tiling::{self, PatchId, Tiling, TilingMode, TilingOptions, TriangleMap};
 use rayon::prelude::*;
 use std::collections::{HashMap, VecDeque};
+use std::ops::Range;
 use std::time::Instant;
 
 /// Why a `.pvis` cannot be evaluated against a mesh.
@@ -35,9 +38,10 @@ pub enum EvalError {
         /// Triangles in the mesh.
         mesh: u32,
     },
-    /// Re-tiling the mesh gave other patches than the file holds.
+    /// The mesh is neither in the file's patch order with the file's bounds (a `--mesh-out`
+    /// mesh) nor tiles into the file's patches.
     #[error(
-        "patch {patch}: the file has triangles {file_first}+{file_count}, re-tiling the mesh gives {mesh_first}+{mesh_count} (or other bounds): the file was not baked from this mesh with these settings"
+        "patch {patch}: the file has triangles {file_first}+{file_count}, the mesh gives {mesh_first}+{mesh_count} (or other bounds): the file was not baked from this mesh with these settings (evaluate the bake's --mesh-out mesh, or pass the bake's --memory and --tiling)"
     )]
     PatchMismatch {
         /// First differing patch.
@@ -46,9 +50,9 @@ pub enum EvalError {
         file_first: u32,
         /// Its triangle count in the file.
         file_count: u32,
-        /// Its first triangle after re-tiling.
+        /// Its first triangle in the mesh (or its re-tiling).
         mesh_first: u32,
-        /// Its triangle count after re-tiling.
+        /// Its triangle count there.
         mesh_count: u32,
     },
     /// Tiling the mesh failed.
@@ -57,11 +61,34 @@ pub enum EvalError {
     /// A temporary file for the renumbered tiling could not be written.
     #[error("cannot write a temporary file for the tiling: {0}")]
     TempFile(String),
-    /// Sampling the mesh (`eval --sweep`'s bakes) failed; the sampler's error as text, so
-    /// that this error stays `Clone` and comparable. Only a checkpoint file makes sampling
-    /// fail, and the sweep writes none.
-    #[error("sampling the mesh failed: {0}")]
-    Sampling(String),
+    /// A sweep setting is out of range.
+    #[error("{0}")]
+    Settings(String),
+    /// A sweep's bake failed; its error as text, so that this error stays `Clone` and
+    /// comparable.
+    #[error("{0}")]
+    Bake(String),
+}
+
+impl EvalError {
+    /// A bake error of `eval --sweep`.
+    pub(crate) fn bake(e: BakeError) -> EvalError {
+        match e {
+            BakeError::Tiling(t) => EvalError::Tiling(t),
+            BakeError::Settings(m) => EvalError::Settings(m),
+            other => EvalError::Bake(other.to_string()),
+        }
+    }
+}
+
+/// How [`Evaluator::new`] finds a file's patches in a mesh, and within which heap.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EvalOptions {
+    /// The heap budget: bounds the tiling (when the mesh must be tiled again) and the number
+    /// of views rendered at once.
+    pub memory: MemoryBudget,
+    /// The tiling algorithm, when the mesh must be tiled again (the bake's `--tiling`).
+    pub tiling: TilingMode,
 }
 
 /// What one view shows: the full render against the render of the query's answer.
@@ -107,45 +134,100 @@ pub struct Pictures {
     pub difference: RgbImage,
 }
 
-/// A mesh, the tiling of it that a `.pvis` was baked with, and what evaluation needs per
-/// triangle. Holds no reference to the file, so one evaluator serves several files baked with
-/// the same patch count (`sweep`).
+/// A mesh, where each patch of a `.pvis` lies in it, and what evaluation needs per view.
+/// Holds no reference to the file, so one evaluator serves several files baked with the same
+/// patches (`sweep`).
+///
+/// Memory: the file's patch order of the triangles (4 bytes per triangle, memory-mapped when
+/// the tiling was; nothing for a `--mesh-out` mesh, already in that order), one start per
+/// patch, and per worker two ID buffers and the projected vertices (16 bytes per vertex).
 pub struct Evaluator<'m> {
     mesh: &'m Mesh,
-    tiling: Tiling,
-    patch_triangles: Vec<u32>,
-    identity: Vec<u32>,
-    normals: Vec<[f32; 3]>,
+    /// `order[i]` is the mesh triangle at position `i` of the file's patch order; `None` when
+    /// the mesh is in that order already.
+    order: Option<TriangleMap>,
+    /// Patch `p` holds positions `starts[p]..starts[p + 1]`.
+    starts: Vec<u32>,
+    /// The heap budget of the evaluation.
+    budget: u64,
 }
 
 impl<'m> Evaluator<'m> {
-    /// Re-derives the triangle → patch map of `pvis` by tiling `mesh` again (tiling is
-    /// deterministic) and matching every patch record of the file — triangle count, bounding
-    /// sphere, normal cone, bit for bit — to one of the tiling's, in whatever numbering the
-    /// file uses (see `match_tiling`).
-    pub fn new(mesh: &'m Mesh, pvis: &Pvis<'_>) -> Result<Evaluator<'m>, EvalError> {
+    /// Finds the patches of `pvis` in `mesh`: a mesh in the file's patch order (the bake's
+    /// `--mesh-out`) is used as it is, once every patch's triangle range gives the file's
+    /// bounding sphere and normal cone bit for bit; any other mesh is tiled again with
+    /// `options` (tiling is deterministic, so the bake's `--memory` and `--tiling` give the
+    /// bake's patches) and every patch record of the file — triangle count, bounding sphere,
+    /// normal cone, bit for bit — is matched to one of the tiling's, in whatever numbering
+    /// the file uses (see `match_tiling`).
+    pub fn new(
+        mesh: &'m Mesh,
+        pvis: &Pvis<'_>,
+        options: &EvalOptions,
+    ) -> Result<Evaluator<'m>, EvalError> {
         if pvis.triangle_count() != u64::from(mesh.triangle_count()) {
             return Err(EvalError::TriangleCount {
                 file: pvis.triangle_count(),
                 mesh: mesh.triangle_count(),
             });
         }
-        let tiling = tiling::tile(mesh, pvis.patch_count())?;
+        let starts = file_starts(pvis);
+        let budget = options.memory.split().eval;
+        if in_file_order(mesh, pvis, 0) {
+            if let Some(p) = (0..pvis.patch_count())
+                .into_par_iter()
+                .find_first(|&p| !in_file_order(mesh, pvis, p))
+            {
+                let f = pvis.patch(p);
+                return Err(EvalError::PatchMismatch {
+                    patch: p,
+                    file_first: f.first_triangle,
+                    file_count: f.triangle_count,
+                    mesh_first: f.first_triangle,
+                    mesh_count: f.triangle_count,
+                });
+            }
+            return Ok(Evaluator::with_order(mesh, None, starts, budget));
+        }
+        let tiling = tiling::tile_with(
+            mesh,
+            pvis.patch_count(),
+            &TilingOptions {
+                mode: options.tiling,
+                memory_budget: options.memory.split().tiling,
+            },
+        )?;
         let order = match_tiling(&tiling, pvis)?;
         let tiling = tiling
             .renumbered(&order)
             .map_err(|e| EvalError::TempFile(e.to_string()))?;
-        Ok(Evaluator::from_tiling(mesh, tiling))
+        Ok(Evaluator::with_order(
+            mesh,
+            Some(tiling.order),
+            starts,
+            budget,
+        ))
     }
 
-    /// An evaluator for files baked from `mesh` with `tiling` (unchecked: the caller made both).
-    pub fn from_tiling(mesh: &'m Mesh, tiling: Tiling) -> Evaluator<'m> {
+    /// An evaluator for files baked from `mesh` with `tiling`, in its numbering (unchecked:
+    /// the caller made both).
+    pub fn from_tiling(mesh: &'m Mesh, tiling: &Tiling) -> Evaluator<'m> {
+        let mut starts: Vec<u32> = tiling.patches.iter().map(|p| p.first).collect();
+        starts.push(mesh.triangle_count());
+        Evaluator::with_order(mesh, Some(tiling.order.clone()), starts, u64::MAX)
+    }
+
+    fn with_order(
+        mesh: &'m Mesh,
+        order: Option<TriangleMap>,
+        starts: Vec<u32>,
+        budget: u64,
+    ) -> Evaluator<'m> {
         Evaluator {
             mesh,
-            patch_triangles: tiling.patches.iter().map(|p| p.count).collect(),
-            tiling,
-            identity: (0..mesh.triangle_count()).collect(),
-            normals: face_normals(mesh),
+            order,
+            starts,
+            budget,
         }
     }
 
@@ -154,17 +236,61 @@ impl<'m> Evaluator<'m> {
         self.mesh
     }
 
-    /// The tiling the files were baked with: patch ranges into its reordered mesh.
-    pub fn tiling(&self) -> &Tiling {
-        &self.tiling
+    /// The file's patch order of the triangles: `order()[i]` is the mesh triangle at
+    /// position `i`, patch `p` holding positions [`Evaluator::patch_range`]`(p)`; `None` when
+    /// the mesh is in that order already.
+    pub fn order(&self) -> Option<&[u32]> {
+        self.order.as_deref()
+    }
+
+    /// The positions of patch `p`'s triangles in the file's patch order.
+    pub fn patch_range(&self, p: PatchId) -> Range<u32> {
+        self.starts[p as usize]..self.starts[p as usize + 1]
     }
 
     /// Number of patches.
     pub fn patch_count(&self) -> u32 {
-        self.patch_triangles.len() as u32
+        (self.starts.len() - 1) as u32
     }
 
-    /// Evaluates every camera (in parallel, one view per task); the result is in camera order.
+    /// Where each patch starts in the file's patch order, and the triangle count after the
+    /// last.
+    pub fn starts(&self) -> &[u32] {
+        &self.starts
+    }
+
+    /// The heap budget.
+    pub fn budget(&self) -> u64 {
+        self.budget
+    }
+
+    /// Views rendered at once at `resolution`: as many workers as the budget holds besides
+    /// the triangle order (when it is on the heap), at least one, at most the thread count.
+    pub fn workers(&self, resolution: u32) -> usize {
+        let fixed = self
+            .order
+            .as_ref()
+            .filter(|o| !o.is_mapped())
+            .map_or(0, |o| o.len() as u64 * 4)
+            + self.starts.len() as u64 * 4;
+        (self.budget.saturating_sub(fixed) / worker_bytes(self.mesh, resolution).max(1))
+            .clamp(1, rayon::current_num_threads() as u64) as usize
+    }
+
+    /// The patch holding position `i`.
+    fn patch_at(&self, i: u32) -> usize {
+        self.starts.partition_point(|&s| s <= i) - 1
+    }
+
+    /// The mesh triangle at position `i`.
+    fn triangle_at(&self, i: u32) -> u32 {
+        self.order.as_ref().map_or(i, |o| o[i as usize])
+    }
+
+    /// Evaluates every camera (in parallel, one view per task, at most
+    /// [`Evaluator::workers`] at once); the result is in camera order.
+    ///
+    /// Panics (caller contract) if the file's patch count is not the evaluator's.
     pub fn evaluate(
         &self,
         pvis: &Pvis<'_>,
@@ -177,17 +303,24 @@ impl<'m> Evaluator<'m> {
             "the file and the evaluator differ in patch count"
         );
         progress.start("eval", cameras.len() as u64);
-        let out = cameras
-            .par_iter()
-            .map_init(
-                || Scratch::new(pvis),
-                |scratch, camera| {
-                    let metrics = self.view(pvis, camera, scratch);
-                    progress.inc(1);
-                    metrics
-                },
-            )
-            .collect();
+        let workers = cameras.first().map_or(1, |c| self.workers(c.resolution()));
+        let run = || {
+            cameras
+                .par_iter()
+                .map_init(
+                    || Scratch::new(pvis),
+                    |scratch, camera| {
+                        let metrics = self.view(pvis, camera, scratch);
+                        progress.inc(1);
+                        metrics
+                    },
+                )
+                .collect()
+        };
+        let out = match rayon::ThreadPoolBuilder::new().num_threads(workers).build() {
+            Ok(pool) if workers < rayon::current_num_threads() => pool.install(run),
+            _ => run(),
+        };
         progress.finish();
         out
     }
@@ -196,7 +329,8 @@ impl<'m> Evaluator<'m> {
     pub fn pictures(&self, pvis: &Pvis<'_>, camera: &Camera) -> Pictures {
         let mut scratch = Scratch::new(pvis);
         self.view(pvis, camera, &mut scratch);
-        let shader = Shader::new(&self.normals, camera.forward());
+        let normal = |id: u32| face_normal(self.mesh, self.triangle_at(id));
+        let shader = Shader::new(&normal, camera.forward());
         let resolution = camera.resolution();
         let (full, rec) = (scratch.full.ids(), scratch.reconstruction.ids());
         Pictures {
@@ -213,11 +347,13 @@ impl<'m> Evaluator<'m> {
             s.full = IdBuffer::new(camera.resolution());
             s.reconstruction = IdBuffer::new(camera.resolution());
         }
+        let order = self.order.as_deref();
 
         s.full.clear();
+        let everything = 0..mesh.triangle_count();
         let start = Instant::now();
         s.rasterizer
-            .render(mesh, &self.identity, camera, &mut s.full);
+            .render_runs(mesh, order, std::slice::from_ref(&everything), camera, &mut s.full);
         let full_seconds = start.elapsed().as_secs_f64();
 
         let visible = pvis.query(eye, &mut s.scratch);
@@ -227,22 +363,24 @@ impl<'m> Evaluator<'m> {
         for (word, &bits) in s.answer.iter_mut().zip(visible.bits()) {
             *word = bits;
         }
-        let culled = self.culled_mesh(|p| visible.contains(p), &mut s.remap);
+        s.runs.clear();
+        extend_runs(visible.bits(), &self.starts, &mut s.runs);
+        let triangles_drawn: u64 = s.runs.iter().map(|r| u64::from(r.end - r.start)).sum();
 
         s.reconstruction.clear();
-        let culled_seconds = match &culled {
-            Some((sub, ids)) => {
-                let start = Instant::now();
-                s.rasterizer.render(sub, ids, camera, &mut s.reconstruction);
-                start.elapsed().as_secs_f64()
-            }
-            None => 0.0,
+        let start = Instant::now();
+        s.rasterizer
+            .render_runs(mesh, order, &s.runs, camera, &mut s.reconstruction);
+        let culled_seconds = if s.runs.is_empty() {
+            0.0
+        } else {
+            start.elapsed().as_secs_f64()
         };
-        let triangles_drawn = culled.as_ref().map_or(0, |(_, ids)| ids.len() as u64);
 
         // Compare, collect the truly visible patches, and sum the shaded error.
         s.seen.fill(0);
-        let shader = Shader::new(&self.normals, camera.forward());
+        let normal = |id: u32| face_normal(mesh, self.triangle_at(id));
+        let shader = Shader::new(&normal, camera.forward());
         let (mut covered, mut missed, mut squared_error) = (0u64, 0u64, 0u64);
         let mut previous = NO_PATCH;
         for (&a, &b) in s.full.ids().iter().zip(s.reconstruction.ids()) {
@@ -250,8 +388,8 @@ impl<'m> Evaluator<'m> {
                 covered += 1;
                 if a != previous {
                     previous = a;
-                    let p = self.tiling.patch_of[a as usize];
-                    s.seen[p as usize / 64] |= 1 << (p % 64);
+                    let p = self.patch_at(a);
+                    s.seen[p / 64] |= 1 << (p % 64);
                 }
             }
             if a != b {
@@ -264,17 +402,17 @@ impl<'m> Evaluator<'m> {
         }
         let pixels = s.full.ids().len() as f64;
         let answer = s.answer.as_slice();
-        let (mut visible_patches, mut missed_patches, mut visible_triangles) = (0, 0, 0u64);
+        let (mut visible_patches, mut missed_patches) = (0, 0);
         for (w, &word) in s.seen.iter().enumerate() {
             visible_patches += word.count_ones();
             missed_patches += (word & !answer[w]).count_ones();
-            let mut bits = word;
-            while bits != 0 {
-                let p = w * 64 + bits.trailing_zeros() as usize;
-                visible_triangles += u64::from(self.patch_triangles[p]);
-                bits &= bits - 1;
-            }
         }
+        let visible_triangles: u64 = crate::runtime::Patches::of_bits(&s.seen)
+            .map(|p| {
+                let r = self.patch_range(p);
+                u64::from(r.end - r.start)
+            })
+            .sum();
         let total = f64::from(mesh.triangle_count());
         ViewMetrics {
             eye,
@@ -292,41 +430,61 @@ impl<'m> Evaluator<'m> {
             culled_seconds,
         }
     }
+}
 
-    /// The triangles whose patch `keep` accepts, as a compact mesh (only the vertices they
-    /// use) in their original order, with their original triangle indices as ids; `None` if
-    /// nothing is kept.
-    fn culled_mesh(
-        &self,
-        keep: impl Fn(PatchId) -> bool,
-        remap: &mut Vec<u32>,
-    ) -> Option<(Mesh, Vec<u32>)> {
-        let mesh = self.mesh;
-        remap.clear();
-        remap.resize(mesh.vertex_count() as usize, u32::MAX);
-        let (mut positions, mut triangles, mut ids) = (Vec::new(), Vec::new(), Vec::new());
-        for t in 0..mesh.triangle_count() {
-            if !keep(self.tiling.patch_of[t as usize]) {
-                continue;
-            }
-            let corners = mesh.triangle(t).map(|v| {
-                let slot = &mut remap[v as usize];
-                if *slot == u32::MAX {
-                    *slot = positions.len() as u32;
-                    positions.push(mesh.position(v));
-                }
-                *slot
-            });
-            triangles.push(corners);
-            ids.push(t);
+/// The triangle positions (in the file's patch order) of the patches whose bits are set in
+/// `bits`, consecutive patches merged into one run: patch `p` holds `starts[p]..starts[p +
+/// 1]`. Ascending; empty patches add nothing. What a renderer draws for an answer.
+///
+/// Panics (caller contract) if a bit is set for a patch beyond `starts.len() - 1`.
+pub fn visible_runs(bits: &[u64], starts: &[u32]) -> Vec<Range<u32>> {
+    let mut runs = Vec::new();
+    extend_runs(bits, starts, &mut runs);
+    runs
+}
+
+/// [`visible_runs`] appended to `runs`.
+fn extend_runs(bits: &[u64], starts: &[u32], runs: &mut Vec<Range<u32>>) {
+    for p in crate::runtime::Patches::of_bits(bits) {
+        let range = starts[p as usize]..starts[p as usize + 1];
+        match runs.last_mut() {
+            _ if range.is_empty() => {}
+            Some(last) if last.end == range.start => last.end = range.end,
+            _ => runs.push(range),
         }
-        if triangles.is_empty() {
-            return None;
-        }
-        // The positions and indices come from a validated mesh, so this cannot fail.
-        let sub = Mesh::from_memory("culled", positions, triangles).ok()?;
-        Some((sub, ids))
     }
+}
+
+/// Heap bytes one evaluation worker holds at `resolution`: two ID buffers (an id and a depth
+/// per pixel) and the projected vertices with their stamps.
+pub fn worker_bytes(mesh: &Mesh, resolution: u32) -> u64 {
+    let pixels = u64::from(resolution) * u64::from(resolution);
+    2 * pixels * 8 + u64::from(mesh.vertex_count()) * 20
+}
+
+/// Where each patch of `pvis` starts, and the triangle count after the last.
+fn file_starts(pvis: &Pvis<'_>) -> Vec<u32> {
+    let mut starts: Vec<u32> = (0..pvis.patch_count())
+        .map(|p| pvis.patch(p).first_triangle)
+        .collect();
+    // The reader checked that the ranges are contiguous and sum to the triangle count.
+    starts.push(pvis.triangle_count() as u32);
+    starts
+}
+
+/// Whether patch `p`'s triangle range of `mesh` has exactly the file's bounding sphere and
+/// normal cone: true for every patch when `mesh` is the bake's `--mesh-out`.
+fn in_file_order(mesh: &Mesh, pvis: &Pvis<'_>, p: u32) -> bool {
+    if p >= pvis.patch_count() {
+        return true;
+    }
+    let f = pvis.patch(p);
+    let triangles: Vec<u32> = (f.first_triangle..f.first_triangle + f.triangle_count).collect();
+    let (m, _) = tiling::patch_bounds(mesh, &triangles, f.first_triangle);
+    (m.center.map(f32::to_bits), m.radius.to_bits())
+        == (f.center.map(f32::to_bits), f.radius.to_bits())
+        && (m.cone_axis.map(f32::to_bits), m.cone_cos.to_bits())
+            == (f.cone_axis.map(f32::to_bits), f.cone_cos.to_bits())
 }
 
 /// Per-worker buffers.
@@ -340,7 +498,8 @@ struct Scratch {
     answer: Vec<u64>,
     /// The patches the full render shows, one row.
     seen: Vec<u64>,
-    remap: Vec<u32>,
+    /// The answer's triangle positions, as runs.
+    runs: Vec<Range<u32>>,
 }
 
 impl Scratch {
@@ -352,7 +511,7 @@ impl Scratch {
             scratch: vec![0; pvis.scratch_words()],
             answer: vec![0; pvis.row_words()],
             seen: vec![0; pvis.row_words()],
-            remap: Vec::new(),
+            runs: Vec::new(),
         }
     }
 }

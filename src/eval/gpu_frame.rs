@@ -3,7 +3,7 @@
 //! (`evaluator.rs`).
 //!
 //! The mesh is uploaded once, regrouped by patch, by the sampling backend's upload
-//! (`sampler::gpu::upload`), so each patch's triangles are one contiguous range of the index
+//! (`gpu::mesh`), so each patch's triangles are one contiguous range of the index
 //! buffers and the culled set is drawn from the same buffers as the full mesh, with one
 //! `draw_indexed` per run of consecutive visible patches ([`visible_runs`], split at buffer
 //! boundaries by [`chunk_draws`]). Multi-draw-indirect would put the runs into one call but is
@@ -11,7 +11,7 @@
 //! ([`GpuFrameCost::draws_mean`]). Each frame renders into a colour + depth target of the
 //! evaluation resolution with a flat-shaded pipeline (`frame.wgsl`: the face normal from
 //! screen-space derivatives, lit from the eye, like the CPU pictures) — a frame, not an ID
-//! buffer. Depth is reversed Z, as in the sampler (`sampler::gpu::view_matrix`).
+//! buffer. Depth is reversed Z, as in the sampler (`gpu::view_matrix`).
 //!
 //! Timing: every frame is its own submission, timed on the wall clock from `submit` until
 //! `device.poll(Wait)` returns; where the adapter has `TIMESTAMP_QUERY`, timestamps written at
@@ -26,14 +26,12 @@
 //! `resolution² × 8` bytes.
 
 use super::evaluator::Evaluator;
+use super::evaluator::visible_runs;
 use super::summary::FrameCost;
+use crate::gpu::mesh::{self as upload, MeshChunk};
+use crate::gpu::{GpuError, depth_tested_pipeline, describe, one_line, open_device, view_matrix};
 use crate::runtime::Pvis;
 use crate::sampler::Camera;
-use crate::sampler::gpu::upload::{self, MeshChunk};
-use crate::sampler::gpu::{
-    GpuError, depth_tested_pipeline, describe, one_line, open_device, view_matrix,
-};
-use crate::tiling::Patch;
 use std::ops::Range;
 use std::sync::mpsc;
 use std::time::Instant;
@@ -277,15 +275,19 @@ impl GpuFrameTimer {
         out: &mut Vec<GpuViewCost>,
     ) -> Result<(), GpuError> {
         let (device, queue) = (&self.device, &self.queue);
-        let tiling = evaluator.tiling();
         let center = pvis.sampling().center;
+        let starts = evaluator.starts();
         let chunks = upload::upload_mesh(
             device,
             queue,
             evaluator.mesh(),
-            tiling,
+            upload::PatchOrder {
+                order: evaluator.order(),
+                starts,
+            },
             center,
             &device.limits(),
+            evaluator.budget(),
         )?;
         let chunk_ranges: Vec<Range<u32>> = chunks
             .iter()
@@ -362,10 +364,7 @@ impl GpuFrameTimer {
         let mut culled_draws_of = |camera: &Camera| {
             let eye = camera.eye().map(|c| c as f32);
             let visible = pvis.query(eye, &mut scratch);
-            chunk_draws(
-                &chunk_ranges,
-                &visible_runs(visible.bits(), &tiling.patches),
-            )
+            chunk_draws(&chunk_ranges, &visible_runs(visible.bits(), starts))
         };
         let set_camera = |camera: &Camera| {
             let mut bytes = Vec::with_capacity(UNIFORM_BYTES as usize);
@@ -529,33 +528,6 @@ struct Frame<'a> {
     timestamps: Option<&'a Timestamps>,
 }
 
-/// The triangle ranges (of the reordered mesh, `Tiling::order`) of the patches whose bits are
-/// set in `bits`, consecutive patches merged into one range: a patch's triangles are
-/// `first..first + count`, and patch `p + 1` starts where patch `p` ends. Ascending; empty
-/// patches add nothing.
-///
-/// Panics (caller contract) if a bit is set for a patch beyond `patches`.
-pub fn visible_runs(bits: &[u64], patches: &[Patch]) -> Vec<Range<u32>> {
-    let mut runs: Vec<Range<u32>> = Vec::new();
-    for (w, &word) in bits.iter().enumerate() {
-        let mut rest = word;
-        while rest != 0 {
-            let p = w * 64 + rest.trailing_zeros() as usize;
-            rest &= rest - 1;
-            let patch = &patches[p];
-            if patch.count == 0 {
-                continue;
-            }
-            let range = patch.first..patch.first + patch.count;
-            match runs.last_mut() {
-                Some(last) if last.end == range.start => last.end = range.end,
-                _ => runs.push(range),
-            }
-        }
-    }
-    runs
-}
-
 /// The draws of triangle ranges `runs` (ascending, disjoint) over index buffers holding the
 /// consecutive triangle ranges `chunks`: `(chunk, index range)` pairs, a run crossing a chunk
 /// boundary split in two, three indices per triangle. Triangles outside every chunk are left
@@ -587,30 +559,19 @@ pub fn chunk_draws(chunks: &[Range<u32>], runs: &[Range<u32>]) -> Vec<(usize, Ra
 mod tests {
     use super::*;
 
-    fn patches(counts: &[u32]) -> Vec<Patch> {
-        let mut first = 0;
-        counts
-            .iter()
-            .map(|&count| {
-                let p = Patch {
-                    first,
-                    count,
-                    area: 0.0,
-                    center: [0.0; 3],
-                    radius: 0.0,
-                    cone_axis: [0.0; 3],
-                    cone_cos: -1.0,
-                };
-                first += count;
-                p
-            })
-            .collect()
+    /// Patch starts for patches of `counts` triangles, and the total.
+    fn starts(counts: &[u32]) -> Vec<u32> {
+        let mut out = vec![0];
+        for &c in counts {
+            out.push(out.last().copied().unwrap_or(0) + c);
+        }
+        out
     }
 
     #[test]
     fn consecutive_visible_patches_merge_into_one_run() {
         // Patches of 3, 2, 4, 1, 5 triangles: starts 0, 3, 5, 9, 10.
-        let ps = patches(&[3, 2, 4, 1, 5]);
+        let ps = starts(&[3, 2, 4, 1, 5]);
         // Patches 0, 1, 3, 4 visible: runs 0..5 and 9..15.
         assert_eq!(visible_runs(&[0b11011], &ps), [0..5, 9..15]);
         assert_eq!(visible_runs(&[0b00100], &ps), [5..9]);
@@ -623,7 +584,7 @@ mod tests {
         // 130 patches of one triangle each, patch 64 empty.
         let mut counts = vec![1; 130];
         counts[64] = 0;
-        let ps = patches(&counts);
+        let ps = starts(&counts);
         // Patches 62..=65 visible (64 empty, no gap in triangles) and 129.
         let bits = [0b11 << 62, 0b11, 1 << 1];
         assert_eq!(visible_runs(&bits, &ps), [62..65, 128..129]);

@@ -10,9 +10,10 @@
 //! Figures 4–5); `gpu_frame.rs` (feature `gpu`) times the frame cost on a GPU through wgpu
 //! instead of the CPU rasterizer. The last stage: it may use every other module.
 //!
-//! The file stores triangle ranges of the *reordered* mesh; the evaluator takes the original
-//! mesh and re-derives the triangle → patch map by tiling it again, which is deterministic,
-//! and refuses files whose patch records differ from the re-tiling in any bit.
+//! The file stores triangle ranges of the *reordered* mesh. The evaluator takes that mesh as
+//! the bake wrote it (`--mesh-out`), checking every patch's bounds against the file, or the
+//! original mesh, which it tiles again (deterministic, within `--memory`) and refuses files
+//! whose patch records differ from the re-tiling in any bit.
 //!
 //! Cost: two renders per view (the full mesh and the culled set), views in parallel.
 
@@ -26,13 +27,16 @@ mod summary;
 mod sweep;
 pub mod views;
 
-pub use evaluator::{EvalError, Evaluator, Pictures, ViewMetrics, sampling_params};
+pub use evaluator::{
+    EvalError, EvalOptions, Evaluator, Pictures, ViewMetrics, sampling_params, visible_runs,
+    worker_bytes,
+};
 #[cfg(feature = "gpu")]
 pub use gpu_frame::{
-    FrameClock, GpuFrameCost, GpuFrameTimer, GpuViewCost, WARMUP_FRAMES, chunk_draws, visible_runs,
+    FrameClock, GpuFrameCost, GpuFrameTimer, GpuViewCost, WARMUP_FRAMES, chunk_draws,
 };
 pub use summary::{EvalSummary, FrameCost};
-pub use sweep::{SweepMode, SweepPoint, SweepSettings, sweep};
+pub use sweep::{SweepPoint, SweepSettings, sweep};
 
 #[cfg(test)]
 mod tests;

@@ -4,8 +4,8 @@
 //!
 //! The light shines along the camera's viewing direction; `|n · f|` makes the shading
 //! independent of the triangles' winding, which scanned meshes do not keep consistent.
-//! Cost: one dot product per pixel; face normals are computed once per mesh (12 bytes per
-//! triangle).
+//! Cost: one dot product per pixel, plus a face normal where the picture is drawn (computed
+//! from the mesh on demand, so a huge mesh needs no normal array).
 
 use crate::ooc::Mesh;
 use crate::sampler::NO_PATCH;
@@ -57,40 +57,38 @@ pub const MISSED: [u8; 3] = [255, 0, 0];
 /// Brightness of the unchanged pixels in the difference picture, so that the red stands out.
 const DIFF_DIM: f32 = 0.35;
 
-/// Unit face normal of every triangle (zero for degenerate ones).
-pub fn face_normals(mesh: &Mesh) -> Vec<[f32; 3]> {
-    (0..mesh.triangle_count())
-        .map(|t| {
-            let [a, b, c] = mesh.triangle(t).map(|v| mesh.position(v));
-            let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-            let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-            let n = [
-                u[1] * v[2] - u[2] * v[1],
-                u[2] * v[0] - u[0] * v[2],
-                u[0] * v[1] - u[1] * v[0],
-            ];
-            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-            if len > 0.0 && len.is_finite() {
-                [n[0] / len, n[1] / len, n[2] / len]
-            } else {
-                [0.0; 3]
-            }
-        })
-        .collect()
+/// Unit face normal of triangle `t` of `mesh` (zero for a degenerate one).
+pub fn face_normal(mesh: &Mesh, t: u32) -> [f32; 3] {
+    let [a, b, c] = mesh.triangle(t).map(|v| mesh.position(v));
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    let n = [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ];
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if len > 0.0 && len.is_finite() {
+        [n[0] / len, n[1] / len, n[2] / len]
+    } else {
+        [0.0; 3]
+    }
 }
 
-/// Shades triangle-ID pixels: `normals` per triangle, `light` the unit viewing direction.
-#[derive(Clone, Copy, Debug)]
+/// Shades triangle-ID pixels: `normal` gives an id's face normal, `light` is the unit
+/// viewing direction.
+#[derive(Clone, Copy)]
 pub struct Shader<'a> {
-    normals: &'a [[f32; 3]],
+    normal: &'a dyn Fn(u32) -> [f32; 3],
     light: [f32; 3],
 }
 
 impl<'a> Shader<'a> {
-    /// A headlight shader for a camera looking along `forward`.
-    pub fn new(normals: &'a [[f32; 3]], forward: [f64; 3]) -> Shader<'a> {
+    /// A headlight shader for a camera looking along `forward`, with `normal(id)` the unit
+    /// face normal of the triangle with id `id`.
+    pub fn new(normal: &'a dyn Fn(u32) -> [f32; 3], forward: [f64; 3]) -> Shader<'a> {
         Shader {
-            normals,
+            normal,
             light: forward.map(|c| c as f32),
         }
     }
@@ -101,7 +99,7 @@ impl<'a> Shader<'a> {
         if id == NO_PATCH {
             return BACKGROUND;
         }
-        let n = self.normals[id as usize];
+        let n = (self.normal)(id);
         let lambert = (n[0] * self.light[0] + n[1] * self.light[1] + n[2] * self.light[2]).abs();
         let intensity = AMBIENT + (1.0 - AMBIENT) * lambert.min(1.0);
         ALBEDO.map(|c| (c * intensity).round() as u8)
@@ -144,7 +142,8 @@ mod tests {
     #[test]
     fn headlight_shading_ignores_winding_and_keeps_grazing_faces_visible() {
         let normals = [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]];
-        let shader = Shader::new(&normals, [0.0, 0.0, -1.0]);
+        let normal = |id: u32| normals[id as usize];
+        let shader = Shader::new(&normal, [0.0, 0.0, -1.0]);
         assert_eq!(shader.colour(0), ALBEDO.map(|c| c as u8));
         assert_eq!(shader.colour(1), shader.colour(0));
         let grazing = shader.colour(2);
@@ -155,8 +154,8 @@ mod tests {
 
     #[test]
     fn difference_marks_exactly_the_changed_pixels() {
-        let normals = [[0.0, 0.0, 1.0]; 2];
-        let shader = Shader::new(&normals, [0.0, 0.0, 1.0]);
+        let normal = |_: u32| [0.0, 0.0, 1.0];
+        let shader = Shader::new(&normal, [0.0, 0.0, 1.0]);
         let full = [0, 1, NO_PATCH, 1];
         let rec = [0, NO_PATCH, NO_PATCH, 0];
         let diff = shader.difference(&full, &rec, 2);

@@ -79,7 +79,7 @@ fn views_at_sampling_positions_miss_nothing() {
     let mesh = lattice(0.0);
     let bytes = bake(&mesh, 80, 2);
     let pvis = Pvis::parse(&bytes).unwrap();
-    let evaluator = Evaluator::new(&mesh, &pvis).unwrap();
+    let evaluator = Evaluator::new(&mesh, &pvis, &options()).unwrap();
     let params = sampling_params(&pvis, RESOLUTION, 1.0);
     let cameras: Vec<Camera> = (0..pvis.sampling().views)
         .map(|v| Camera::sampling_view(&params, v))
@@ -105,7 +105,7 @@ fn random_views_are_deterministic_and_consistent() {
     let mesh = lattice(0.0);
     let bytes = bake(&mesh, 80, 1);
     let pvis = Pvis::parse(&bytes).unwrap();
-    let evaluator = Evaluator::new(&mesh, &pvis).unwrap();
+    let evaluator = Evaluator::new(&mesh, &pvis, &options()).unwrap();
     let params = sampling_params(&pvis, RESOLUTION, 1.3);
     let cameras: Vec<Camera> = random_directions(24, 5)
         .into_iter()
@@ -157,7 +157,7 @@ fn files_from_another_mesh_are_refused() {
     let pvis = Pvis::parse(&bytes).unwrap();
     let moved = lattice(0.05);
     assert!(matches!(
-        Evaluator::new(&moved, &pvis),
+        Evaluator::new(&moved, &pvis, &options()),
         Err(EvalError::PatchMismatch { .. })
     ));
     let other = Mesh::from_memory(
@@ -167,7 +167,7 @@ fn files_from_another_mesh_are_refused() {
     )
     .unwrap();
     assert_eq!(
-        Evaluator::new(&other, &pvis).err(),
+        Evaluator::new(&other, &pvis, &options()).err(),
         Some(EvalError::TriangleCount {
             file: 27 * 256,
             mesh: 1
@@ -191,7 +191,7 @@ fn renumbered_files_evaluate_like_the_tiling_numbering() {
     };
     let metrics = |bytes: &[u8]| -> Vec<ViewMetrics> {
         let pvis = Pvis::parse(bytes).unwrap();
-        let evaluator = Evaluator::new(&mesh, &pvis).unwrap();
+        let evaluator = Evaluator::new(&mesh, &pvis, &options()).unwrap();
         evaluator
             .evaluate(&pvis, &cameras, &NoProgress)
             .into_iter()
@@ -203,4 +203,70 @@ fn renumbered_files_evaluate_like_the_tiling_numbering() {
     };
     // Same answers in another numbering: every per-view figure is the same.
     assert_eq!(metrics(&spatial), metrics(&covisible));
+}
+
+fn options() -> EvalOptions {
+    EvalOptions {
+        memory: crate::memory::MemoryBudget::new(1 << 30),
+        tiling: tiling::TilingMode::Auto,
+    }
+}
+
+#[test]
+fn a_mesh_in_the_files_patch_order_evaluates_without_tiling_and_like_the_original() {
+    let mesh = lattice(0.0);
+    // The file and its patch order, as `bake --mesh-out` writes them (co-visibility order).
+    let mut tiling = tiling::tile(&mesh, 80).unwrap();
+    let params = SamplingParams::for_mesh(&mesh, 1, RESOLUTION, 45.0);
+    let rows = sampler::sample(&mesh, &tiling.patch_of, 80, &params, &NoProgress);
+    let order = format::covisibility_order(&rows).unwrap();
+    tiling = tiling.renumbered(&order).unwrap();
+    let bytes = format::encode(&BakeContents {
+        sampling: &params,
+        triangle_count: u64::from(mesh.triangle_count()),
+        patches: &tiling.patches,
+        visibility: &rows.with_patch_order(&order),
+    });
+    let pvis = Pvis::parse(&bytes).unwrap();
+    let positions = (0..mesh.vertex_count()).map(|v| mesh.position(v)).collect();
+    let triangles = tiling.order.iter().map(|&t| mesh.triangle(t)).collect();
+    let reordered = Mesh::from_memory("mesh-out", positions, triangles).unwrap();
+
+    let cameras: Vec<Camera> = random_directions(12, 3)
+        .into_iter()
+        .map(|d| Camera::sampling(&sampling_params(&pvis, RESOLUTION, 1.2), d))
+        .collect();
+    let metrics = |evaluator: &Evaluator<'_>| -> Vec<ViewMetrics> {
+        evaluator
+            .evaluate(&pvis, &cameras, &NoProgress)
+            .into_iter()
+            .map(|mut m| {
+                (m.full_seconds, m.culled_seconds) = (0.0, 0.0);
+                m
+            })
+            .collect()
+    };
+    let from_original = Evaluator::new(&mesh, &pvis, &options()).unwrap();
+    assert!(from_original.order().is_some());
+    let in_order = Evaluator::new(&reordered, &pvis, &options()).unwrap();
+    assert!(in_order.order().is_none(), "no tiling for a mesh in file order");
+    assert_eq!(metrics(&from_original), metrics(&in_order));
+    // A budget for one worker at a time changes nothing but the pace.
+    let tight = EvalOptions {
+        memory: crate::memory::MemoryBudget::new(1),
+        ..options()
+    };
+    let one_at_a_time = Evaluator::new(&reordered, &pvis, &tight).unwrap();
+    assert_eq!(one_at_a_time.workers(RESOLUTION), 1);
+    assert_eq!(metrics(&one_at_a_time), metrics(&in_order));
+}
+
+#[test]
+fn visible_runs_merge_consecutive_patches_and_skip_empty_ones() {
+    // Patches of 3, 2, 0, 4 and 3 triangles.
+    let starts = [0, 3, 5, 5, 9, 12];
+    assert_eq!(visible_runs(&[0b10011], &starts), [0..5, 9..12]);
+    // Patch 2 is empty, so 1 and 3 are adjacent.
+    assert_eq!(visible_runs(&[0b01010], &starts).first(), Some(&(3..9)));
+    assert_eq!(visible_runs(&[0b00100], &starts), []);
 }

@@ -23,9 +23,9 @@ pub use visb::{encode_hierarchical, probabilities};
 use crate::runtime::Pvis;
 use crate::runtime::consts::*;
 use crate::runtime::crc32c::crc32c;
-use crate::sampler::{SamplingParams, VisibilityMatrix};
 use crate::sphere;
 use crate::tiling::Patch;
+use crate::visibility::{SamplingParams, VisibilityMatrix};
 
 /// What a bake produced, ready to be encoded.
 #[derive(Clone, Copy, Debug)]

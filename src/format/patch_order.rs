@@ -19,8 +19,9 @@
 
 use rayon::prelude::*;
 
-use crate::sampler::VisibilityMatrix;
+use crate::runtime::Patches;
 use crate::tiling::PatchId;
+use crate::visibility::VisibilityMatrix;
 
 /// Largest `p² · ceil(v / 64)` for which the tour is computed: 2^33 word operations, a few
 /// seconds on two cores (e.g. 8,000 patches at 4,098 views, 20,000 at 1,026). Beyond it the
@@ -69,13 +70,8 @@ pub fn covisibility_order(matrix: &VisibilityMatrix) -> Option<Vec<PatchId>> {
     // Signature of patch p: bit v of words[p·words ..] is "view v sees p".
     let mut signatures = vec![0u64; patches * words];
     for v in 0..views {
-        for (w, &bits) in matrix.row(v as u32).iter().enumerate() {
-            let mut bits = bits;
-            while bits != 0 {
-                let p = w * 64 + bits.trailing_zeros() as usize;
-                signatures[p * words + v / 64] |= 1 << (v % 64);
-                bits &= bits - 1;
-            }
+        for p in Patches::of_bits(matrix.row(v as u32)) {
+            signatures[p as usize * words + v / 64] |= 1 << (v % 64);
         }
     }
     let signature = |p: u32| &signatures[p as usize * words..][..words];

@@ -8,9 +8,8 @@
 //! numbered coarse to fine, so parents come first), builds the face table by walking the
 //! hierarchy and ORs each leaf's three rows; a query is `O(level)` with no decoding and no
 //! copy. Memory: [`super::Pvis::expanded_bound`] words, of which the leaf answers are
-//! `8·4^level` rows (at 2000 patches and level 4, 512 KiB of 1,075 KiB; they took random-eye
-//! queries from 113 to 80 ns on an AMD EPYC, where the three row reads and the OR were a
-//! quarter of a query).
+//! `8·4^level` rows (at 2000 patches and level 4, 512 KiB of 1,075 KiB), stored because reading
+//! a leaf's three rows and ORing them was about a quarter of a query (BENCHMARKS.md).
 //!
 //! Start grid: every split plane passes through the origin, so in an octant's central
 //! (gnomonic) projection onto `|x| + |y| + |z| = 1` every face boundary is a straight line.

@@ -31,11 +31,7 @@ impl<'s> Visible<'s> {
 
     /// The visible patches, ascending.
     pub fn patches(&self) -> Patches<'s> {
-        Patches {
-            bits: self.bits,
-            word: 0,
-            current: self.bits.first().copied().unwrap_or(0),
-        }
+        Patches::of_bits(self.bits)
     }
 
     /// Number of visible patches.
@@ -56,6 +52,18 @@ pub struct Patches<'s> {
     bits: &'s [u64],
     word: usize,
     current: u64,
+}
+
+impl<'s> Patches<'s> {
+    /// The set bits of any row in the reader's layout (bit `p % 64` of word `p / 64` is patch
+    /// `p`), ascending: one `trailing_zeros` per set bit.
+    pub fn of_bits(bits: &'s [u64]) -> Patches<'s> {
+        Patches {
+            bits,
+            word: 0,
+            current: bits.first().copied().unwrap_or(0),
+        }
+    }
 }
 
 impl Iterator for Patches<'_> {

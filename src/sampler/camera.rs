@@ -20,8 +20,10 @@
 
 use super::SamplingParams;
 
-/// Largest supported image width/height. Bounds the fixed-point range (see `raster.rs`).
-pub const MAX_RESOLUTION: u32 = 1 << 15;
+/// Largest image width/height, for baking and evaluating alike: one ID buffer per thread is
+/// `resolution² × 8` bytes (512 MiB here). The fixed-point rasterizer would hold to 2^15
+/// (see `raster.rs`).
+pub const MAX_RESOLUTION: u32 = 1 << 13;
 
 /// Default near-plane distance as a fraction of the eye–target distance. Small enough that a
 /// sampling camera never clips the model for any field of view below ~175°, large enough that

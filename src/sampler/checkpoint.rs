@@ -88,7 +88,7 @@ pub(crate) fn save(
         action: "write",
         source,
     };
-    let words = &matrix.bits[..rows as usize * matrix.words_per_row];
+    let words = &matrix.words()[..rows as usize * matrix.words_per_row()];
     let mut bytes = Vec::with_capacity(HEADER_BYTES + words.len() * 8);
     bytes.extend_from_slice(MAGIC);
     bytes.extend_from_slice(&VERSION.to_le_bytes());
@@ -168,7 +168,7 @@ pub(crate) fn load(
             matrix.patches()
         )));
     }
-    let words = rows as usize * matrix.words_per_row;
+    let words = rows as usize * matrix.words_per_row();
     if bytes.len() != HEADER_BYTES + words * 8 {
         return Err(bad(format!(
             "checkpoint is {} bytes, expected {}",
@@ -176,7 +176,7 @@ pub(crate) fn load(
             HEADER_BYTES + words * 8
         )));
     }
-    for (w, chunk) in matrix.bits[..words]
+    for (w, chunk) in matrix.words_mut()[..words]
         .iter_mut()
         .zip(bytes[HEADER_BYTES..].chunks_exact(8))
     {
@@ -187,7 +187,7 @@ pub(crate) fn load(
     let tail = matrix.patches() % 64;
     if tail != 0 {
         let padding = !((1u64 << tail) - 1);
-        let last = matrix.words_per_row - 1;
+        let last = matrix.words_per_row() - 1;
         if let Some(row) = (0..rows).find(|&r| matrix.row(r)[last] & padding != 0) {
             return Err(bad(format!(
                 "row {row} has bits set past patch {}, expected zero padding",

@@ -20,7 +20,7 @@
 //! (|ex| + |ey|) · ½ px`, as in Hasselgren, Akenine-Möller & Ohlsson, GPU Gems 2 ch. 42), on
 //! the same snapped fixed-point vertices as the point-sampled rasterizer.
 //!
-//! Depth rule (documented in ARCHITECTURE/BENCHMARKS): the fragment depth is a sound upper
+//! Depth rule (also stated in docs/benchmarks/sampling.md): the fragment depth is a sound upper
 //! bound of `1/w` (nearer is larger) over triangle ∩ pixel: the minimum of (a) the maximum of
 //! the affine depth plane over the whole pixel square, `q(centre) + ½ (|∂q/∂x| + |∂q/∂y|)`, and
 //! (b) the largest corner depth; evaluated in `f64`, widened by a relative `DEPTH_SLACK` for

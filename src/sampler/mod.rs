@@ -15,6 +15,7 @@ mod conservative;
 pub mod gpu;
 mod id_buffer;
 mod key_buffer;
+mod marks;
 mod patch_box;
 mod patch_graph;
 mod patch_mesh;
@@ -39,106 +40,13 @@ pub use tiled::{SamplingError, SamplingOptions, sample_tiled};
 
 mod bounding;
 
+pub use crate::visibility::{SamplingParams, VisibilityMatrix};
 pub use bounding::bounding_sphere;
 
 use crate::ooc::Mesh;
 use crate::progress::Progress;
 use crate::tiling::PatchId;
 use rayon::prelude::*;
-
-/// Where the sampling cameras are, shared by every view (see the spec's "Sampling sphere").
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SamplingParams {
-    /// Subdivision level of the sphere (views: `sphere::view_count(level)`).
-    pub level: u32,
-    /// ID buffer width and height in pixels.
-    pub resolution: u32,
-    /// Full field of view, degrees, of the square image.
-    pub fov_deg: f32,
-    /// Centre of the bounding sphere the cameras look at.
-    pub center: [f32; 3],
-    /// Radius of that bounding sphere.
-    pub radius: f32,
-}
-
-impl SamplingParams {
-    /// Camera distance from the centre: `radius / sin(fov / 2)`, so the sphere fits the view.
-    pub fn distance(&self) -> f32 {
-        self.radius / (self.fov_deg.to_radians() * 0.5).sin()
-    }
-}
-
-/// Which patches each view sees: one row of `patches` bits per view.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct VisibilityMatrix {
-    views: u32,
-    patches: u32,
-    words_per_row: usize,
-    bits: Vec<u64>,
-}
-
-impl VisibilityMatrix {
-    /// An all-zero matrix.
-    pub fn new(views: u32, patches: u32) -> Self {
-        let words_per_row = (patches as usize).div_ceil(64);
-        VisibilityMatrix {
-            views,
-            patches,
-            words_per_row,
-            bits: vec![0; words_per_row * views as usize],
-        }
-    }
-    /// Number of views (rows).
-    pub fn views(&self) -> u32 {
-        self.views
-    }
-    /// Number of patches (bits per row).
-    pub fn patches(&self) -> u32 {
-        self.patches
-    }
-    /// Row of `view`: bit `p % 64` of word `p / 64` is patch `p`; bits past `patches` are zero.
-    pub fn row(&self, view: u32) -> &[u64] {
-        let start = view as usize * self.words_per_row;
-        &self.bits[start..start + self.words_per_row]
-    }
-    /// Mutable row of `view`.
-    pub fn row_mut(&mut self, view: u32) -> &mut [u64] {
-        let start = view as usize * self.words_per_row;
-        &mut self.bits[start..start + self.words_per_row]
-    }
-    /// Whether `view` sees `patch`.
-    pub fn get(&self, view: u32, patch: PatchId) -> bool {
-        self.row(view)[patch as usize / 64] >> (patch % 64) & 1 == 1
-    }
-    /// Marks `patch` seen from `view`.
-    pub fn set(&mut self, view: u32, patch: PatchId) {
-        self.row_mut(view)[patch as usize / 64] |= 1 << (patch % 64);
-    }
-
-    /// The same visibility with the patches renumbered: patch `i` of the result is patch
-    /// `order[i]` of `self` (see [`crate::tiling::Tiling::renumbered`]). O(views × patches).
-    ///
-    /// Panics (caller contract) if `order` does not have one entry per patch or names a
-    /// patch that does not exist.
-    pub fn with_patch_order(&self, order: &[PatchId]) -> VisibilityMatrix {
-        assert_eq!(order.len(), self.patches as usize, "one entry per patch");
-        let mut out = VisibilityMatrix::new(self.views, self.patches);
-        let words = self.words_per_row;
-        if words == 0 {
-            return out;
-        }
-        out.bits
-            .par_chunks_mut(words)
-            .zip(self.bits.par_chunks(words))
-            .for_each(|(to, from)| {
-                for (i, &old) in order.iter().enumerate() {
-                    let bit = from[old as usize / 64] >> (old % 64) & 1;
-                    to[i / 64] |= bit << (i % 64);
-                }
-            });
-        out
-    }
-}
 
 /// Renders every view of `params` and returns which patches each one shows.
 /// `patch_of[t]` is the patch of input triangle `t`, below `patch_count`.
@@ -181,10 +89,10 @@ pub fn sample_directions(
     let views = u32::try_from(directions.len()).expect("more than 2^32 views");
     let mut matrix = VisibilityMatrix::new(views, patch_count);
     progress.start("sampling", views as u64);
-    if matrix.words_per_row > 0 {
-        let words_per_row = matrix.words_per_row;
+    if matrix.words_per_row() > 0 {
+        let words_per_row = matrix.words_per_row();
         matrix
-            .bits
+            .words_mut()
             .par_chunks_mut(words_per_row)
             .zip(directions.par_iter())
             .for_each_init(

@@ -4,10 +4,10 @@
 //! what the occlusion tiles hold. Its bounding sphere is a poor bound there: a patch is a
 //! nearly flat piece of surface, and its sphere reaches out by its radius in every
 //! direction, past silhouettes onto empty pixels and in front of the surface that hides the
-//! patch. On the 1.6M-triangle bunny 182 of the 414 patches tested per view passed the sphere
-//! test, and 172 of them turned out hidden (all their triangles looped over for nothing);
-//! with exact per-pixel depths instead of 8×8 tiles still 153 passed, so the bound, not the
-//! tile size, was the problem.
+//! patch. On the 1.6M-triangle subdivided bunny most patches that pass the sphere test turn
+//! out hidden (all their triangles looped over for nothing), and exact per-pixel depths
+//! instead of 8×8 tiles let nearly as many through: the bound, not the tile size, is what
+//! fails (counted in docs/benchmarks/sampling.md).
 //!
 //! Technique: one axis of the box is the patch's normal-cone axis (the thin direction of a
 //! surface piece), the other two the principal directions of its vertices in the tangent

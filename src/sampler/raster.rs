@@ -17,7 +17,7 @@
 //! triangle, and per covered bounding-box pixel three adds and a compare. Triangles spanning
 //! under 4 pixels (most of those that draw anything on scanned and finer meshes) set up
 //! their three edge functions together in `f32` lanes, where those integers are exact
-//! (`LaneEdges`: bunny −9 % of a view's instructions). Bounding boxes up
+//! (`LaneEdges`; measured in docs/benchmarks/sampling.md). Bounding boxes up
 //! to `SPAN_MIN_WIDTH` pixels wide are walked pixel by pixel (those of up to 3 columns, most
 //! triangles of scanned meshes, with rows unrolled to their width); wider ones solve each
 //! row's covered span directly so large triangles cost their area, not their bounding box.
@@ -40,7 +40,7 @@ const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
 const HALF_PIXEL: i64 = SUBPIXEL / 2;
 
 /// How far, in pixels, the guard band reaches beyond each image edge. Triangles inside it are
-/// rasterized without clipping. With `MAX_RESOLUTION` = 2^15 a snapped coordinate stays below
+/// rasterized without clipping. With `MAX_RESOLUTION` ≤ 2^15 a snapped coordinate stays below
 /// 2^28 sub-pixel units, so edge functions (products of two coordinate differences) stay
 /// below 2^59 and never overflow `i64`.
 const GUARD_BAND: f64 = (1u32 << 19) as f64;
@@ -102,7 +102,12 @@ pub fn render_ids_filtered(
 /// render many views without allocating.
 #[derive(Debug, Default)]
 pub struct Rasterizer {
+    /// Each vertex projected for the current view (valid where its stamp is current).
     vertices: Vec<ProjectedVertex>,
+    /// The render in which each vertex was last projected.
+    stamps: Vec<u32>,
+    /// The current render's stamp.
+    generation: u32,
 }
 
 impl Rasterizer {
@@ -141,39 +146,77 @@ impl Rasterizer {
             camera.resolution(),
             "ID buffer and camera resolutions differ"
         );
-        self.rasterize(
-            mesh,
-            camera,
-            |t| {
-                let id = patch_of[t as usize];
-                keep(id).then_some(id)
-            },
-            |id, index, q, covered| buffer.plot(index, q, id, covered),
-        );
+        let triangles = (0..mesh.triangle_count()).filter_map(|t| {
+            let id = patch_of[t as usize];
+            keep(id).then_some((t, id))
+        });
+        self.rasterize(mesh, camera, triangles, |id, index, q, covered| {
+            buffer.plot(index, q, id, covered)
+        });
     }
 
-    /// Draws each triangle `t` for which `id_of(t)` is `Some(id)`, in input order, calling
+    /// Draws the triangles at positions `runs` (ascending, disjoint) of `order` — the
+    /// mesh's own triangle order when `None` — each with its position as its id: the
+    /// evaluator's renders of a whole mesh and of a query's answer, drawn in the same relative
+    /// order so that equally near fragments resolve alike. Only the vertices the drawn
+    /// triangles use are projected, as an indexed draw on a GPU would.
+    pub fn render_runs(
+        &mut self,
+        mesh: &Mesh,
+        order: Option<&[u32]>,
+        runs: &[std::ops::Range<u32>],
+        camera: &Camera,
+        buffer: &mut IdBuffer,
+    ) {
+        assert_eq!(
+            buffer.resolution(),
+            camera.resolution(),
+            "ID buffer and camera resolutions differ"
+        );
+        let triangles = runs.iter().flat_map(|run| {
+            run.clone()
+                .map(move |i| (order.map_or(i, |o| o[i as usize]), i))
+        });
+        self.rasterize(mesh, camera, triangles, |id, index, q, covered| {
+            buffer.plot(index, q, id, covered)
+        });
+    }
+
+    /// Draws each `(triangle, id)` of `triangles` in that order, calling
     /// `plot(id, pixel_index, depth, covered)` for every pixel it may cover (no depth test
-    /// here; see [`scan_triangle`] for `covered`).
+    /// here; see [`scan_triangle`] for `covered`). Vertices are projected on first use.
     fn rasterize(
         &mut self,
         mesh: &Mesh,
         camera: &Camera,
-        mut id_of: impl FnMut(u32) -> Option<u32>,
+        triangles: impl Iterator<Item = (u32, u32)>,
         mut plot: impl FnMut(u32, usize, f32, bool),
     ) {
         let resolution = camera.resolution();
         let planes = clip::planes(resolution, camera.near(), GUARD_BAND);
-        self.vertices.clear();
-        self.vertices
-            .extend((0..mesh.vertex_count()).map(|v| project(camera, &planes, mesh.position(v))));
-        for t in 0..mesh.triangle_count() {
-            let Some(id) = id_of(t) else {
-                continue;
-            };
+        let vertex_count = mesh.vertex_count() as usize;
+        if self.stamps.len() != vertex_count || self.generation == u32::MAX {
+            self.stamps.clear();
+            self.stamps.resize(vertex_count, 0);
+            self.vertices.clear();
+            self.vertices
+                .resize(vertex_count, ProjectedVertex::default());
+            self.generation = 0;
+        }
+        self.generation += 1;
+        let generation = self.generation;
+        for (t, id) in triangles {
             let corners = mesh.triangle(t);
+            let projected = corners.map(|v| {
+                let slot = v as usize;
+                if self.stamps[slot] != generation {
+                    self.stamps[slot] = generation;
+                    self.vertices[slot] = project(camera, &planes, mesh.position(v));
+                }
+                self.vertices[slot]
+            });
             draw_triangle(
-                corners.map(|v| self.vertices[v as usize]),
+                projected,
                 || corners.map(|v| mesh.position(v)),
                 camera,
                 &planes,
@@ -707,7 +750,8 @@ fn covered_span(values: [i64; 3], edges: [&Edge; 3], last: i64) -> Option<(i64, 
 pub(crate) fn coverage_counts(mesh: &Mesh, camera: &Camera) -> Vec<u32> {
     let resolution = camera.resolution() as usize;
     let mut counts = vec![0; resolution * resolution];
-    Rasterizer::new().rasterize(mesh, camera, Some, |_, index, _, covered| {
+    let triangles = (0..mesh.triangle_count()).map(|t| (t, t));
+    Rasterizer::new().rasterize(mesh, camera, triangles, |_, index, _, covered| {
         counts[index] += u32::from(covered)
     });
     counts

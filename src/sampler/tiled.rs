@@ -47,8 +47,9 @@ use super::camera::{Camera, SphereBounds};
 use super::checkpoint;
 use super::conservative::scan_triangle_conservative;
 use super::key_buffer::{KeyBuffer, low_half, patch_slot};
+use super::marks::Marks;
 use super::patch_box::{PatchBox, patch_boxes};
-use super::patch_graph::{PatchGraph, faces_away, may_face};
+use super::patch_graph::faces_away;
 use super::patch_mesh::{PatchMesh, Storage};
 use super::raster::{
     DEFAULT_PATHS, ProjectedVertex, ScreenBatch, ScreenVertex, draw_triangle, prefetch, project,
@@ -57,6 +58,7 @@ use super::raster::{
 use super::{SamplingParams, VisibilityMatrix};
 use crate::ooc::Mesh;
 use crate::progress::Progress;
+use crate::runtime::Patches;
 use crate::sphere::{parents, view_count};
 use crate::tiling::{PatchId, Tiling};
 use rayon::prelude::*;
@@ -133,14 +135,7 @@ pub fn sample_tiled(
     );
     let views = view_count(params.level);
     let mut matrix = VisibilityMatrix::new(views, patch_count);
-    let mut always = vec![0u64; matrix.words_per_row];
-    for &p in &options.always_visible {
-        assert!(
-            p < patch_count,
-            "always-visible patch {p} is not below {patch_count}"
-        );
-        always[p as usize / 64] |= 1 << (p % 64);
-    }
+    let marks = Marks::new(mesh, tiling, options);
     let hash = options
         .checkpoint
         .as_ref()
@@ -163,17 +158,14 @@ pub fn sample_tiled(
         tiling,
         params,
         options,
-        always,
+        marks,
         back_winding: back_winding(mesh),
-        graph: options
-            .dilate
-            .then(|| PatchGraph::new(mesh, &tiling.patch_of, patch_count)),
     };
-    let words_per_row = matrix.words_per_row;
+    let words_per_row = matrix.words_per_row();
     for level in first_level..=params.level {
         let first_view = if level == 0 { 0 } else { view_count(level - 1) };
         let (done, rest) = matrix
-            .bits
+            .words_mut()
             .split_at_mut(first_view as usize * words_per_row);
         let done: &[u64] = done;
         let new_rows = (view_count(level) - first_view) as usize * words_per_row;
@@ -245,10 +237,10 @@ struct ViewContext<'a> {
     tiling: &'a Tiling,
     params: &'a SamplingParams,
     options: &'a SamplingOptions,
-    always: Vec<u64>,
+    /// The dilation and always-visible marks.
+    marks: Marks,
     /// Every patch's oriented bounding box, the tight bound of the occlusion test.
     boxes: Vec<PatchBox>,
-    graph: Option<PatchGraph>,
     /// [`back_winding`] of the mesh.
     back_winding: i64,
 }
@@ -370,16 +362,6 @@ fn prefetch_run(triangles: &[[u16; 3]]) {
     prefetch(triangles, triangles.len().saturating_sub(1));
 }
 
-/// Calls `f` with every set bit of `words`.
-fn for_each_bit(words: impl Iterator<Item = u64>, mut f: impl FnMut(usize)) {
-    for (w, mut bits) in words.enumerate() {
-        while bits != 0 {
-            f(w * 64 + bits.trailing_zeros() as usize);
-            bits &= bits - 1;
-        }
-    }
-}
-
 /// How one patch's screen triangles reach a view's key buffer in one pass.
 struct Placer<'c, 'a> {
     context: &'c ViewContext<'a>,
@@ -461,17 +443,18 @@ impl ViewContext<'_> {
         for (w, d) in view.drawn.iter_mut().enumerate() {
             let hinted = hint.map_or(u64::MAX, |[a, b]| a[w] | b[w]) & valid(w);
             let mut away = 0u64;
-            for_each_bit(std::iter::once(hinted), |k| {
+            for k in Patches::of_bits(&[hinted]) {
+                let k = k as usize;
                 if faces_away(&self.tiling.patches[w * 64 + k], eye) {
                     away |= 1 << k;
                 }
-            });
-            *d = (hinted & !away) | (self.always[w] & valid(w));
+            }
+            *d = (hinted & !away) | (self.marks.always()[w] & valid(w));
         }
         for w in 0..view.drawn.len() {
-            for_each_bit(std::iter::once(view.drawn[w]), |k| {
-                self.draw_patch(w * 64 + k, &camera, view, draw, Pass::First);
-            });
+            for k in Patches::of_bits(&[view.drawn[w]]) {
+                self.draw_patch(w * 64 + k as usize, &camera, view, draw, Pass::First);
+            }
         }
         view.keys.build_tiles();
         let ViewScratch { keys, deferred, .. } = &mut *view;
@@ -482,8 +465,8 @@ impl ViewContext<'_> {
             }
         }
         for w in 0..view.drawn.len() {
-            for_each_bit(std::iter::once(!view.drawn[w] & valid(w)), |k| {
-                let p = w * 64 + k;
+            for k in Patches::of_bits(&[!view.drawn[w] & valid(w)]) {
+                let p = w * 64 + k as usize;
                 let patch = &self.tiling.patches[p];
                 // The sphere first (cheap), then the tighter box (8 projections).
                 let visible = !hidden(camera.sphere_bounds(patch.center, patch.radius), &view.keys)
@@ -491,7 +474,7 @@ impl ViewContext<'_> {
                 if visible {
                     self.draw_patch(p, &camera, view, draw, Pass::Tested);
                 }
-            });
+            }
         }
         // Resolving empties the key buffer for the worker's next view.
         self.resolve(&camera, &mut view.keys, resolve, row);
@@ -670,19 +653,6 @@ impl ViewContext<'_> {
             }
         }
         row.copy_from_slice(seen);
-        if let Some(graph) = &self.graph {
-            let eye = camera.eye();
-            for_each_bit(seen.iter().copied(), |p| {
-                for &q in graph.neighbours(p as PatchId) {
-                    let (w, bit) = (q as usize / 64, 1u64 << (q % 64));
-                    if row[w] & bit == 0 && may_face(&self.tiling.patches[q as usize], eye) {
-                        row[w] |= bit;
-                    }
-                }
-            });
-        }
-        for (r, a) in row.iter_mut().zip(&self.always) {
-            *r |= a;
-        }
+        self.marks.apply(self.tiling, camera.eye(), seen, row);
     }
 }

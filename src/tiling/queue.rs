@@ -9,8 +9,8 @@
 //! everything pushed later: the seeds are sorted once and consumed front to back, and only
 //! fused patches go through a heap. The heap is 4-ary rather than binary: the four children of
 //! a node are 64 contiguous bytes, so a pop touches half as many cache lines on the
-//! million-entry heaps of large meshes. Together the two changes cut the fusion of a
-//! 1M-triangle grid from 5.1 s to 2.2 s (std `BinaryHeap` holding every seed before).
+//! million-entry heaps of large meshes (measured against std `BinaryHeap` holding every seed:
+//! docs/benchmarks/tiling.md).
 //!
 //! Cost: O(n log n) to sort the seeds; O(log m) per push and pop for m queued entries.
 

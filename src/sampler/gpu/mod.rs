@@ -27,14 +27,15 @@
 //! submission and `views × ⌈patches / 64⌉ × 8` bytes read back. GPU memory besides the mesh:
 //! `resolution² × 8` bytes per batched view, capped at [`BATCH_TARGET_BYTES`].
 
-pub(crate) mod upload;
-
-use super::patch_graph::{PatchGraph, may_face};
+use super::marks::Marks;
 use super::{Camera, SamplingOptions, SamplingParams, VisibilityMatrix};
+pub use crate::gpu::GpuError;
+use crate::gpu::mesh::{self as upload};
+use crate::gpu::{depth_tested_pipeline, describe, one_line, open_device, view_matrix};
 use crate::ooc::Mesh;
 use crate::progress::Progress;
 use crate::sphere::view_count;
-use crate::tiling::{PatchId, Tiling};
+use crate::tiling::Tiling;
 use std::sync::mpsc;
 
 /// The id of an empty pixel in the GPU's ID buffers (the colour target's clear value); the
@@ -62,78 +63,6 @@ const WORD_GROUP: u32 = 64;
 
 /// Bytes of one view's clip matrix in the uniform array (a `mat4x4<f32>`).
 const MATRIX_BYTES: u64 = 64;
-
-/// Why the GPU backend could not sample.
-#[derive(Debug, thiserror::Error)]
-pub enum GpuError {
-    /// No GPU adapter is available (no driver, no Vulkan/Metal/DX12 loader, or none found).
-    #[error("no GPU adapter found ({0})")]
-    NoAdapter(String),
-    /// The adapter exists but refused to open a device.
-    #[error("GPU adapter {adapter}: cannot open a device: {reason}")]
-    Device {
-        /// The adapter's description.
-        adapter: String,
-        /// wgpu's reason.
-        reason: String,
-    },
-    /// A sampling option the GPU backend does not implement.
-    #[error("the GPU backend does not support {0}; use the CPU backend")]
-    Unsupported(&'static str),
-    /// The job exceeds one of the device's limits.
-    #[error("{what} needs {needed}, but this GPU allows at most {limit}")]
-    TooLarge {
-        /// What does not fit.
-        what: &'static str,
-        /// What it needs.
-        needed: u64,
-        /// The device's limit.
-        limit: u64,
-    },
-    /// The device reported an error while sampling (out of memory, device lost, …).
-    #[error("GPU error: {0}")]
-    Failed(String),
-}
-
-/// Opens the highest-performance adapter wgpu finds (honouring wgpu's `WGPU_BACKEND` and
-/// `WGPU_ADAPTER_NAME` environment variables) with all its limits and those of `optional`
-/// features it has: the device selection of the sampler, shared with the evaluator's GPU
-/// frame cost (`eval::gpu_frame`).
-pub(crate) fn open_device(
-    label: &str,
-    optional: wgpu::Features,
-) -> Result<(wgpu::Device, wgpu::Queue, wgpu::AdapterInfo), GpuError> {
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-        power_preference: wgpu::PowerPreference::HighPerformance,
-        ..Default::default()
-    }))
-    .map_err(|e| GpuError::NoAdapter(one_line(e)))?;
-    let info = adapter.get_info();
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        label: Some(label),
-        required_features: adapter.features() & optional,
-        // Everything the adapter offers: big meshes want its largest buffers.
-        required_limits: adapter.limits(),
-        ..Default::default()
-    }))
-    .map_err(|e| GpuError::Device {
-        adapter: describe(&info),
-        reason: one_line(e),
-    })?;
-    Ok((device, queue, info))
-}
-
-/// One line of an error text from wgpu, whose messages may span several lines.
-pub(crate) fn one_line(text: impl std::fmt::Display) -> String {
-    text.to_string()
-        .lines()
-        .map(str::trim)
-        .filter(|l| !l.is_empty())
-        .collect::<Vec<_>>()
-        .join("; ")
-}
 
 /// An open GPU device with the sampling pipelines compiled: create once, sample many times.
 #[derive(Debug)]
@@ -260,7 +189,19 @@ impl GpuSampler {
         let words32 = 2 * words64;
         let counting = options.min_pixels > 1;
         let batch = batch_views(params.resolution, patches, words32, counting, &limits)?;
-        let chunks = upload::upload_mesh(device, queue, mesh, tiling, params.center, &limits)?;
+        let starts = upload::patch_starts(tiling);
+        let host_bytes = options.memory_budget.map_or(u64::MAX, |b| {
+            crate::memory::MemoryBudget::new(b).split().gpu_staging
+        });
+        let chunks = upload::upload_mesh(
+            device,
+            queue,
+            mesh,
+            upload::PatchOrder::of(tiling, &starts),
+            params.center,
+            &limits,
+            host_bytes,
+        )?;
 
         let layers = Layers::new(device, params.resolution, batch);
         let row_bytes = words32 * 4;
@@ -487,8 +428,8 @@ struct Pending {
     count: u32,
 }
 
-/// Adds what the CPU backend adds after point sampling: `dilate`'s facing neighbours of the
-/// seen patches, then the always-visible patches (as `tiled.rs` does per view).
+/// Adds what the CPU backend adds after point sampling, with the same [`Marks`]: `dilate`'s
+/// facing neighbours of the seen patches, then the always-visible patches.
 fn post_process(
     mesh: &Mesh,
     tiling: &Tiling,
@@ -496,32 +437,11 @@ fn post_process(
     options: &SamplingOptions,
     matrix: &mut VisibilityMatrix,
 ) {
-    let patches = matrix.patches();
-    if options.dilate {
-        let graph = PatchGraph::new(mesh, &tiling.patch_of, patches);
-        for view in 0..matrix.views() {
-            let eye = Camera::sampling_view(params, view).eye();
-            let seen = matrix.row(view).to_vec();
-            let row = matrix.row_mut(view);
-            for (w, &word) in seen.iter().enumerate() {
-                let mut rest = word;
-                while rest != 0 {
-                    let p = (w * 64) as u32 + rest.trailing_zeros();
-                    rest &= rest - 1;
-                    for &q in graph.neighbours(p as PatchId) {
-                        let (qw, bit) = (q as usize / 64, 1u64 << (q % 64));
-                        if row[qw] & bit == 0 && may_face(&tiling.patches[q as usize], eye) {
-                            row[qw] |= bit;
-                        }
-                    }
-                }
-            }
-        }
-    }
+    let marks = Marks::new(mesh, tiling, options);
     for view in 0..matrix.views() {
-        for &p in &options.always_visible {
-            matrix.set(view, p);
-        }
+        let eye = Camera::sampling_view(params, view).eye();
+        let seen = matrix.row(view).to_vec();
+        marks.apply(tiling, eye, &seen, matrix.row_mut(view));
     }
 }
 
@@ -731,145 +651,7 @@ impl Pipelines {
     }
 }
 
-/// The clip matrix of `camera` for positions relative to `center`, row-major (`clip = M ·
-/// (p − center, 1)`): `x` and `y` are [`Camera::clip`]'s, rescaled to normalised device
-/// coordinates (`x / w` in `[−1, 1]` across the image, `y` up), `z = near` so that the depth
-/// `near / w` is 1 on the near plane and falls towards 0 far away (reversed Z, which keeps
-/// `f32` depth precise), and `w` is the view-space depth. Computed in `f64` from the camera's
-/// basis and eye relative to `center`, then rounded once.
-pub fn view_matrix(camera: &Camera, center: [f32; 3]) -> [f32; 16] {
-    let eye = camera.eye();
-    let e = [
-        eye[0] - f64::from(center[0]),
-        eye[1] - f64::from(center[1]),
-        eye[2] - f64::from(center[2]),
-    ];
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    // Pixels per unit of x / w over half the image: 1 / tan(fov / 2).
-    let k = 1.0 / (camera.fov_deg().to_radians() * 0.5).tan();
-    let (r, u, f) = (camera.right(), camera.up(), camera.forward());
-    let rows: [[f64; 4]; 4] = [
-        [k * r[0], k * r[1], k * r[2], -k * dot(e, r)],
-        [k * u[0], k * u[1], k * u[2], -k * dot(e, u)],
-        [0.0, 0.0, 0.0, camera.near()],
-        [f[0], f[1], f[2], -dot(e, f)],
-    ];
-    let mut out = [0.0f32; 16];
-    for (i, value) in rows.iter().flatten().enumerate() {
-        out[i] = *value as f32;
-    }
-    out
-}
-
-/// A render pipeline over triangle lists with both windings drawn (as on the CPU: a back face
-/// can be the visible one on an open or inconsistently wound mesh), reversed-Z depth
-/// (`Depth32Float`, larger is nearer) tested and written, and one colour target of `format`;
-/// the shader's entry points are `vs_main` and `fs_main`. The sampler's ID buffers and the
-/// evaluator's timed frames both draw this way.
-pub(crate) fn depth_tested_pipeline(
-    device: &wgpu::Device,
-    label: &str,
-    layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
-    vertices: wgpu::VertexBufferLayout<'_>,
-    format: wgpu::TextureFormat,
-) -> wgpu::RenderPipeline {
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(label),
-        layout: Some(layout),
-        vertex: wgpu::VertexState {
-            module,
-            entry_point: Some("vs_main"),
-            compilation_options: Default::default(),
-            buffers: &[Some(vertices)],
-        },
-        primitive: wgpu::PrimitiveState {
-            topology: wgpu::PrimitiveTopology::TriangleList,
-            cull_mode: None,
-            ..Default::default()
-        },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: wgpu::TextureFormat::Depth32Float,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Greater),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module,
-            entry_point: Some("fs_main"),
-            compilation_options: Default::default(),
-            targets: &[Some(wgpu::ColorTargetState {
-                format,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })],
-        }),
-        multiview_mask: None,
-        cache: None,
-    })
-}
-
 /// `words` as little-endian bytes, for buffer uploads.
 fn u32s_to_bytes(words: &[u32]) -> Vec<u8> {
     words.iter().flat_map(|w| w.to_le_bytes()).collect()
-}
-
-/// `name (type, backend)` of an adapter.
-pub(crate) fn describe(info: &wgpu::AdapterInfo) -> String {
-    format!("{} ({:?}, {:?})", info.name, info.device_type, info.backend)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The clip matrix puts every point where the CPU camera does: pixel
-    /// `((x/w + 1) · res/2, (1 − y/w) · res/2)` equals [`Camera::project`], and the depth
-    /// `near / w` is 1 on the near plane.
-    #[test]
-    fn view_matrix_projects_like_the_cpu_camera() {
-        let params = SamplingParams {
-            level: 2,
-            resolution: 512,
-            fov_deg: 45.0,
-            center: [1000.0, -20.0, 3.5],
-            radius: 2.0,
-        };
-        let half = f64::from(params.resolution) / 2.0;
-        for view in 0..view_count(params.level) {
-            let camera = Camera::sampling_view(&params, view);
-            let m = view_matrix(&camera, params.center).map(f64::from);
-            for k in 0..50 {
-                let t = f64::from(k) * 0.37;
-                let offset = [t.sin() * 1.5, (2.0 * t).cos() * 1.5, (3.0 * t).sin() * 1.2];
-                let p: [f32; 3] = std::array::from_fn(|i| params.center[i] + offset[i] as f32);
-                let rel: [f64; 3] =
-                    std::array::from_fn(|i| f64::from(p[i]) - f64::from(params.center[i]));
-                let row = |r: usize| {
-                    m[4 * r] * rel[0] + m[4 * r + 1] * rel[1] + m[4 * r + 2] * rel[2] + m[4 * r + 3]
-                };
-                let (x, y, w) = (row(0), row(1), row(3));
-                let [px, py] = camera.project(p).expect("in front of the camera");
-                let (gx, gy) = ((x / w + 1.0) * half, (1.0 - y / w) * half);
-                // f32 matrix entries: agreement to a few thousandths of a pixel.
-                assert!(
-                    (gx - px).abs() < 2e-3 && (gy - py).abs() < 2e-3,
-                    "view {view}: GPU ({gx}, {gy}), CPU ({px}, {py})"
-                );
-            }
-            // On the near plane the depth is 1.
-            let f = camera.forward();
-            let e = camera.eye();
-            let on_near: [f64; 3] =
-                std::array::from_fn(|i| e[i] + f[i] * camera.near() - f64::from(params.center[i]));
-            let w = m[12] * on_near[0] + m[13] * on_near[1] + m[14] * on_near[2] + m[15];
-            assert!(
-                (m[11] / w - 1.0).abs() < 1e-3,
-                "view {view}: depth {}",
-                m[11] / w
-            );
-        }
-    }
 }

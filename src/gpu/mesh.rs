@@ -1,4 +1,4 @@
-//! The mesh on the GPU for the sampling backend, regrouped by patch: each patch's distinct
+//! The mesh on the GPU, regrouped by patch (the sampling backend's and the frame cost's): each patch's distinct
 //! vertices (position relative to the bounding-sphere centre, `f32 × 3`, and the patch id,
 //! `u32`, the id the fragment shader writes) and its triangles as 32-bit indices, patch after
 //! patch in the tiling's order.
@@ -67,17 +67,50 @@ struct HostChunk {
     indices: Vec<u8>,
 }
 
-/// Uploads `mesh`'s triangles patch by patch (`tiling.order`), each vertex tagged with its
-/// patch, positions relative to `center`.
+/// The triangles of a mesh in patch order: patch `p` is positions `starts[p]..starts[p + 1]`
+/// of `order` (the mesh's own order when `None`, as in a `--mesh-out` mesh).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PatchOrder<'a> {
+    /// `order[i]` is the mesh triangle at position `i`.
+    pub(crate) order: Option<&'a [u32]>,
+    /// Where each patch starts, and the triangle count after the last.
+    pub(crate) starts: &'a [u32],
+}
+
+impl<'a> PatchOrder<'a> {
+    /// The patch order of `tiling`; `starts` must hold its patches' starts and the total.
+    pub(crate) fn of(tiling: &'a Tiling, starts: &'a [u32]) -> PatchOrder<'a> {
+        PatchOrder {
+            order: Some(&tiling.order),
+            starts,
+        }
+    }
+}
+
+/// Where each patch of `tiling` starts, and the triangle count after the last.
+pub(crate) fn patch_starts(tiling: &Tiling) -> Vec<u32> {
+    let mut starts: Vec<u32> = tiling.patches.iter().map(|p| p.first).collect();
+    starts.push(tiling.order.len() as u32);
+    starts
+}
+
+/// Uploads `mesh`'s triangles patch by patch (`patches`), each vertex tagged with its patch,
+/// positions relative to `center`, staging at most `host_bytes` (at least one run) in host
+/// memory at a time.
 pub(crate) fn upload_mesh(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     mesh: &Mesh,
-    tiling: &Tiling,
+    patches: PatchOrder<'_>,
     center: [f32; 3],
     limits: &wgpu::Limits,
+    host_bytes: u64,
 ) -> Result<Vec<MeshChunk>, GpuError> {
-    let max_bytes = limits.max_buffer_size.min(MAX_CHUNK_BYTES);
+    // Vertex and index buffers are staged together.
+    let max_bytes = limits
+        .max_buffer_size
+        .min(MAX_CHUNK_BYTES)
+        .min((host_bytes / 2).max(RUN_TRIANGLES as u64 * 3 * VERTEX_BYTES));
     // The largest run: every corner a distinct vertex.
     let run_bytes = RUN_TRIANGLES as u64 * 3 * VERTEX_BYTES;
     if run_bytes > max_bytes {
@@ -94,10 +127,19 @@ pub(crate) fn upload_mesh(
     let mut distinct: Vec<u32> = Vec::new();
     // Triangles in the chunks before `host`.
     let mut uploaded = 0u32;
-    for (p, patch) in tiling.patches.iter().enumerate() {
+    let mut positions: Vec<u32> = Vec::new();
+    for (p, w) in patches.starts.windows(2).enumerate() {
         let patch_id = p as u32;
-        let range = patch.first as usize..(patch.first + patch.count) as usize;
-        for run in tiling.order[range].chunks(RUN_TRIANGLES) {
+        let range = w[0] as usize..w[1] as usize;
+        let run_source: &[u32] = match patches.order {
+            Some(order) => &order[range],
+            None => {
+                positions.clear();
+                positions.extend(w[0]..w[1]);
+                &positions
+            }
+        };
+        for run in run_source.chunks(RUN_TRIANGLES) {
             corners.clear();
             corners.extend(run.iter().flat_map(|&t| mesh.triangle(t)));
             distinct.clear();

@@ -1,0 +1,126 @@
+//! Where a bake renders its ID buffers, as a value: the CPU rasterizer (bit-exact and
+//! reproducible everywhere, the default) or the wgpu backend (feature `gpu`). `Auto` takes a
+//! hardware GPU when there is one and says why it did not otherwise.
+
+use super::BakeError;
+use crate::ooc::Mesh;
+use crate::progress::Progress;
+use crate::sampler::{self, SamplingOptions};
+use crate::tiling::Tiling;
+use crate::visibility::{SamplingParams, VisibilityMatrix};
+
+/// Which backend to open (`--backend`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BackendChoice {
+    /// The CPU rasterizer.
+    #[default]
+    Cpu,
+    /// The GPU; an error without an adapter or the `gpu` feature.
+    Gpu,
+    /// A hardware GPU if there is one, else the CPU.
+    Auto,
+}
+
+/// An opened sampling backend.
+#[derive(Debug)]
+pub enum Backend {
+    /// The CPU rasterizer (`sampler::sample_tiled`).
+    Cpu,
+    /// An open GPU device with its pipelines.
+    #[cfg(feature = "gpu")]
+    Gpu(Box<sampler::gpu::GpuSampler>),
+}
+
+/// The first option the GPU backend does not implement, if any.
+pub(crate) fn cpu_only_option(conservative_raster: bool, resume: bool) -> Option<&'static str> {
+    if conservative_raster {
+        Some("--conservative-raster")
+    } else if resume {
+        Some("--resume")
+    } else {
+        None
+    }
+}
+
+impl Backend {
+    /// Opens `choice` for a bake with `conservative_raster` and `resume` (which only the CPU
+    /// implements). `Auto` falls back to the CPU and returns why as the second value (a
+    /// software rasterizer such as lavapipe is slower than the CPU backend).
+    pub fn open(
+        choice: BackendChoice,
+        conservative_raster: bool,
+        resume: bool,
+    ) -> Result<(Backend, Option<String>), BakeError> {
+        match choice {
+            BackendChoice::Cpu => Ok((Backend::Cpu, None)),
+            BackendChoice::Gpu => {
+                if let Some(option) = cpu_only_option(conservative_raster, resume) {
+                    return Err(BakeError::Settings(format!(
+                        "--backend gpu: {option} needs the CPU backend (--backend cpu or auto)"
+                    )));
+                }
+                #[cfg(feature = "gpu")]
+                {
+                    sampler::gpu::GpuSampler::new()
+                        .map(|g| (Backend::Gpu(Box::new(g)), None))
+                        .map_err(|e| BakeError::Backend(format!("--backend gpu: {e}")))
+                }
+                #[cfg(not(feature = "gpu"))]
+                Err(BakeError::Settings(
+                    "--backend gpu: this patchvis was built without the `gpu` feature".into(),
+                ))
+            }
+            BackendChoice::Auto => {
+                let why_cpu = if let Some(option) = cpu_only_option(conservative_raster, resume) {
+                    format!("{option} needs it")
+                } else {
+                    #[cfg(feature = "gpu")]
+                    match sampler::gpu::GpuSampler::new() {
+                        Ok(g) if !g.is_software() => {
+                            return Ok((Backend::Gpu(Box::new(g)), None));
+                        }
+                        Ok(g) => format!("{} is a software rasterizer", g.adapter()),
+                        Err(e) => e.to_string(),
+                    }
+                    #[cfg(not(feature = "gpu"))]
+                    "built without the `gpu` feature".to_string()
+                };
+                Ok((Backend::Cpu, Some(why_cpu)))
+            }
+        }
+    }
+
+    /// `cpu`, or `gpu: ADAPTER`.
+    pub fn describe(&self) -> String {
+        match self {
+            Backend::Cpu => "cpu".into(),
+            #[cfg(feature = "gpu")]
+            Backend::Gpu(g) => format!("gpu: {}", g.adapter()),
+        }
+    }
+
+    /// Whether this is the CPU rasterizer.
+    pub fn is_cpu(&self) -> bool {
+        matches!(self, Backend::Cpu)
+    }
+
+    /// Samples every view of `params` for the patches of `tiling` (a tiling of `mesh`).
+    pub fn sample(
+        &self,
+        mesh: &Mesh,
+        tiling: &Tiling,
+        params: &SamplingParams,
+        options: &SamplingOptions,
+        progress: &dyn Progress,
+    ) -> Result<VisibilityMatrix, BakeError> {
+        match self {
+            Backend::Cpu => Ok(sampler::sample_tiled(
+                mesh, tiling, params, options, progress,
+            )?),
+            #[cfg(feature = "gpu")]
+            Backend::Gpu(gpu) => gpu
+                .sample(mesh, tiling, params, options, progress)
+                .map_err(|e| BakeError::Backend(format!("GPU sampling failed: {e}"))),
+        }
+    }
+}

@@ -1,0 +1,95 @@
+//! The bake as one library call: settings in, a `.pvis` out.
+//!
+//! [`BakeSettings`] holds every option `patchvis bake` has; [`BakeSettings::check`] resolves
+//! the defaults that depend on each other into a [`Recipe`]; [`Backend`] is where the ID
+//! buffers are rendered; [`Recipe::run`] tiles, samples (supersampling and folding), numbers
+//! the patches by co-visibility and encodes, recording each stage's time and peak heap in
+//! [`Stages`]; [`Recipe::write`] writes the outputs so that they appear whole or not at all.
+//! The heap budget and its split between the stages is [`MemoryBudget`].
+//!
+//! ```no_run
+//! use patchvis::bake::{Backend, BakeSettings, Outputs, Stages};
+//! use patchvis::progress::NoProgress;
+//!
+//! let recipe = BakeSettings { patches: 500, ..BakeSettings::default() }.check()?;
+//! let mesh = recipe.open("bunny.ply".as_ref())?;
+//! let mut stages = Stages::new();
+//! let baked = recipe.run(&mesh, &Backend::Cpu, &NoProgress, &mut stages)?;
+//! let outputs = Outputs { pvis: "bunny.pvis".into(), mesh: None };
+//! recipe.write(&baked, &mesh, &outputs, &mut stages)?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! Files: `settings.rs` (options, defaults, checks), `recipe.rs` (the stages), `rows.rs`
+//! (sampled rows and the fold), `backend.rs` (CPU or GPU), `stages.rs` (time and heap).
+
+mod backend;
+mod recipe;
+mod rows;
+mod settings;
+mod stages;
+
+pub use crate::memory::{MemoryBudget, StageBudgets};
+pub use backend::{Backend, BackendChoice};
+pub use recipe::{Baked, Outputs, Recipe};
+pub use rows::SampledRows;
+pub use settings::{
+    BakeSettings, CONSERVATIVE_RESOLUTION_SCALE, DEFAULT_FOLD_CORNERS, DEFAULT_FOLD_MIN_PIXELS,
+    DEFAULT_VIEW_SUPERSAMPLE, PatchOrder, SettingsError, Supersample,
+};
+pub use stages::{StageRecord, Stages};
+
+use std::path::PathBuf;
+
+/// Why a bake failed.
+#[derive(Debug, thiserror::Error)]
+pub enum BakeError {
+    /// A setting is out of range or does not fit the mesh (a usage error).
+    #[error("{0}")]
+    Settings(String),
+    /// The mesh cannot be read.
+    #[error(transparent)]
+    Mesh(#[from] crate::ooc::MeshError),
+    /// Tiling failed.
+    #[error("tiling failed: {0}")]
+    Tiling(#[from] crate::tiling::TilingError),
+    /// Sampling failed (its checkpoint or temporary mesh file).
+    #[error(transparent)]
+    Sampling(#[from] crate::sampler::SamplingError),
+    /// The sampling backend could not be opened or failed.
+    #[error("{0}")]
+    Backend(String),
+    /// A stage does not fit the memory budget.
+    #[error("{0}")]
+    Budget(String),
+    /// A temporary file (the renumbered tiling) could not be written.
+    #[error("cannot write a temporary file for the renumbered tiling: {0}")]
+    TempFile(#[source] std::io::Error),
+    /// An output could not be written.
+    #[error("{}: cannot write: {source}", path.display())]
+    Write {
+        /// The output.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A finished bake's checkpoint could not be removed.
+    #[error("{}: cannot remove: {source}", path.display())]
+    Remove {
+        /// The checkpoint.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A bug: the pipeline produced something it should not have.
+    #[error("internal error: {0}")]
+    Internal(String),
+}
+
+impl From<SettingsError> for BakeError {
+    fn from(e: SettingsError) -> BakeError {
+        BakeError::Settings(e.0)
+    }
+}

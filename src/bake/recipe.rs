@@ -1,0 +1,345 @@
+//! The recipe a bake follows, stage by stage: tile → sample (supersample and fold) → number
+//! the patches → encode, then write the outputs. [`Recipe::run`] is `patchvis bake`;
+//! `eval --sweep` runs the same stages, sampling once per patch count and cutting every level
+//! it evaluates from those rows ([`SampledRows::stored`]).
+
+use super::settings::{BakeSettings, PatchOrder, Supersample};
+use super::{Backend, BakeError, SampledRows, Stages};
+use crate::format::{self, BakeContents};
+use crate::memory::MemoryBudget;
+use crate::ooc::{Mesh, OpenOptions, default_cache_dir};
+use crate::progress::Progress;
+use crate::runtime::Pvis;
+use crate::sampler::SamplingOptions;
+use crate::tiling::{self, Tiling, TilingOptions};
+use crate::visibility::{SamplingParams, VisibilityMatrix};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Checked settings with every default resolved ([`BakeSettings::check`]): what a bake does.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Recipe {
+    /// The settings as given.
+    pub settings: BakeSettings,
+    /// The ID-buffer side sampled (`resolution`, scaled by `--conservative`).
+    pub resolution: u32,
+    /// Supersampling and folding.
+    pub supersample: Supersample,
+    /// Checkpoint of the stored level's plain pass when the fold has a threshold.
+    pub coarse_checkpoint: Option<PathBuf>,
+    /// Checkpoint of the main (supersampled) pass.
+    pub fine_checkpoint: Option<PathBuf>,
+}
+
+/// The result of [`Recipe::run`]: the file's bytes and what they were made of.
+#[derive(Debug)]
+pub struct Baked {
+    /// Where the sampling cameras were (the stored level).
+    pub params: SamplingParams,
+    /// The tiling, in the file's patch numbering.
+    pub tiling: Tiling,
+    /// The stored rows, in the file's patch numbering.
+    pub visibility: VisibilityMatrix,
+    /// Whether the patches were renumbered by co-visibility.
+    pub renumbered: bool,
+    /// Views rendered, every pass counted.
+    pub sampled_views: u32,
+    /// The `.pvis` file.
+    pub bytes: Vec<u8>,
+    /// Bytes of its VISB payload.
+    pub visibility_bytes: u64,
+}
+
+impl Baked {
+    /// The fraction of (view, patch) pairs marked visible.
+    pub fn visible_fraction(&self) -> f64 {
+        let pairs = f64::from(self.visibility.views()) * f64::from(self.visibility.patches());
+        if pairs == 0.0 {
+            0.0
+        } else {
+            self.visibility.count_ones() as f64 / pairs
+        }
+    }
+}
+
+/// Where [`Recipe::write`] puts a bake.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Outputs {
+    /// The `.pvis` file.
+    pub pvis: PathBuf,
+    /// The mesh reordered by patch as binary PLY (`--mesh-out`).
+    pub mesh: Option<PathBuf>,
+}
+
+impl Recipe {
+    /// The heap budget.
+    pub fn memory(&self) -> MemoryBudget {
+        self.settings.memory
+    }
+
+    /// How to open the input mesh: the user's conversion cache, within the input's share.
+    pub fn open_options(&self) -> OpenOptions {
+        OpenOptions {
+            cache_dir: Some(default_cache_dir()),
+            memory_budget: self.memory().split().input,
+        }
+    }
+
+    /// Tiling options: the algorithm asked for, within the tiling's share.
+    pub fn tiling_options(&self) -> TilingOptions {
+        TilingOptions {
+            mode: self.settings.tiling,
+            memory_budget: self.memory().split().tiling,
+        }
+    }
+
+    /// Where the cameras of the stored level are, for `mesh`.
+    pub fn sampling_params(&self, mesh: &Mesh) -> SamplingParams {
+        SamplingParams::for_mesh(
+            mesh,
+            self.settings.level,
+            self.resolution,
+            self.settings.fov_deg,
+        )
+    }
+
+    /// Opens `path` with [`Recipe::open_options`].
+    pub fn open(&self, path: &Path) -> Result<Mesh, BakeError> {
+        Ok(Mesh::open_with(path, &self.open_options())?)
+    }
+
+    /// Tiles `mesh` and checks what depends on its size: the always-visible ids against the
+    /// patch count, the `--dilate` patch graph against the budget.
+    pub fn tile(&self, mesh: &Mesh) -> Result<Tiling, BakeError> {
+        let settings = &self.settings;
+        if settings.dilate && !self.memory().fits_patch_graph(mesh.triangle_count()) {
+            return Err(BakeError::Budget(format!(
+                "--dilate builds a patch graph of about {} MiB for {} triangles, more than --memory {} MiB",
+                (u64::from(mesh.triangle_count()) * crate::memory::PATCH_GRAPH_BYTES_PER_TRIANGLE)
+                    >> 20,
+                mesh.triangle_count(),
+                self.memory().total() >> 20
+            )));
+        }
+        let tiling = tiling::tile_with(mesh, settings.patches, &self.tiling_options())?;
+        let patch_count = tiling.patches.len() as u32;
+        if let Some(&bad) = settings.always_visible.iter().find(|&&p| p >= patch_count) {
+            return Err(BakeError::Settings(format!(
+                "--always-visible {bad}: the bake has patches 0 to {}",
+                patch_count - 1
+            )));
+        }
+        Ok(tiling)
+    }
+
+    /// Sampling options with `min_pixels` and `checkpoint`, the rest from the settings.
+    fn sampling_options(&self, min_pixels: u32, checkpoint: Option<PathBuf>) -> SamplingOptions {
+        let s = &self.settings;
+        SamplingOptions {
+            min_pixels,
+            dilate: s.dilate,
+            always_visible: s.always_visible.clone(),
+            conservative: s.conservative_raster,
+            checkpoint,
+            resume: s.resume,
+            memory_budget: Some(self.memory().split().sampling),
+        }
+    }
+
+    /// Samples the views the stored level needs with `backend`: the stored views with every
+    /// pixel, and the finer views of the supersampling, thresholded when the fold has a
+    /// threshold (see [`SampledRows`]).
+    pub fn sample(
+        &self,
+        mesh: &Mesh,
+        tiling: &Tiling,
+        backend: &Backend,
+        progress: &dyn Progress,
+    ) -> Result<SampledRows, BakeError> {
+        let params = self.sampling_params(mesh);
+        let Supersample {
+            extra_levels,
+            fold_min_pixels,
+            ..
+        } = self.supersample;
+        // The finer pass differs from the stored level in `level` only (same centre, radius,
+        // camera distance), so its views are the stored ones plus the finer ones.
+        let fine = SamplingParams {
+            // Capped for `eval --sweep`, whose recipe may sample at the finest level (a checked
+            // bake has `level + extra_levels` within it already).
+            level: (params.level + extra_levels).min(crate::sphere::MAX_LEVEL),
+            ..params
+        };
+        let min_pixels = self.settings.min_pixels;
+        let (plain, fine) = if fold_min_pixels > 0 {
+            let coarse_options = self.sampling_options(min_pixels, self.coarse_checkpoint.clone());
+            let plain = backend.sample(mesh, tiling, &params, &coarse_options, progress)?;
+            let fine_options = self.sampling_options(fold_min_pixels, self.fine_checkpoint.clone());
+            let rows = backend.sample(mesh, tiling, &fine, &fine_options, progress)?;
+            (plain, Some(rows))
+        } else {
+            let options = self.sampling_options(min_pixels, self.fine_checkpoint.clone());
+            (
+                backend.sample(mesh, tiling, &fine, &options, progress)?,
+                None,
+            )
+        };
+        Ok(SampledRows {
+            plain,
+            fine,
+            level: params.level,
+            supersample: self.supersample,
+        })
+    }
+
+    /// The file's patch numbering: by co-visibility (patches seen from the same views get
+    /// neighbouring ids), which moves the tiling with the rows, or the tiling's own. Returns
+    /// whether the patches were renumbered.
+    pub fn number(
+        &self,
+        tiling: Tiling,
+        visibility: VisibilityMatrix,
+    ) -> Result<(Tiling, VisibilityMatrix, bool), BakeError> {
+        if self.settings.patch_order == PatchOrder::Spatial {
+            return Ok((tiling, visibility, false));
+        }
+        match format::covisibility_order(&visibility) {
+            Some(order) => {
+                let tiling = tiling.renumbered(&order).map_err(BakeError::TempFile)?;
+                Ok((tiling, visibility.with_patch_order(&order), true))
+            }
+            None => Ok((tiling, visibility, false)),
+        }
+    }
+
+    /// The `.pvis` bytes of a bake.
+    pub fn encode(
+        &self,
+        params: &SamplingParams,
+        triangle_count: u32,
+        tiling: &Tiling,
+        visibility: &VisibilityMatrix,
+    ) -> Vec<u8> {
+        format::encode_with(
+            &BakeContents {
+                sampling: params,
+                triangle_count: u64::from(triangle_count),
+                patches: &tiling.patches,
+                visibility,
+            },
+            self.settings.encoding,
+        )
+    }
+
+    /// Runs the whole recipe on `mesh`: tile → sample → fold → number → encode, each stage
+    /// recorded in `stages` and reported to `progress`.
+    pub fn run(
+        &self,
+        mesh: &Mesh,
+        backend: &Backend,
+        progress: &dyn Progress,
+        stages: &mut Stages,
+    ) -> Result<Baked, BakeError> {
+        let tiling = stages.run("tiling", || spin(progress, "tiling", || self.tile(mesh)))?;
+        let rows = stages.run("sampling", || self.sample(mesh, &tiling, backend, progress))?;
+        let visibility = rows.stored(self.settings.level);
+        let sampled_views = rows.sampled_views();
+        drop(rows);
+        let (tiling, visibility, renumbered) =
+            stages.run("patch-order", || self.number(tiling, visibility))?;
+        let params = self.sampling_params(mesh);
+        let bytes = stages.run("encoding", || {
+            spin(progress, "encoding", || {
+                self.encode(&params, mesh.triangle_count(), &tiling, &visibility)
+            })
+        });
+        let visibility_bytes = Pvis::parse(&bytes)
+            .map(|p| p.visibility_bytes())
+            .map_err(|e| BakeError::Internal(format!("the written file does not parse: {e}")))?;
+        Ok(Baked {
+            params,
+            tiling,
+            visibility,
+            renumbered,
+            sampled_views,
+            bytes,
+            visibility_bytes,
+        })
+    }
+
+    /// Writes `baked` (from `mesh`) to `outputs`: the reordered mesh to a temporary file
+    /// first, then the `.pvis` atomically, then the mesh renamed into place, so that a failure
+    /// anywhere leaves no partial output behind; the finished bake's checkpoints are removed.
+    pub fn write(
+        &self,
+        baked: &Baked,
+        mesh: &Mesh,
+        outputs: &Outputs,
+        stages: &mut Stages,
+    ) -> Result<(), BakeError> {
+        let mesh_tmp = match &outputs.mesh {
+            Some(path) => {
+                Some(stages.run("mesh-out", || write_mesh_tmp(path, mesh, &baked.tiling))?)
+            }
+            None => None,
+        };
+        format::write_atomic(&outputs.pvis, &baked.bytes).map_err(|source| BakeError::Write {
+            path: outputs.pvis.clone(),
+            source,
+        })?;
+        // The output is complete: its checkpoints have served their purpose.
+        for checkpoint in [&self.fine_checkpoint, &self.coarse_checkpoint]
+            .into_iter()
+            .flatten()
+        {
+            match std::fs::remove_file(checkpoint) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    return Err(BakeError::Remove {
+                        path: checkpoint.clone(),
+                        source: e,
+                    });
+                }
+                _ => {}
+            }
+        }
+        if let (Some(tmp), Some(path)) = (mesh_tmp, &outputs.mesh) {
+            tmp.persist(path).map_err(|e| BakeError::Write {
+                path: path.clone(),
+                source: e.error,
+            })?;
+        }
+        Ok(())
+    }
+}
+
+/// Runs `f` as an indeterminate progress step (a spinner with elapsed time in the binary).
+fn spin<T>(progress: &dyn Progress, what: &str, f: impl FnOnce() -> T) -> T {
+    progress.start(what, 0);
+    let out = f();
+    progress.finish();
+    out
+}
+
+/// The reordered, patch-coloured PLY of `--mesh-out` in a temporary file beside `path`.
+fn write_mesh_tmp(
+    path: &Path,
+    mesh: &Mesh,
+    tiling: &Tiling,
+) -> Result<tempfile::NamedTempFile, BakeError> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let failed = |source| BakeError::Write {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(failed)?;
+    {
+        let mut out = BufWriter::new(tmp.as_file_mut());
+        crate::ooc::write_ply::write_patch_ply(&mut out, mesh, &tiling.order, &tiling.patch_of)
+            .and_then(|()| out.flush())
+            .map_err(failed)?;
+    }
+    Ok(tmp)
+}

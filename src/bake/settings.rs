@@ -1,0 +1,332 @@
+//! Every knob of a bake, with the defaults of `patchvis bake`, and the check that turns them
+//! into a [`Recipe`] whose values are all usable as they are.
+//!
+//! Defaults that depend on other settings are resolved here and nowhere else: view
+//! supersampling (one finer level unless the level is the finest), the fold threshold and
+//! corners (`--conservative` folds every pixel into every corner), the sampled resolution
+//! (`--conservative` doubles it), and the checkpoint files of each sampling pass.
+
+use crate::format::VisibilityEncoding;
+use crate::sampler::{FoldCorners, MAX_RESOLUTION, MAX_VIEW_SUPERSAMPLE};
+use crate::sphere::{MAX_LEVEL, view_count};
+use crate::tiling::{PatchId, TilingMode};
+use std::path::PathBuf;
+
+use super::{MemoryBudget, Recipe};
+
+/// `--view-supersample` unless given: one level finer, which removes most misses between the
+/// stored views for ~4× the sampling time (BENCHMARKS.md, "Quality").
+pub const DEFAULT_VIEW_SUPERSAMPLE: u32 = 1;
+/// `--fold-min-pixels` unless given (and without `--conservative`): finer views fold only
+/// patches of at least this many pixels, which buys back culling for misses of a few pixels.
+pub const DEFAULT_FOLD_MIN_PIXELS: u32 = 4;
+/// `--fold-corners` unless given (and without `--conservative`, which folds into all): one
+/// stored view per finer view.
+pub const DEFAULT_FOLD_CORNERS: FoldCorners = FoldCorners::One;
+/// `--conservative` samples ID buffers this many times finer than `--resolution`, so that a
+/// renderer at up to this multiple of `--resolution` finds no sub-pixel sliver the sampler
+/// skipped (measured, not proven: BENCHMARKS.md, "Quality").
+pub const CONSERVATIVE_RESOLUTION_SCALE: u32 = 2;
+
+/// How the patches of the file are numbered (`--patch-order`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PatchOrder {
+    /// Patches seen from the same views get neighbouring ids, which makes the visibility
+    /// payload smaller (`format::covisibility_order`).
+    #[default]
+    Covisibility,
+    /// The tiling's Z-order ids, the same for every bake of a mesh at a patch count.
+    Spatial,
+}
+
+/// What to bake and how: every option `patchvis bake` has, as plain values. `Default` is the
+/// command's default bake; [`BakeSettings::check`] validates and resolves them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakeSettings {
+    /// Patches to tile into (`--patches`); fewer when the mesh has fewer triangles.
+    pub patches: u32,
+    /// Sphere level of the stored views (`--level`).
+    pub level: u32,
+    /// ID-buffer side in pixels (`--resolution`), before `--conservative` scales it.
+    pub resolution: u32,
+    /// Field of view in degrees (`--fov`).
+    pub fov_deg: f32,
+    /// A patch counts only where it covers at least this many pixels (`--min-pixels`).
+    pub min_pixels: u32,
+    /// Also mark facing edge neighbours of seen patches (`--dilate`).
+    pub dilate: bool,
+    /// Patches never culled, in the tiling's spatial numbering (`--always-visible`).
+    pub always_visible: Vec<PatchId>,
+    /// ID buffers at [`CONSERVATIVE_RESOLUTION_SCALE`]× the resolution, every finer patch
+    /// folded into every corner (`--conservative`).
+    pub conservative: bool,
+    /// A triangle marks every pixel it touches (`--conservative-raster`).
+    pub conservative_raster: bool,
+    /// Extra sphere levels sampled and folded into the stored ones (`--view-supersample`);
+    /// `None`: [`DEFAULT_VIEW_SUPERSAMPLE`], capped at the finest level.
+    pub view_supersample: Option<u32>,
+    /// Pixel threshold of the folded finer views (`--fold-min-pixels`); `None`:
+    /// [`DEFAULT_FOLD_MIN_PIXELS`], 0 with `conservative`.
+    pub fold_min_pixels: Option<u32>,
+    /// Which stored views receive a finer view's patches (`--fold-corners`); `None`:
+    /// [`DEFAULT_FOLD_CORNERS`], all with `conservative`.
+    pub fold_corners: Option<FoldCorners>,
+    /// Patch numbering (`--patch-order`).
+    pub patch_order: PatchOrder,
+    /// VISB encoding (`--encoding`).
+    pub encoding: VisibilityEncoding,
+    /// Tiling algorithm (`--tiling`).
+    pub tiling: TilingMode,
+    /// Heap budget (`--memory`).
+    pub memory: MemoryBudget,
+    /// Checkpoints are written next to this path (the output file's), one per sampling pass,
+    /// after every sphere level; `None` writes none.
+    pub checkpoint: Option<PathBuf>,
+    /// Continue from the checkpoints (`--resume`).
+    pub resume: bool,
+}
+
+impl Default for BakeSettings {
+    fn default() -> BakeSettings {
+        BakeSettings {
+            patches: 1000,
+            level: 4,
+            resolution: 512,
+            fov_deg: 45.0,
+            min_pixels: 0,
+            dilate: false,
+            always_visible: Vec::new(),
+            conservative: false,
+            conservative_raster: false,
+            view_supersample: None,
+            fold_min_pixels: None,
+            fold_corners: None,
+            patch_order: PatchOrder::default(),
+            encoding: VisibilityEncoding::Tree,
+            tiling: TilingMode::Auto,
+            memory: MemoryBudget::default(),
+            checkpoint: None,
+            resume: false,
+        }
+    }
+}
+
+/// A setting out of range; the message names the option as `patchvis bake` spells it.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct SettingsError(pub String);
+
+/// How the stored views are supersampled, resolved.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Supersample {
+    /// Extra sphere levels sampled (0: none).
+    pub extra_levels: u32,
+    /// Finer views fold only patches of at least this many pixels; 0 when no separate
+    /// thresholded pass is needed (no supersampling, or a threshold at or below the stored
+    /// views' own `min_pixels`).
+    pub fold_min_pixels: u32,
+    /// Which stored views receive a finer view's patches.
+    pub fold_corners: FoldCorners,
+}
+
+impl BakeSettings {
+    /// Checks every value and resolves the defaults.
+    pub fn check(self) -> Result<Recipe, SettingsError> {
+        let fail = |message: String| Err(SettingsError(message));
+        if self.patches == 0 {
+            return fail("--patches 0: expected at least 1 patch".into());
+        }
+        if self.level > MAX_LEVEL {
+            return fail(format!(
+                "--level {}: expected a sphere level from 0 to {MAX_LEVEL} ({} views at most)",
+                self.level,
+                view_count(MAX_LEVEL)
+            ));
+        }
+        if self.resolution == 0 || self.resolution > MAX_RESOLUTION {
+            return fail(format!(
+                "--resolution {}: expected 1 to {MAX_RESOLUTION} pixels",
+                self.resolution
+            ));
+        }
+        let resolution = if self.conservative {
+            let scaled = self.resolution * CONSERVATIVE_RESOLUTION_SCALE;
+            if scaled > MAX_RESOLUTION {
+                return fail(format!(
+                    "--resolution {} with --conservative: expected 1 to {} pixels (--conservative samples at {CONSERVATIVE_RESOLUTION_SCALE}× the resolution, at most {MAX_RESOLUTION})",
+                    self.resolution,
+                    MAX_RESOLUTION / CONSERVATIVE_RESOLUTION_SCALE
+                ));
+            }
+            scaled
+        } else {
+            self.resolution
+        };
+        if !(self.fov_deg.is_finite() && self.fov_deg > 0.0 && self.fov_deg < 180.0) {
+            return fail(format!(
+                "--fov {}: expected degrees between 0 and 180, exclusive",
+                self.fov_deg
+            ));
+        }
+        // The level was checked above, so the subtraction cannot underflow.
+        let extra_levels = self
+            .view_supersample
+            .unwrap_or(DEFAULT_VIEW_SUPERSAMPLE.min(MAX_LEVEL - self.level));
+        if extra_levels > MAX_VIEW_SUPERSAMPLE || self.level + extra_levels > MAX_LEVEL {
+            return fail(format!(
+                "--view-supersample {extra_levels}: expected 0 to {MAX_VIEW_SUPERSAMPLE} with --level + K at most {MAX_LEVEL} (--level is {})",
+                self.level
+            ));
+        }
+        let fold_min_pixels = self.fold_min_pixels.unwrap_or(if self.conservative {
+            0
+        } else {
+            DEFAULT_FOLD_MIN_PIXELS
+        });
+        // A threshold at or below the stored views' own changes nothing: no extra plain pass.
+        let thresholded = extra_levels > 0 && fold_min_pixels > self.min_pixels.max(1);
+        let fold_corners = self.fold_corners.unwrap_or(if self.conservative {
+            FoldCorners::All
+        } else {
+            DEFAULT_FOLD_CORNERS
+        });
+        // The supersampled bake samples other rows than a plain one: its own checkpoint, so
+        // that resuming finds the right one and a plain bake's checkpoint stays usable. The
+        // plain pass of a thresholded fold samples exactly what a plain bake does: it shares
+        // a plain bake's checkpoint.
+        let checkpoint_with = |suffix: String| {
+            self.checkpoint.as_ref().map(|base| {
+                let mut path = base.clone().into_os_string();
+                path.push(suffix);
+                PathBuf::from(path)
+            })
+        };
+        let mut suffix = String::new();
+        if extra_levels > 0 {
+            suffix.push_str(&format!(".vs{extra_levels}"));
+        }
+        if thresholded {
+            suffix.push_str(&format!(".m{fold_min_pixels}"));
+        }
+        let fine_checkpoint = checkpoint_with(suffix + ".ckpt");
+        let coarse_checkpoint = if thresholded {
+            checkpoint_with(".ckpt".into())
+        } else {
+            None
+        };
+        Ok(Recipe {
+            resolution,
+            supersample: Supersample {
+                extra_levels,
+                fold_min_pixels: if thresholded { fold_min_pixels } else { 0 },
+                fold_corners,
+            },
+            coarse_checkpoint,
+            fine_checkpoint,
+            settings: self,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check(f: impl FnOnce(&mut BakeSettings)) -> Result<Recipe, SettingsError> {
+        let mut s = BakeSettings {
+            checkpoint: Some("out.pvis".into()),
+            ..BakeSettings::default()
+        };
+        f(&mut s);
+        s.check()
+    }
+
+    #[test]
+    fn supersampling_defaults_follow_the_level_and_conservative() {
+        let c = check(|_| {}).unwrap();
+        assert_eq!(
+            (c.supersample, c.resolution),
+            (
+                Supersample {
+                    extra_levels: DEFAULT_VIEW_SUPERSAMPLE,
+                    fold_min_pixels: DEFAULT_FOLD_MIN_PIXELS,
+                    fold_corners: FoldCorners::One
+                },
+                512
+            )
+        );
+        assert_eq!(c.fine_checkpoint, Some("out.pvis.vs1.m4.ckpt".into()));
+        assert_eq!(c.coarse_checkpoint, Some("out.pvis.ckpt".into()));
+        // The finest level has nothing finer to sample: the default turns itself off there,
+        // while asking for it explicitly is an error.
+        let c = check(|s| s.level = 7).unwrap();
+        assert_eq!(
+            (c.supersample.extra_levels, c.supersample.fold_min_pixels),
+            (0, 0)
+        );
+        assert_eq!(c.fine_checkpoint, Some("out.pvis.ckpt".into()));
+        let err = check(|s| {
+            s.level = 7;
+            s.view_supersample = Some(1)
+        })
+        .unwrap_err();
+        assert!(err.0.contains("--view-supersample 1"), "{}", err.0);
+        let c = check(|s| s.conservative = true).unwrap();
+        assert_eq!(
+            (
+                c.supersample.extra_levels,
+                c.supersample.fold_min_pixels,
+                c.resolution
+            ),
+            (
+                DEFAULT_VIEW_SUPERSAMPLE,
+                0,
+                512 * CONSERVATIVE_RESOLUTION_SCALE
+            )
+        );
+        assert!(!c.settings.conservative_raster);
+        assert_eq!(c.supersample.fold_corners, FoldCorners::All);
+        let err = check(|s| {
+            s.conservative = true;
+            s.resolution = 8000
+        })
+        .unwrap_err();
+        assert!(err.0.contains("--conservative"), "{}", err.0);
+        // A threshold at or below --min-pixels changes nothing: no extra plain pass.
+        let c = check(|s| s.min_pixels = 4).unwrap();
+        assert_eq!(
+            (c.supersample.fold_min_pixels, c.coarse_checkpoint),
+            (0, None)
+        );
+        let c = check(|s| {
+            s.view_supersample = Some(0);
+            s.fold_min_pixels = Some(9)
+        })
+        .unwrap();
+        assert_eq!(
+            (c.supersample.extra_levels, c.supersample.fold_min_pixels),
+            (0, 0)
+        );
+    }
+
+    #[test]
+    fn out_of_range_values_are_refused_with_the_option_named() {
+        for (f, flag) in [
+            (
+                &(|s: &mut BakeSettings| s.patches = 0) as &dyn Fn(&mut BakeSettings),
+                "--patches",
+            ),
+            (&|s: &mut BakeSettings| s.level = MAX_LEVEL + 1, "--level"),
+            (&|s: &mut BakeSettings| s.resolution = 0, "--resolution"),
+            (&|s: &mut BakeSettings| s.fov_deg = 180.0, "--fov"),
+            (&|s: &mut BakeSettings| s.fov_deg = f32::NAN, "--fov"),
+            (
+                &|s: &mut BakeSettings| s.view_supersample = Some(3),
+                "--view-supersample",
+            ),
+        ] {
+            let err = check(|s| f(s)).unwrap_err();
+            assert!(err.0.starts_with(flag), "{flag}: {}", err.0);
+        }
+    }
+}
