@@ -538,3 +538,49 @@ fn covisibility_numbering_renames_patches_and_keeps_always_visible_ids_spatial()
     let moved = (0..b.patch_count()).find(|&q| spatial_id(q) == 7).unwrap();
     assert!(rows_b.iter().all(|r| r[moved as usize]));
 }
+
+#[test]
+fn info_compare_sizes_the_matrix_with_in_process_zstd_and_xz() {
+    let dir = tempfile::tempdir().unwrap();
+    let pvis = dir.path().join("bunny.pvis");
+    let out = patchvis(&[
+        "bake",
+        BUNNY,
+        "-o",
+        pvis.to_str().unwrap(),
+        "--patches",
+        "60",
+        "--level",
+        "1",
+        "--resolution",
+        "32",
+        "-q",
+    ]);
+    assert!(out.status.success(), "bake failed: {}", stderr(&out));
+    let out = patchvis(&["info", pvis.to_str().unwrap(), "--compare"]);
+    assert!(
+        out.status.success(),
+        "info --compare failed: {}",
+        stderr(&out)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    // The byte count after a row's label, e.g. `  zstd -19 (raw rows)   1234 B ...`.
+    let size = |label: &str| -> u64 {
+        let line = text
+            .lines()
+            .find(|l| l.trim_start().starts_with(label))
+            .unwrap_or_else(|| panic!("no `{label}` line in:\n{text}"));
+        let rest = line.trim_start()[label.len()..].trim_start();
+        let (number, unit) = rest.split_once(' ').unwrap_or((rest, ""));
+        assert!(unit.starts_with('B'), "{line}");
+        number
+            .parse()
+            .unwrap_or_else(|_| panic!("no size in `{line}`"))
+    };
+    let raw = size("raw rows");
+    let zstd = size("zstd -19 (raw rows)");
+    let xz = size("xz -9 (raw rows)");
+    assert!(zstd > 0 && xz > 0 && raw > 0, "{text}");
+    assert!(size("zstd -19 (rows)") > 0, "{text}");
+    assert!(!text.contains("n/a"), "{text}");
+}

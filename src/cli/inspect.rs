@@ -5,9 +5,7 @@ use super::args::{InfoArgs, QueryArgs};
 use anyhow::{Context, Result, anyhow};
 use patchvis::runtime::Pvis;
 use serde_json::json;
-use std::io::Write;
 use std::path::Path;
-use std::process::{Command, Stdio};
 use std::time::Instant;
 
 fn read(path: &Path) -> Result<Vec<u8>> {
@@ -67,7 +65,7 @@ pub fn info(args: &InfoArgs) -> Result<()> {
         );
     }
     if args.compare {
-        compare(&pvis);
+        compare(&pvis)?;
     }
     Ok(())
 }
@@ -96,68 +94,55 @@ fn raw_matrices(pvis: &Pvis<'_>, order: &[u32]) -> (Vec<u8>, Vec<u8>) {
     (raw, reordered)
 }
 
-/// Size of `data` compressed by an external tool, or `None` if it is not installed.
-fn compressed_size(tool: &str, args: &[&str], data: &[u8]) -> Option<usize> {
-    let mut child = Command::new(tool)
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .ok()?;
-    let mut stdin = child.stdin.take()?;
-    let input = data.to_vec();
-    // Feed stdin from a thread so a full stdout pipe cannot deadlock us.
-    let feeder = std::thread::spawn(move || stdin.write_all(&input));
-    let output = child.wait_with_output().ok()?;
-    feeder.join().ok()?.ok()?;
-    output.status.success().then_some(output.stdout.len())
+/// Size of `data` compressed by the zstd library at `level`, as `zstd -<level>` would.
+fn zstd_size(data: &[u8], level: i32) -> Result<usize> {
+    Ok(zstd::bulk::compress(data, level)
+        .context("zstd compression failed")?
+        .len())
+}
+
+/// Size of `data` as an `.xz` stream (CRC64 check) from liblzma at `preset`, as `xz -<preset>`.
+fn xz_size(data: &[u8], preset: u32) -> Result<usize> {
+    Ok(liblzma::encode_all(data, preset)
+        .context("xz compression failed")?
+        .len())
 }
 
 /// `info --compare`: the payload next to generic compressors on the raw matrix.
-fn compare(pvis: &Pvis<'_>) {
+fn compare(pvis: &Pvis<'_>) -> Result<()> {
     let centres: Vec<[f32; 3]> = (0..pvis.patch_count())
         .map(|p| pvis.patch(p).center)
         .collect();
     let (raw, spatial) = raw_matrices(pvis, &patchvis::format::centre_order(&centres));
-    let zstd = compressed_size("zstd", &["-19", "-c", "-q"], &raw);
-    let xz = compressed_size("xz", &["-9", "-c", "-q"], &raw);
-    let zstd_spatial = compressed_size("zstd", &["-19", "-c", "-q"], &spatial);
+    let zstd = zstd_size(&raw, 19)?;
+    let xz = xz_size(&raw, 9)?;
+    let zstd_spatial = zstd_size(&spatial, 19)?;
     let ours = pvis.visibility_bytes() as usize;
-    let show = |name: &str, size: Option<usize>| match size {
-        Some(s) => println!(
-            "  {name:<28}{s:>10} B  {:>6.3} x raw{}",
+    let show = |name: &str, s: usize| {
+        println!(
+            "  {name:<28}{s:>10} B  {:>6.3} x raw  {:>6.3} x zstd",
             s as f64 / raw.len() as f64,
-            zstd.map_or(String::new(), |z| format!(
-                "  {:>6.3} x zstd",
-                s as f64 / z as f64
-            ))
-        ),
-        None => println!("  {name:<28}       n/a  (tool not installed)"),
+            s as f64 / zstd as f64
+        )
     };
     println!(
         "visibility payload, {} views x {} patches:",
         pvis.sampling().views,
         pvis.patch_count()
     );
-    show("raw rows", Some(raw.len()));
+    show("raw rows", raw.len());
     show("zstd -19 (raw rows)", zstd);
     show("xz -9 (raw rows)", xz);
-    show("VISB in this file", Some(ours));
+    show("VISB in this file", ours);
     // A file numbered by co-visibility has rows that zstd also compresses better; the same
     // matrix with the patches in spatial (Z-order) numbering is the baseline before that.
     println!("  same matrix, patches in Z-order of their centres (spatial numbering):");
-    match zstd_spatial {
-        Some(z) => println!(
-            "  {:<28}{z:>10} B  VISB in this file: {:.3} x this",
-            "zstd -19 (rows)",
-            ours as f64 / z as f64
-        ),
-        None => println!(
-            "  {:<28}       n/a  (tool not installed)",
-            "zstd -19 (rows)"
-        ),
-    }
+    println!(
+        "  {:<28}{zstd_spatial:>10} B  VISB in this file: {:.3} x this",
+        "zstd -19 (rows)",
+        ours as f64 / zstd_spatial as f64
+    );
+    Ok(())
 }
 
 /// Runs `patchvis query`.

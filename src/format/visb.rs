@@ -11,7 +11,7 @@
 
 use crate::runtime::consts::*;
 use crate::runtime::context;
-use crate::sampler::VisibilityMatrix;
+use crate::visibility::VisibilityMatrix;
 use crate::sphere::{level_of, parents};
 use rayon::prelude::*;
 
