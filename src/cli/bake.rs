@@ -1,12 +1,12 @@
 //! `patchvis bake`: checked settings, then tile → sample → encode, with a timing and peak-heap
 //! record per stage, and outputs that appear only once everything succeeded.
 
+use super::UsageError;
 use super::args::{BackendArg, BakeArgs, EncodingArg, FoldCornersArg, PatchOrderArg, TilingArg};
 use super::progress::Bars;
-use super::UsageError;
-use patchvis::heap;
 use anyhow::{Context, Result};
 use patchvis::format::{self, BakeContents};
+use patchvis::heap;
 use patchvis::ooc::{Mesh, OpenOptions, default_cache_dir};
 use patchvis::sampler::{self, SamplingParams};
 use patchvis::sphere::{MAX_LEVEL, view_count};
