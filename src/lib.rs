@@ -27,6 +27,8 @@ pub mod generate;
 #[cfg(feature = "bake")]
 pub mod heap;
 #[cfg(feature = "bake")]
+pub(crate) mod mapped;
+#[cfg(feature = "bake")]
 pub mod ooc;
 #[cfg(feature = "bake")]
 pub mod progress;
