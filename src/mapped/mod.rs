@@ -1,7 +1,7 @@
 //! Memory-mapped arrays: the one module that maps files, and so the one that holds the
 //! `unsafe` those maps need.
 //!
-//! Two kinds of data outgrow the heap budget on large meshes and live in maps instead,
+//! Three kinds of data outgrow the heap budget on large meshes and live in maps instead,
 //! each behind a type that derefs to a plain slice, so that the algorithms using them take
 //! `&[T]` and never see where the bytes are:
 //!
@@ -11,11 +11,14 @@
 //! - [`Array`] (`array.rs`): a fixed-length array of plain records, zeroed and mutable, on the
 //!   heap or in an unlinked temporary file mapped read-write. What `tiling::TriangleMap`
 //!   stores.
+//! - [`Records`] and [`RecordWriter`] (`records.rs`): records appended one batch after the
+//!   other, then read only, on the heap or in an unlinked temporary file mapped read-only.
+//!   What the sampler's patch-ordered mesh copy (`sampler::patch_mesh`) stores.
 //!
 //! Records are `bytemuck::Pod` types (no padding, every bit pattern valid), so viewing mapped
 //! bytes as records is `bytemuck::cast_slice`, which checks length and alignment and needs no
 //! `unsafe` (a map starts on a page boundary, so the alignment check always passes). The
-//! only `unsafe` left is the two calls that create maps of files (`Mmap::map`,
+//! only `unsafe` left is the three calls that create maps of files (`Mmap::map`,
 //! `MmapMut::map_mut`), each with a `// SAFETY:` comment; ripgrep's `searcher/mmap.rs` is the
 //! model.
 //!
@@ -29,6 +32,8 @@
 
 mod array;
 mod file_bytes;
+mod records;
 
 pub(crate) use array::Array;
 pub(crate) use file_bytes::FileBytes;
+pub(crate) use records::{RecordWriter, Records};
