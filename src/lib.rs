@@ -31,6 +31,8 @@ pub mod gpu;
 #[cfg(feature = "bake")]
 pub mod heap;
 #[cfg(feature = "bake")]
+pub(crate) mod mapped;
+#[cfg(feature = "bake")]
 pub mod memory;
 #[cfg(feature = "bake")]
 pub mod ooc;

@@ -32,8 +32,8 @@ use gltf::{Accessor, Document, Semantic};
 use super::Bounds;
 use super::cache::CacheWriter;
 use super::error::{Fault, MeshErrorKind, snippet};
-use super::mmap::MeshBytes;
 use super::ply::BoundsBuilder;
+use crate::mapped::FileBytes;
 
 /// `glTF`, the first four bytes of a GLB file.
 const GLB_MAGIC: &[u8; 4] = b"glTF";
@@ -232,7 +232,7 @@ fn split_glb(
 /// One buffer's bytes: borrowed from the GLB, mapped from a `.bin` file, or decoded.
 enum BufferBytes<'a> {
     Borrowed(&'a [u8]),
-    Mapped(MeshBytes),
+    Mapped(FileBytes),
     Owned(Vec<u8>),
 }
 
@@ -288,7 +288,7 @@ fn load_buffers<'a>(
                 if metadata.len() == 0 {
                     BufferBytes::Owned(Vec::new())
                 } else {
-                    BufferBytes::Mapped(MeshBytes::open(&file, metadata.len()).map_err(io_error)?)
+                    BufferBytes::Mapped(FileBytes::open(&file, metadata.len()).map_err(io_error)?)
                 }
             }
         };

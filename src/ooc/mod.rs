@@ -16,15 +16,17 @@
 //! Cost: opening the 1.9 MB bunny in place is one validation pass (about a millisecond in
 //! release); a query is a multiply-add and three little-endian loads.
 //!
-//! Files: `error.rs` (errors with positions), `mmap.rs` (the map, the crate's only `unsafe`),
-//! `cache.rs` (conversion cache files), `ply/` (header, in-place and converting readers),
-//! `obj.rs`, `stl.rs`, `gltf_mesh.rs` (converters), `text.rs` (line scanning and number parsing for the text
-//! formats), `write_ply.rs` (`--mesh-out`).
+//! The map itself, read-only with a copying fallback where a file cannot be mapped, is
+//! `crate::mapped::FileBytes`: this module holds no `unsafe` code.
+//!
+//! Files: `error.rs` (errors with positions), `cache.rs` (conversion cache files), `ply/`
+//! (header, in-place and converting readers), `obj.rs`, `stl.rs`, `gltf_mesh.rs` (converters),
+//! `text.rs` (line scanning and number parsing for the text formats), `write_ply.rs`
+//! (`--mesh-out`).
 
 mod cache;
 mod error;
 mod gltf_mesh;
-mod mmap;
 mod obj;
 mod ply;
 mod stl;
@@ -38,7 +40,8 @@ pub use cache::default_cache_dir;
 use cache::{CacheKey, CacheWriter};
 use error::Fault;
 pub use error::{ErrorPosition, MeshError, MeshErrorKind};
-use mmap::MeshBytes;
+
+use crate::mapped::FileBytes;
 
 /// Axis-aligned bounds of a mesh's vertices.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -149,7 +152,7 @@ impl InputFormat {
 /// A triangle mesh opened for reading.
 pub struct Mesh {
     path: PathBuf,
-    bytes: MeshBytes,
+    bytes: FileBytes,
     layout: Layout,
     vertex_count: u32,
     triangle_count: u32,
@@ -180,7 +183,7 @@ impl Mesh {
             )
             .in_file(path));
         }
-        let bytes = MeshBytes::open(&file, metadata.len()).map_err(|e| MeshError::io(path, &e))?;
+        let bytes = FileBytes::open(&file, metadata.len()).map_err(|e| MeshError::io(path, &e))?;
         // Without a key (e.g. no modification time) the cache cannot be trusted: convert.
         let key = CacheKey::of(path, &metadata).ok();
         let cache_dir = options.cache_dir.as_deref().filter(|_| key.is_some());
@@ -197,7 +200,7 @@ impl Mesh {
     /// Serves `bytes` in place, from a cache, or converted into one.
     fn from_bytes(
         path: PathBuf,
-        bytes: MeshBytes,
+        bytes: FileBytes,
         format: InputFormat,
         cache_dir: Option<&Path>,
         key: Option<CacheKey>,
@@ -237,7 +240,7 @@ impl Mesh {
             let cached = dir.join(key.file_name());
             if let Ok(file) = File::open(&cached) {
                 let len = file.metadata().map(|m| m.len()).unwrap_or(0);
-                let hit = MeshBytes::open(&file, len)
+                let hit = FileBytes::open(&file, len)
                     .ok()
                     .and_then(|map| Mesh::from_cache(&path, map, Some(key), MeshSource::CacheHit));
                 if let Some(mesh) = hit {
@@ -262,7 +265,7 @@ impl Mesh {
         drop(bytes);
         let file = sink.finish(bounds).map_err(cache_error)?;
         let len = file.metadata().map_err(cache_error)?.len();
-        let map = MeshBytes::open(&file, len).map_err(cache_error)?;
+        let map = FileBytes::open(&file, len).map_err(cache_error)?;
         Mesh::from_cache(&path, map, None, MeshSource::Converted).ok_or_else(|| {
             let err = std::io::Error::other("the cache file just written does not read back");
             Fault::cache(err).in_file(&path)
@@ -272,7 +275,7 @@ impl Mesh {
     /// Serves a cache file; `None` when it is stale, damaged or not for `key`.
     fn from_cache(
         path: &Path,
-        bytes: MeshBytes,
+        bytes: FileBytes,
         key: Option<&CacheKey>,
         source: MeshSource,
     ) -> Option<Mesh> {
@@ -375,7 +378,7 @@ impl Mesh {
     ) -> Result<Mesh, MeshError> {
         let vertex_bytes = positions.len() * OWNED_RECORD_BYTES;
         let len = vertex_bytes + triangles.len() * OWNED_RECORD_BYTES;
-        let bytes = MeshBytes::filled(len, |out| {
+        let bytes = FileBytes::filled(len, |out| {
             let (vertex_out, triangle_out) = out.split_at_mut(vertex_bytes);
             for (record, p) in vertex_out
                 .chunks_exact_mut(OWNED_RECORD_BYTES)

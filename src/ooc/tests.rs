@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use proptest::prelude::*;
 
-use super::mmap::MeshBytes;
 use super::*;
+use crate::mapped::FileBytes;
 
 fn corpus(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -797,7 +797,7 @@ fn file_system_errors() {
 
 /// Opens `bytes` without touching the file system; on success every query must be in range.
 fn open_in_memory(bytes: &[u8]) {
-    let copy = MeshBytes::filled(bytes.len(), |out| out.copy_from_slice(bytes)).unwrap();
+    let copy = FileBytes::filled(bytes.len(), |out| out.copy_from_slice(bytes)).unwrap();
     let name = PathBuf::from("fuzz.ply");
     if let Ok(mesh) = Mesh::from_bytes(name, copy, InputFormat::Ply, None, None, 1 << 20) {
         for v in 0..mesh.vertex_count() {

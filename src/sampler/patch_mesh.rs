@@ -36,16 +36,16 @@
 //! same slices either way, patch by patch in file order, so a view's reads are sequential
 //! runs of the file.
 //!
-//! This file's only `unsafe` code views the mapped bytes as `[f32; 12]` / `[u16; 3]`.
+//! Both storages are the crate's record arrays (`crate::mapped::{RecordWriter, Records}`),
+//! which own the temporary file and its map: this file holds no `unsafe` code.
 //! Cost: one pass over the triangles plus a sort per patch.
 
-use std::fs::File;
-use std::io::{self, BufWriter, Write};
-use std::ops::Deref;
+use std::io;
 
-use memmap2::Mmap;
+use bytemuck::Pod;
 use rayon::prelude::*;
 
+use crate::mapped::{RecordWriter, Records};
 use crate::ooc::Mesh;
 use crate::tiling::{Tiling, bounding_sphere};
 
@@ -80,122 +80,20 @@ impl Storage {
             _ => Storage::Heap,
         }
     }
+
+    /// An empty writer for records kept in this storage.
+    fn writer<T: Pod>(self) -> io::Result<RecordWriter<T>> {
+        match self {
+            Storage::Heap => Ok(RecordWriter::heap()),
+            Storage::Mapped => RecordWriter::temp_file(),
+        }
+    }
 }
 
 /// The regrouped mesh's expected size: 6 bytes per triangle and, on a typical mesh (half
 /// as many vertices as triangles, plus the border copies), about 6 more for vertices.
 pub(crate) fn estimated_bytes(triangles: u64) -> u64 {
     triangles.saturating_mul(12)
-}
-
-/// Records of one kind ([`PointBlock`] or `[u16; 3]`) on the heap or in a mapped file.
-#[derive(Debug)]
-enum Records<T: Plain> {
-    Heap(Vec<T>),
-    /// `len` records at the start of `map`; the file behind it is unlinked, so this process
-    /// holds the only handle to it.
-    Mapped {
-        map: Mmap,
-        len: usize,
-    },
-}
-
-/// Three or twelve 32-bit or three 16-bit numbers: no padding, alignment at most 4, every
-/// bit pattern valid.
-trait Plain: Copy + Default + std::fmt::Debug {
-    fn write_to(&self, out: &mut impl Write) -> io::Result<()>;
-}
-
-impl Plain for PointBlock {
-    fn write_to(&self, out: &mut impl Write) -> io::Result<()> {
-        for x in self {
-            out.write_all(&x.to_ne_bytes())?;
-        }
-        Ok(())
-    }
-}
-
-impl Plain for [u16; 3] {
-    fn write_to(&self, out: &mut impl Write) -> io::Result<()> {
-        for x in self {
-            out.write_all(&x.to_ne_bytes())?;
-        }
-        Ok(())
-    }
-}
-
-impl<T: Plain> Deref for Records<T> {
-    type Target = [T];
-    #[inline]
-    fn deref(&self) -> &[T] {
-        match self {
-            Records::Heap(v) => v,
-            Records::Mapped { map, len } => {
-                let bytes: &[u8] = &map[..len * std::mem::size_of::<T>()];
-                // SAFETY: `T` is `[f32; 12]` or `[u16; 3]` (the sealed `Plain`): no padding,
-                // align 4 or 2, every bit pattern valid. A mapping starts on a page boundary, so
-                // the pointer is aligned; `bytes` holds exactly `len` records, written in
-                // native byte order by `Sink::push`; the slice borrows `self`, so the map
-                // outlives it, and nothing writes the unlinked file while it is mapped.
-                unsafe { std::slice::from_raw_parts(bytes.as_ptr().cast::<T>(), *len) }
-            }
-        }
-    }
-}
-
-/// Where records go while the mesh is regrouped.
-enum Sink<T: Plain> {
-    Heap(Vec<T>),
-    File { out: BufWriter<File>, len: usize },
-}
-
-impl<T: Plain> Sink<T> {
-    fn new(storage: Storage) -> io::Result<Sink<T>> {
-        Ok(match storage {
-            Storage::Heap => Sink::Heap(Vec::new()),
-            Storage::Mapped => Sink::File {
-                out: BufWriter::with_capacity(1 << 20, tempfile::tempfile()?),
-                len: 0,
-            },
-        })
-    }
-
-    fn push(&mut self, records: &[T]) -> io::Result<()> {
-        match self {
-            Sink::Heap(v) => v.extend_from_slice(records),
-            Sink::File { out, len } => {
-                for r in records {
-                    r.write_to(out)?;
-                }
-                *len += records.len();
-            }
-        }
-        Ok(())
-    }
-
-    fn len(&self) -> usize {
-        match self {
-            Sink::Heap(v) => v.len(),
-            Sink::File { len, .. } => *len,
-        }
-    }
-
-    fn finish(self) -> io::Result<Records<T>> {
-        match self {
-            Sink::Heap(v) => Ok(Records::Heap(v)),
-            // An empty file cannot be mapped on every system; nothing to map anyway.
-            Sink::File { len: 0, .. } => Ok(Records::Heap(Vec::new())),
-            Sink::File { out, len } => {
-                let file = out.into_inner().map_err(|e| e.into_error())?;
-                // SAFETY: `tempfile()` returns an already unlinked file (or one opened with
-                // exclusive sharing where unlinking open files is impossible): no other
-                // process or handle can change it while the map lives, and the map keeps its
-                // own reference to the file.
-                let map = unsafe { Mmap::map(&file)? };
-                Ok(Records::Mapped { map, len })
-            }
-        }
-    }
 }
 
 /// One patch's sections: each one's distinct vertices, its triangles' corners as indices
@@ -422,8 +320,8 @@ impl PatchMesh {
                 .collect()
         };
         let patch_count = tiling.patches.len();
-        let mut positions = Sink::new(storage)?;
-        let mut triangles = Sink::new(storage)?;
+        let mut positions = storage.writer()?;
+        let mut triangles = storage.writer()?;
         let mut block_start = Vec::with_capacity(patch_count + 1);
         let mut triangle_start = Vec::with_capacity(patch_count + 1);
         let mut section_start = Vec::with_capacity(patch_count + 1);
@@ -514,19 +412,16 @@ impl PatchMesh {
     /// Heap bytes held: [`Self::bytes`] on the heap, the offsets and clusters when mapped.
     #[cfg(test)]
     pub(crate) fn heap_bytes(&self) -> usize {
-        let offsets = self.offset_bytes();
-        match (&self.positions, &self.triangles) {
-            (Records::Heap(_), Records::Heap(_)) => self.bytes(),
-            (Records::Heap(p), _) => offsets + p.len() * 48,
-            (_, Records::Heap(t)) => offsets + t.len() * 6,
-            _ => offsets,
-        }
+        let on_heap = |mapped: bool, bytes: usize| if mapped { 0 } else { bytes };
+        self.offset_bytes()
+            + on_heap(self.positions.is_mapped(), self.positions.len() * 48)
+            + on_heap(self.triangles.is_mapped(), self.triangles.len() * 6)
     }
 
     /// True when the vertices and triangles live in a mapped file.
     #[cfg(test)]
     pub(crate) fn is_mapped(&self) -> bool {
-        matches!(self.triangles, Records::Mapped { .. })
+        self.triangles.is_mapped()
     }
 }
 

@@ -1,4 +1,4 @@
-//! The bytes a [`Mesh`](super::Mesh) reads from: a read-only memory map, always.
+//! The bytes a mesh is read from: a read-only memory map, always.
 //!
 //! A mesh file is mapped in place (memmap2), so opening a multi-gigabyte binary PLY costs page
 //! faults on first touch rather than a copy. Where the file cannot be mapped (some network or
@@ -6,8 +6,7 @@
 //! meshes are written into one too. Keeping a single type behind `Deref<Target = [u8]>` is what
 //! lets `Mesh::position` and `Mesh::triangle` run without a per-call match on the storage kind.
 //!
-//! This is the crate's only `unsafe` code (one `Mmap::map` call); ripgrep's `searcher/mmap.rs`
-//! is the model.
+//! One `unsafe` call: `Mmap::map` of the input file.
 
 use std::fs::File;
 use std::io::{self, Read};
@@ -15,31 +14,32 @@ use std::ops::Deref;
 
 use memmap2::{Mmap, MmapMut};
 
-/// Read-only bytes of a mesh: a mapped file or an anonymous mapping filled by this process.
-pub(crate) struct MeshBytes {
+/// Read-only bytes of a file: the file mapped in place, or an anonymous mapping filled by this
+/// process.
+pub(crate) struct FileBytes {
     map: Mmap,
     /// True when `map` is the file itself (zero copy), false for a private copy.
     file_backed: bool,
 }
 
-impl MeshBytes {
+impl FileBytes {
     /// Maps `file` (of `len` bytes) read-only; when mapping fails, reads it into memory.
     ///
     /// # Safety
     ///
     /// This function is safe to call, but it relies on an assumption the type system cannot
-    /// check: nobody truncates or rewrites the file while the [`Mesh`](super::Mesh) is alive.
-    /// Truncation makes a later read of a vanished page raise `SIGBUS`; rewriting changes the
-    /// bytes under the validated layout. The pipeline opens its input read-only and never
-    /// writes it; the `patchvis` documentation tells users not to edit a mesh during a bake,
-    /// the same contract ripgrep and every mmap-based mesh tool make.
-    pub(crate) fn open(file: &File, len: u64) -> io::Result<MeshBytes> {
+    /// check: nobody truncates or rewrites the file while the bytes are alive. Truncation
+    /// makes a later read of a vanished page raise `SIGBUS`; rewriting changes the bytes under
+    /// the validated layout. The pipeline opens its input read-only and never writes it; the
+    /// `patchvis` documentation tells users not to edit a mesh during a bake, the same
+    /// contract ripgrep and every mmap-based mesh tool make.
+    pub(crate) fn open(file: &File, len: u64) -> io::Result<FileBytes> {
         // SAFETY: the mapping is read-only and private to this process; the remaining hazard
         // (the file changing underneath) is the documented contract above. Every read through
         // the map is a bounds-checked slice access, so changed bytes give wrong values, never
         // out-of-bounds access.
         match unsafe { Mmap::map(file) } {
-            Ok(map) => Ok(MeshBytes {
+            Ok(map) => Ok(FileBytes {
                 map,
                 file_backed: true,
             }),
@@ -48,22 +48,22 @@ impl MeshBytes {
     }
 
     /// The fallback: the file's bytes copied into an anonymous mapping.
-    fn read(mut file: &File, len: u64) -> io::Result<MeshBytes> {
+    fn read(mut file: &File, len: u64) -> io::Result<FileBytes> {
         let len = usize::try_from(len)
             .map_err(|_| io::Error::new(io::ErrorKind::OutOfMemory, "file too large to read"))?;
         let mut map = MmapMut::map_anon(len)?;
         file.read_exact(&mut map)?;
-        Ok(MeshBytes {
+        Ok(FileBytes {
             map: map.make_read_only()?,
             file_backed: false,
         })
     }
 
     /// `len` bytes written by `fill`, held in an anonymous mapping (converted meshes).
-    pub(crate) fn filled(len: usize, fill: impl FnOnce(&mut [u8])) -> io::Result<MeshBytes> {
+    pub(crate) fn filled(len: usize, fill: impl FnOnce(&mut [u8])) -> io::Result<FileBytes> {
         let mut map = MmapMut::map_anon(len)?;
         fill(&mut map);
-        Ok(MeshBytes {
+        Ok(FileBytes {
             map: map.make_read_only()?,
             file_backed: false,
         })
@@ -75,7 +75,7 @@ impl MeshBytes {
     }
 }
 
-impl Deref for MeshBytes {
+impl Deref for FileBytes {
     type Target = [u8];
     #[inline]
     fn deref(&self) -> &[u8] {
