@@ -35,6 +35,9 @@ pub mod sampler;
 #[cfg(feature = "bake")]
 pub mod tiling;
 
+#[cfg(test)]
+pub(crate) mod test_kit;
+
 #[cfg(all(feature = "bake", not(feature = "std")))]
 compile_error!("the `bake` feature needs `std`");
 

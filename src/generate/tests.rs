@@ -2,17 +2,13 @@
 //! closed and nested engine parts, determinism, and a zero-copy read back through `Mesh`.
 
 use std::collections::HashMap;
-use std::path::Path;
 
 use super::engine::{Engine, casing_inside};
 use super::grid::BunnyGrid;
 use super::subdivide::SubdividedMesh;
 use super::*;
 use crate::ooc::Mesh;
-
-fn bunny() -> Mesh {
-    Mesh::open(&Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bunny.ply")).unwrap()
-}
+use crate::test_kit::bunny::bunny;
 
 fn collect(model: &dyn Model) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
     let (mut v, mut t) = (Vec::new(), Vec::new());
