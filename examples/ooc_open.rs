@@ -1,39 +1,19 @@
-//! Times `Mesh::open_with` on a file and reports the peak heap it used (a counting global
-//! allocator), for BENCHMARKS.md; optionally rewrites the mesh as ASCII PLY or OBJ to produce
-//! conversion-throughput inputs.
+//! Times `Mesh::open_with` on a file and reports the peak heap it used (the library's counting
+//! global allocator, `patchvis::heap`), for BENCHMARKS.md; optionally rewrites the mesh as
+//! ASCII PLY or OBJ to produce conversion-throughput inputs.
 //!
 //! `cargo run --release --example ooc_open -- MESH [--cache DIR] [--budget BYTES]
 //!  [--write-obj OUT.obj | --write-ascii-ply OUT.ply]`
 
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::io::{BufWriter, Write};
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
+use patchvis::heap;
 use patchvis::ooc::{Mesh, OpenOptions};
 
-struct Counting;
-static CURRENT: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: forwards to `System`; the counters only observe sizes.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let now = CURRENT.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
-        PEAK.fetch_max(now, Ordering::Relaxed);
-        // SAFETY: the caller's contract.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
-        // SAFETY: the caller's contract.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
 #[global_allocator]
-static ALLOC: Counting = Counting;
+static ALLOC: heap::CountingAlloc = heap::CountingAlloc;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -49,12 +29,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             _ => return Err(format!("unknown flag {flag}").into()),
         }
     }
-    let before = CURRENT.load(Ordering::Relaxed);
-    PEAK.store(before, Ordering::Relaxed);
+    heap::reset_peak();
+    let before = heap::current();
     let start = Instant::now();
     let mesh = Mesh::open_with(&input, &options)?;
     let seconds = start.elapsed().as_secs_f64();
-    let peak = PEAK.load(Ordering::Relaxed) - before;
+    let peak = heap::peak() - before;
     let bytes = std::fs::metadata(&input)?.len();
     println!(
         "{}: {} triangles, {} vertices, {:?}, open {:.3} s, {:.1} MB/s, peak heap {} bytes",

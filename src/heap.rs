@@ -1,14 +1,17 @@
 //! A counting global allocator, so that a bake can report its peak heap per stage and tests
 //! can hold a stage to its memory budget.
 //!
-//! Wraps the system allocator with two relaxed atomics (current and peak bytes); the cost is
-//! a few nanoseconds per allocation, negligible next to what the stages allocate. A program
-//! opts in by installing it (`#[global_allocator] static A: patchvis::heap::CountingAlloc =
-//! patchvis::heap::CountingAlloc;`, as the `patchvis` binary does); without it, [`peak`] and
-//! [`current`] stay 0 and [`is_counting`] says so. The one `unsafe impl` forwards every call
-//! to `System` unchanged.
+//! Wraps the system allocator with two relaxed atomics (current and peak bytes) and a
+//! per-thread count of allocations, which proves that a call allocates nothing (the reader's
+//! invariant) whatever other threads do; the cost is a few nanoseconds per allocation,
+//! negligible next to what the stages allocate. A program opts in by installing it
+//! (`#[global_allocator] static A: patchvis::heap::CountingAlloc =
+//! patchvis::heap::CountingAlloc;`, as the `patchvis` binary does); without it, [`peak`],
+//! [`current`] and [`allocations`] stay 0 and [`is_counting`] says so. The one `unsafe impl`
+//! forwards every call to `System` unchanged.
 
 use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// The system allocator, counting live and peak bytes.
@@ -16,6 +19,12 @@ pub struct CountingAlloc;
 
 static CURRENT: AtomicUsize = AtomicUsize::new(0);
 static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+thread_local! {
+    // Constant-initialised and without a destructor: reading it never allocates, so the
+    // allocator itself may touch it.
+    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+}
 
 // SAFETY: every method forwards to `System` unchanged; the counters only observe sizes.
 unsafe impl GlobalAlloc for CountingAlloc {
@@ -55,6 +64,9 @@ unsafe impl GlobalAlloc for CountingAlloc {
 }
 
 fn grow(bytes: usize) {
+    // `try_with` fails only while the thread's locals are being torn down; such a late
+    // allocation goes uncounted rather than panicking inside the allocator.
+    let _ = ALLOCATIONS.try_with(|n| n.set(n.get() + 1));
     let now = CURRENT.fetch_add(bytes, Ordering::Relaxed) + bytes;
     PEAK.fetch_max(now, Ordering::Relaxed);
 }
@@ -72,6 +84,12 @@ pub fn peak() -> usize {
 /// Live heap bytes now.
 pub fn current() -> usize {
     CURRENT.load(Ordering::Relaxed)
+}
+
+/// Allocations (`alloc`, `alloc_zeroed` and `realloc` calls) made so far by the calling thread.
+/// The difference of two readings is what the thread allocated in between.
+pub fn allocations() -> u64 {
+    ALLOCATIONS.with(Cell::get)
 }
 
 /// Whether [`CountingAlloc`] is the global allocator (it has seen an allocation).

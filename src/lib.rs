@@ -45,6 +45,9 @@ pub mod tiling;
 #[cfg(feature = "bake")]
 pub mod visibility;
 
+#[cfg(test)]
+pub(crate) mod test_kit;
+
 #[cfg(all(feature = "bake", not(feature = "std")))]
 compile_error!("the `bake` feature needs `std`");
 

@@ -6,38 +6,27 @@
 
 mod common;
 
-use common::{BUNNY, json, patchvis, stderr};
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use common::{BUNNY, Bake, Baked, bake, json, patchvis, rows, stderr};
+use std::path::Path;
 
 const RESOLUTION: u32 = 128;
 
-fn bake_small(dir: &Path, threads: &str) -> (PathBuf, PathBuf) {
-    let pvis = dir.join("bunny.pvis");
-    let mesh = dir.join("bunny-patches.ply");
-    let out = Command::new(env!("CARGO_BIN_EXE_patchvis"))
-        .env("RAYON_NUM_THREADS", threads)
-        .args([
-            "bake",
-            BUNNY,
-            "-o",
-            pvis.to_str().unwrap(),
-            "--patches",
-            "200",
-            "--level",
-            "2",
-        ])
-        .args([
-            "--resolution",
-            &RESOLUTION.to_string(),
-            "--mesh-out",
-            mesh.to_str().unwrap(),
-        ])
-        .args(["--stats", dir.join("stats.json").to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "bake failed: {}", stderr(&out));
-    (pvis, mesh)
+/// The bunny in 200 patches, level 2, [`RESOLUTION`] px on `threads` threads, with
+/// `--mesh-out` and `--stats`.
+fn bake_small(threads: &str) -> Baked {
+    let resolution = RESOLUTION.to_string();
+    Bake::new(&[
+        "--patches",
+        "200",
+        "--level",
+        "2",
+        "--resolution",
+        &resolution,
+    ])
+    .env("RAYON_NUM_THREADS", threads)
+    .mesh_out()
+    .stats()
+    .run()
 }
 
 /// The reordered mesh: positions, triangles and each triangle's patch.
@@ -260,9 +249,9 @@ fn ray_cast_patches(
 
 #[test]
 fn queries_from_the_axis_views_contain_every_patch_a_ray_caster_sees() {
-    let dir = tempfile::tempdir().unwrap();
-    let (pvis, mesh_path) = bake_small(dir.path(), "2");
-    let info = json(&patchvis(&["info", pvis.to_str().unwrap(), "--json"]));
+    let baked = bake_small("2");
+    let pvis = baked.pvis_arg();
+    let info = json(&patchvis(&["info", pvis, "--json"]));
     assert_eq!(info["triangles"], 99_785);
     assert_eq!(info["patches"], 200);
     assert_eq!(info["views"], 66);
@@ -273,7 +262,7 @@ fn queries_from_the_axis_views_contain_every_patch_a_ray_caster_sees() {
     let distance = camera["distance"].as_f64().unwrap();
     let fov = camera["fov_deg"].as_f64().unwrap();
 
-    let mesh = read_patch_mesh(&mesh_path);
+    let mesh = read_patch_mesh(&baked.mesh_out());
     assert_eq!(mesh.triangles.len(), 99_785);
     // Reordered: each patch is one contiguous, ascending run.
     assert!(mesh.patch.windows(2).all(|w| w[0] <= w[1]));
@@ -288,13 +277,7 @@ fn queries_from_the_axis_views_contain_every_patch_a_ray_caster_sees() {
     ] {
         let eye: V3 = std::array::from_fn(|k| center[k] + axis[k] * distance);
         let from = format!("{},{},{}", eye[0], eye[1], eye[2]);
-        let answer = json(&patchvis(&[
-            "query",
-            pvis.to_str().unwrap(),
-            "--from",
-            &from,
-            "--json",
-        ]));
+        let answer = json(&patchvis(&["query", pvis, "--from", &from, "--json"]));
         let answered: Vec<u32> = answer["patches"]
             .as_array()
             .unwrap()
@@ -329,17 +312,10 @@ fn queries_from_the_axis_views_contain_every_patch_a_ray_caster_sees() {
     }
     // From the centre the camera is inside the sampling sphere.
     let from = format!("{},{},{}", center[0], center[1], center[2]);
-    let inside = json(&patchvis(&[
-        "query",
-        pvis.to_str().unwrap(),
-        "--from",
-        &from,
-        "--json",
-    ]));
+    let inside = json(&patchvis(&["query", pvis, "--from", &from, "--json"]));
     assert_eq!(inside["inside_sphere"], true);
 
-    let stats: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.path().join("stats.json")).unwrap()).unwrap();
+    let stats = baked.stats();
     let names: Vec<&str> = stats["stages"]
         .as_array()
         .unwrap()
@@ -358,15 +334,13 @@ fn queries_from_the_axis_views_contain_every_patch_a_ray_caster_sees() {
 
 #[test]
 fn bakes_are_byte_identical_for_any_thread_count() {
-    let (one, two) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
-    let (a, ma) = bake_small(one.path(), "1");
-    let (b, mb) = bake_small(two.path(), "2");
+    let (a, b) = (bake_small("1"), bake_small("2"));
     assert!(
-        std::fs::read(a).unwrap() == std::fs::read(b).unwrap(),
+        a.bytes() == b.bytes(),
         ".pvis differs between 1 and 2 threads"
     );
     assert!(
-        std::fs::read(ma).unwrap() == std::fs::read(mb).unwrap(),
+        std::fs::read(a.mesh_out()).unwrap() == std::fs::read(b.mesh_out()).unwrap(),
         "--mesh-out differs between 1 and 2 threads"
     );
 }
@@ -461,30 +435,10 @@ fn info_and_query_refuse_files_that_are_not_pvis() {
     assert_eq!(out.status.code(), Some(1));
 }
 
-/// Decoded rows of a `.pvis` file, one `Vec<bool>` per view.
-fn rows(bytes: &[u8]) -> Vec<Vec<bool>> {
-    let pvis = patchvis::runtime::Pvis::parse(bytes).expect("valid file");
-    let mut row = vec![0u64; pvis.row_words()];
-    (0..pvis.sampling().views)
-        .map(|v| {
-            pvis.view_row(v, &mut row);
-            (0..pvis.patch_count())
-                .map(|p| row[p as usize / 64] >> (p % 64) & 1 == 1)
-                .collect()
-        })
-        .collect()
-}
-
 #[test]
 fn covisibility_numbering_renames_patches_and_keeps_always_visible_ids_spatial() {
-    let dir = tempfile::tempdir().unwrap();
-    let bake = |name: &str, order: &str| -> Vec<u8> {
-        let pvis = dir.path().join(name);
-        let out = patchvis(&[
-            "bake",
-            BUNNY,
-            "-o",
-            pvis.to_str().unwrap(),
+    let bake = |order: &str| -> Vec<u8> {
+        bake(&[
             "--patches",
             "120",
             "--level",
@@ -498,12 +452,11 @@ fn covisibility_numbering_renames_patches_and_keeps_always_visible_ids_spatial()
             "--patch-order",
             order,
             "-q",
-        ]);
-        assert!(out.status.success(), "bake failed: {}", stderr(&out));
-        std::fs::read(pvis).unwrap()
+        ])
+        .bytes()
     };
-    let spatial = bake("spatial.pvis", "spatial");
-    let covisible = bake("covisible.pvis", "covisibility");
+    let spatial = bake("spatial");
+    let covisible = bake("covisibility");
     assert_ne!(spatial, covisible);
     let (a, b) = (
         patchvis::runtime::Pvis::parse(&spatial).unwrap(),
@@ -523,20 +476,26 @@ fn covisibility_numbering_renames_patches_and_keeps_always_visible_ids_spatial()
             .find(|&p| record(a.patch(p)) == record(b.patch(q)))
             .expect("every renumbered patch is a spatial patch")
     };
-    let (rows_a, rows_b) = (rows(&spatial), rows(&covisible));
+    let ((_, rows_a), (_, rows_b)) = (rows(&spatial), rows(&covisible));
+    assert_eq!(rows_a.views(), rows_b.views());
+    let views = 0..rows_a.views();
     let mut renamed = 0;
     for q in 0..b.patch_count() {
         let p = spatial_id(q);
         renamed += usize::from(p != q);
-        for (ra, rb) in rows_a.iter().zip(&rows_b) {
-            assert_eq!(ra[p as usize], rb[q as usize], "patch {q} (spatial {p})");
+        for v in views.clone() {
+            assert_eq!(
+                rows_a.get(v, p),
+                rows_b.get(v, q),
+                "patch {q} (spatial {p})"
+            );
         }
     }
     assert!(renamed > 0, "the tour kept every id");
     // `--always-visible 7` means spatial patch 7, in every view of both files.
-    assert!(rows_a.iter().all(|r| r[7]));
+    assert!(views.clone().all(|v| rows_a.get(v, 7)));
     let moved = (0..b.patch_count()).find(|&q| spatial_id(q) == 7).unwrap();
-    assert!(rows_b.iter().all(|r| r[moved as usize]));
+    assert!(views.clone().all(|v| rows_b.get(v, moved)));
 }
 
 #[test]

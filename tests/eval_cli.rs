@@ -4,44 +4,12 @@
 
 mod common;
 
-use common::{BUNNY, json, patchvis};
-use serde_json::Value;
-use std::path::{Path, PathBuf};
+use common::{BUNNY, SMALL_QUIET, bake, json, number, patchvis, stderr};
 
 const CUBE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/ply/cube.ply");
 
-/// The bunny in 200 patches, sphere level 2 (66 views), 128 px.
-fn bake(dir: &Path) -> PathBuf {
-    let pvis = dir.join("bunny.pvis");
-    let out = patchvis(&[
-        "bake",
-        BUNNY,
-        "-o",
-        pvis.to_str().unwrap(),
-        "--patches",
-        "200",
-        "--level",
-        "2",
-        "--resolution",
-        "128",
-        "-q",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    pvis
-}
-
-fn f(v: &Value, key: &str) -> f64 {
-    v[key]
-        .as_f64()
-        .unwrap_or_else(|| panic!("{key} missing in {v}"))
-}
-
 /// Per-view entries without their timings, which differ run to run.
-fn views_without_timings(report: &Value) -> Vec<Value> {
+fn views_without_timings(report: &serde_json::Value) -> Vec<serde_json::Value> {
     report["per_view"]
         .as_array()
         .unwrap()
@@ -59,18 +27,11 @@ fn views_without_timings(report: &Value) -> Vec<Value> {
 
 #[test]
 fn random_views_report_consistent_deterministic_json() {
-    let dir = tempfile::tempdir().unwrap();
-    let pvis = bake(dir.path());
+    let baked = bake(&SMALL_QUIET);
+    let pvis = baked.pvis_arg();
     let run = || {
         json(&patchvis(&[
-            "eval",
-            BUNNY,
-            pvis.to_str().unwrap(),
-            "--views",
-            "8",
-            "--seed",
-            "3",
-            "--json",
+            "eval", BUNNY, pvis, "--views", "8", "--seed", "3", "--json",
         ]))
     };
     let a = run();
@@ -82,68 +43,68 @@ fn random_views_report_consistent_deterministic_json() {
         "culling_rate_max",
         "ideal_culling_rate_mean",
     ] {
-        assert!((0.0..=1.0).contains(&f(&a, key)), "{key}");
+        assert!((0.0..=1.0).contains(&number(&a, key)), "{key}");
     }
     // Patches exist behind the bunny from every side.
-    assert!(f(&a, "culling_rate_mean") > 0.1);
+    assert!(number(&a, "culling_rate_mean") > 0.1);
     let per_view = a["per_view"].as_array().unwrap();
     assert_eq!(per_view.len(), 8);
     let identical = per_view.iter().filter(|v| v["missed_pixels"] == 0).count();
-    assert_eq!(f(&a, "identical_views_fraction"), identical as f64 / 8.0);
-    let missed: Vec<f64> = per_view.iter().map(|v| f(v, "missed_pixels")).collect();
     assert_eq!(
-        f(&a, "missed_pixels_max"),
+        number(&a, "identical_views_fraction"),
+        identical as f64 / 8.0
+    );
+    let missed: Vec<f64> = per_view
+        .iter()
+        .map(|v| number(v, "missed_pixels"))
+        .collect();
+    assert_eq!(
+        number(&a, "missed_pixels_max"),
         missed.iter().copied().fold(0.0, f64::max)
     );
-    assert!((f(&a, "missed_pixels_mean") - missed.iter().sum::<f64>() / 8.0).abs() < 1e-9);
+    assert!((number(&a, "missed_pixels_mean") - missed.iter().sum::<f64>() / 8.0).abs() < 1e-9);
     for v in per_view {
         // Infinite PSNR (null) exactly for identical views.
         assert_eq!(v["psnr_db"].is_null(), v["missed_pixels"] == 0, "{v}");
-        assert!(f(v, "missed_pixels") <= f(v, "covered_pixels") + 128.0 * 128.0);
+        assert!(number(v, "missed_pixels") <= number(v, "covered_pixels") + 128.0 * 128.0);
     }
-    assert!(f(&a["frame_cost"], "speedup") > 0.0);
+    assert!(number(&a["frame_cost"], "speedup") > 0.0);
     assert_eq!(views_without_timings(&a), views_without_timings(&run()));
 }
 
 #[test]
 fn the_sampling_positions_themselves_miss_nothing() {
-    let dir = tempfile::tempdir().unwrap();
-    let pvis = bake(dir.path());
+    let baked = bake(&SMALL_QUIET);
+    let pvis = baked.pvis_arg();
     let report = json(&patchvis(&[
         "eval",
         BUNNY,
-        pvis.to_str().unwrap(),
+        pvis,
         "--sampling-level",
         "2",
         "--json",
     ]));
     assert_eq!(report["views"], 66);
-    assert_eq!(f(&report, "missed_pixels_max"), 0.0);
-    assert_eq!(f(&report, "missed_patches_max"), 0.0);
-    assert_eq!(f(&report, "identical_views_fraction"), 1.0);
+    assert_eq!(number(&report, "missed_pixels_max"), 0.0);
+    assert_eq!(number(&report, "missed_patches_max"), 0.0);
+    assert_eq!(number(&report, "identical_views_fraction"), 1.0);
     // Without a miss the answer holds the true set: culling is at most the ideal.
     for v in report["per_view"].as_array().unwrap() {
-        assert!(f(v, "culling_rate") <= f(v, "ideal_culling_rate") + 1e-12);
+        assert!(number(v, "culling_rate") <= number(v, "ideal_culling_rate") + 1e-12);
     }
-    let too_fine = patchvis(&[
-        "eval",
-        BUNNY,
-        pvis.to_str().unwrap(),
-        "--sampling-level",
-        "3",
-    ]);
+    let too_fine = patchvis(&["eval", BUNNY, pvis, "--sampling-level", "3"]);
     assert_eq!(too_fine.status.code(), Some(2));
 }
 
 #[test]
 fn orbit_writes_frames_and_a_plot() {
-    let dir = tempfile::tempdir().unwrap();
-    let pvis = bake(dir.path());
-    let pics = dir.path().join("pics");
+    let baked = bake(&SMALL_QUIET);
+    let pvis = baked.pvis_arg();
+    let pics = baked.file("pics");
     let report = json(&patchvis(&[
         "eval",
         BUNNY,
-        pvis.to_str().unwrap(),
+        pvis,
         "--path",
         "orbit:6",
         "--distance-scale",
@@ -174,7 +135,7 @@ fn orbit_writes_frames_and_a_plot() {
     // A path file with one camera (the first orbit eye) evaluates one frame; a bad line is
     // reported with its number.
     let eye = &report["per_view"][0]["eye"];
-    let path_file = dir.path().join("cams.txt");
+    let path_file = baked.file("cams.txt");
     std::fs::write(
         &path_file,
         format!("# one camera\n{} {} {}\n", eye[0], eye[1], eye[2]),
@@ -183,21 +144,15 @@ fn orbit_writes_frames_and_a_plot() {
     let from_file = json(&patchvis(&[
         "eval",
         BUNNY,
-        pvis.to_str().unwrap(),
+        pvis,
         "--path",
         path_file.to_str().unwrap(),
         "--json",
     ]));
     assert_eq!(from_file["views"], 1);
     std::fs::write(&path_file, "1 2\n").unwrap();
-    let bad = patchvis(&[
-        "eval",
-        BUNNY,
-        pvis.to_str().unwrap(),
-        "--path",
-        path_file.to_str().unwrap(),
-    ]);
-    let err = String::from_utf8_lossy(&bad.stderr);
+    let bad = patchvis(&["eval", BUNNY, pvis, "--path", path_file.to_str().unwrap()]);
+    let err = stderr(&bad);
     assert_eq!(bad.status.code(), Some(1));
     assert!(err.contains("cams.txt: line 1"), "{err}");
 }
@@ -236,10 +191,10 @@ fn sweep_bakes_every_combination() {
     assert_eq!(combos, [(20, 0, 6), (20, 1, 18), (60, 0, 6), (60, 1, 18)]);
     for p in points {
         assert_eq!(p["views"], 4);
-        assert!((0.0..=1.0).contains(&f(p, "culling_rate_mean")));
+        assert!((0.0..=1.0).contains(&number(p, "culling_rate_mean")));
     }
     // More views cost more bytes.
-    assert!(f(&points[1], "file_bytes") > f(&points[0], "file_bytes"));
+    assert!(number(&points[1], "file_bytes") > number(&points[0], "file_bytes"));
     for name in ["sweep-levels.svg", "sweep-patches.svg"] {
         let svg = std::fs::read_to_string(dir.path().join(name)).unwrap();
         // Two panels, each with a metric and a size line per group of two.
@@ -249,10 +204,10 @@ fn sweep_bakes_every_combination() {
 
 #[test]
 fn files_from_another_mesh_and_bad_flags_are_refused() {
-    let dir = tempfile::tempdir().unwrap();
-    let pvis = bake(dir.path());
-    let out = patchvis(&["eval", CUBE, pvis.to_str().unwrap()]);
-    let err = String::from_utf8_lossy(&out.stderr);
+    let baked = bake(&SMALL_QUIET);
+    let pvis = baked.pvis_arg();
+    let out = patchvis(&["eval", CUBE, pvis]);
+    let err = stderr(&out);
     assert_eq!(out.status.code(), Some(1));
     assert!(
         err.contains("was not baked from") && err.trim_end().lines().count() == 1,
@@ -260,15 +215,9 @@ fn files_from_another_mesh_and_bad_flags_are_refused() {
     );
     for args in [
         vec!["eval", BUNNY],
-        vec!["eval", BUNNY, pvis.to_str().unwrap(), "--views", "0"],
-        vec![
-            "eval",
-            BUNNY,
-            pvis.to_str().unwrap(),
-            "--distance-scale",
-            "-1",
-        ],
-        vec!["eval", BUNNY, pvis.to_str().unwrap(), "--path", "orbit:0"],
+        vec!["eval", BUNNY, pvis, "--views", "0"],
+        vec!["eval", BUNNY, pvis, "--distance-scale", "-1"],
+        vec!["eval", BUNNY, pvis, "--path", "orbit:0"],
     ] {
         let out = patchvis(&args);
         assert_eq!(out.status.code(), Some(2), "{args:?}");

@@ -8,52 +8,26 @@
 
 mod common;
 
-use common::{BUNNY, json, patchvis};
+use common::{
+    BUNNY, Baked, NO_VULKAN, SMALL_QUIET, bake, json, number, patchvis, patchvis_with_env,
+    path_str, skip_gpu_test, stderr,
+};
 use serde_json::Value;
-use std::io::Write;
-use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn f(v: &Value, key: &str) -> f64 {
-    v[key]
-        .as_f64()
-        .unwrap_or_else(|| panic!("{key} missing in {v}"))
-}
+use std::path::Path;
 
 /// The bunny in 200 patches, sphere level 2, 128 px, with `extra` bake flags.
-fn bake(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
-    let pvis = dir.join(name);
-    let mut args = vec![
-        "bake",
-        BUNNY,
-        "-o",
-        pvis.to_str().unwrap(),
-        "--patches",
-        "200",
-        "--level",
-        "2",
-        "--resolution",
-        "128",
-        "-q",
-    ];
-    args.extend_from_slice(extra);
-    let out = patchvis(&args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    pvis
+fn bake_small(extra: &[&str]) -> Baked {
+    bake(&[&SMALL_QUIET[..], extra].concat())
 }
 
 #[test]
 fn gpu_frame_cost_reports_positive_timings() {
-    let dir = tempfile::tempdir().unwrap();
-    let pvis = bake(dir.path(), "bunny.pvis", &[]);
+    let baked = bake_small(&[]);
+    let pvis = baked.pvis_arg();
     let out = patchvis(&[
         "eval",
         BUNNY,
-        pvis.to_str().unwrap(),
+        pvis,
         "--frame-backend",
         "gpu",
         "--views",
@@ -61,20 +35,11 @@ fn gpu_frame_cost_reports_positive_timings() {
         "--json",
         "-q",
     ]);
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let err = stderr(&out);
     if !out.status.success()
-        && (stderr.contains("no GPU adapter found") || stderr.contains("cannot open a device"))
+        && (err.contains("no GPU adapter found") || err.contains("cannot open a device"))
     {
-        assert!(
-            !std::env::var("CI").is_ok_and(|v| v == "true"),
-            "CI=true but {stderr}; .ci/run installs Mesa's lavapipe for the GPU tests"
-        );
-        // Straight to the stream, past the test harness's capture, so that a plain
-        // `cargo test` shows that the GPU test did not run.
-        let _ = writeln!(
-            std::io::stderr(),
-            "GPU test gpu_frame_cost_reports_positive_timings skipped: {stderr}"
-        );
+        skip_gpu_test("gpu_frame_cost_reports_positive_timings", &err);
         return;
     }
     let report = json(&out);
@@ -96,32 +61,32 @@ fn gpu_frame_cost_reports_positive_timings() {
         "wall_culled_ms_median",
         "wall_speedup",
     ] {
-        let value = f(gpu, key);
+        let value = number(gpu, key);
         assert!(value > 0.0 && value.is_finite(), "{key} = {value}");
     }
     // The culled frame draws at least one run of patches (every view sees some of the bunny).
-    assert!(f(gpu, "culled_draws_mean") >= 1.0, "{gpu}");
+    assert!(number(gpu, "culled_draws_mean") >= 1.0, "{gpu}");
     // The CPU figure is still there, and every view carries both.
-    assert!(f(&report["frame_cost"], "full_ms_median") > 0.0);
+    assert!(number(&report["frame_cost"], "full_ms_median") > 0.0);
     let per_view = report["per_view"].as_array().unwrap();
     assert_eq!(per_view.len(), 4);
     for view in per_view {
         assert!(
-            f(view, "gpu_full_ms") > 0.0 && f(view, "gpu_culled_ms") > 0.0,
+            number(view, "gpu_full_ms") > 0.0 && number(view, "gpu_culled_ms") > 0.0,
             "{view}"
         );
-        assert!(f(view, "full_ms") > 0.0, "{view}");
+        assert!(number(view, "full_ms") > 0.0, "{view}");
     }
 }
 
 #[test]
 fn cpu_frame_backend_reports_no_gpu_figure_and_gpu_sweeps_are_refused() {
-    let dir = tempfile::tempdir().unwrap();
-    let pvis = bake(dir.path(), "bunny.pvis", &[]);
+    let baked = bake_small(&[]);
+    let pvis = baked.pvis_arg();
     let report = json(&patchvis(&[
         "eval",
         BUNNY,
-        pvis.to_str().unwrap(),
+        pvis,
         "--frame-backend",
         "cpu",
         "--views",
@@ -136,49 +101,40 @@ fn cpu_frame_backend_reports_no_gpu_figure_and_gpu_sweeps_are_refused() {
 
     let out = patchvis(&["eval", BUNNY, "--sweep", "--frame-backend", "gpu"]);
     assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = stderr(&out);
     assert!(
         err.contains("--frame-backend") && err.contains("--sweep"),
         "{err}"
     );
 }
 
-/// Environment under which the Vulkan loader finds no driver, so wgpu finds no adapter (as in
-/// tests/gpu.rs).
-const NO_VULKAN: [(&str, &str); 3] = [
-    ("WGPU_BACKEND", "vulkan"),
-    ("VK_ICD_FILENAMES", "/nonexistent.json"),
-    ("VK_DRIVER_FILES", "/nonexistent.json"),
-];
-
 #[test]
 fn frame_backend_gpu_without_an_adapter_fails_in_one_line_and_auto_falls_back() {
-    let dir = tempfile::tempdir().unwrap();
-    let pvis = bake(dir.path(), "bunny.pvis", &[]);
+    let baked = bake_small(&[]);
+    let pvis = baked.pvis_arg();
     let eval = |backend: &str| {
-        Command::new(env!("CARGO_BIN_EXE_patchvis"))
-            .args([
+        patchvis_with_env(
+            &[
                 "eval",
                 BUNNY,
-                pvis.to_str().unwrap(),
+                pvis,
                 "--frame-backend",
                 backend,
                 "--views",
                 "2",
                 "--json",
                 "-q",
-            ])
-            .envs(NO_VULKAN)
-            .output()
-            .expect("run patchvis")
+            ],
+            &NO_VULKAN,
+        )
     };
     let out = eval("gpu");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
-    assert_eq!(stderr.trim_end().lines().count(), 1, "stderr: {stderr}");
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "stderr: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "stderr: {err}");
     assert!(
-        stderr.starts_with("error: --frame-backend gpu: no GPU adapter found"),
-        "stderr: {stderr}"
+        err.starts_with("error: --frame-backend gpu: no GPU adapter found"),
+        "stderr: {err}"
     );
     let report = json(&eval("auto"));
     assert_eq!(report["frame_backend"], "cpu");
@@ -220,7 +176,7 @@ fn eval_file(pvis: &Path) -> Value {
     json(&patchvis(&[
         "eval",
         BUNNY,
-        pvis.to_str().unwrap(),
+        path_str(pvis),
         "--frame-backend",
         "cpu",
         "--views",
@@ -234,13 +190,8 @@ fn eval_file(pvis: &Path) -> Value {
 
 #[test]
 fn sweep_bakes_what_bake_writes_in_each_mode() {
-    let dir = tempfile::tempdir().unwrap();
-    let default = eval_file(&bake(dir.path(), "default.pvis", &[]));
-    let plain = eval_file(&bake(
-        dir.path(),
-        "plain.pvis",
-        &["--view-supersample", "0"],
-    ));
+    let default = eval_file(&bake_small(&[]).pvis);
+    let plain = eval_file(&bake_small(&["--view-supersample", "0"]).pvis);
     for (mode, file) in [("default", &default), ("plain", &plain)] {
         let point = sweep_point(mode);
         // Same bytes in the file (the rows compress to the same size only when they are the
@@ -256,5 +207,5 @@ fn sweep_bakes_what_bake_writes_in_each_mode() {
         }
     }
     // Supersampling folds finer views in: never fewer patches, here strictly more.
-    assert!(f(&default, "culling_rate_mean") < f(&plain, "culling_rate_mean"));
+    assert!(number(&default, "culling_rate_mean") < number(&plain, "culling_rate_mean"));
 }

@@ -8,16 +8,16 @@
 //! missing adapter fails them: CI installs Mesa's lavapipe (`.ci/run`) so that they run.
 #![cfg(all(feature = "gpu", feature = "cli"))]
 
+mod common;
+
+use common::{Bake, Baked, NO_VULKAN, patchvis, skip_gpu_test, stderr};
 use patchvis::ooc::Mesh;
 use patchvis::progress::NoProgress;
 use patchvis::sampler::gpu::{GpuError, GpuSampler};
 use patchvis::sampler::{SamplingOptions, SamplingParams, VisibilityMatrix, sample_tiled};
 use patchvis::tiling::{Tiling, tile};
 use std::io::Write;
-use std::process::{Command, Output};
 use std::sync::OnceLock;
-
-const BUNNY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/bunny.ply");
 
 /// Largest fraction of differing bits between the backends: a rasterization-rule difference
 /// moves single edge pixels, which on the bunny changes well under one bit in a thousand.
@@ -28,13 +28,8 @@ const MAX_DIFFERENT_BITS: f64 = 1e-3;
 fn gpu(test: &str) -> Option<GpuSampler> {
     match GpuSampler::new() {
         Ok(gpu) => Some(gpu),
-        Err(e) if std::env::var("CI").is_ok_and(|v| v == "true") => {
-            panic!("{test}: CI=true but {e}; .ci/run installs Mesa's lavapipe for these tests")
-        }
         Err(e) => {
-            // Straight to the stream, past the test harness's capture of `eprintln!`, so that
-            // a plain `cargo test` shows that the GPU tests did not run.
-            let _ = writeln!(std::io::stderr(), "GPU test {test} skipped: {e}");
+            skip_gpu_test(test, &e.to_string());
             None
         }
     }
@@ -44,7 +39,7 @@ fn gpu(test: &str) -> Option<GpuSampler> {
 fn bunny() -> &'static (Mesh, Tiling) {
     static BUNNY_TILED: OnceLock<(Mesh, Tiling)> = OnceLock::new();
     BUNNY_TILED.get_or_init(|| {
-        let mesh = Mesh::open(std::path::Path::new(BUNNY)).expect("bundled bunny");
+        let mesh = common::bunny();
         let tiling = tile(&mesh, 200).expect("tiling");
         (mesh, tiling)
     })
@@ -138,15 +133,9 @@ fn gpu_refuses_what_it_does_not_implement() {
     }
 }
 
-/// `patchvis bake` of a small bunny with `extra` flags and `env` set.
-fn bake(dir: &std::path::Path, extra: &[&str], env: &[(&str, &str)]) -> Output {
-    let out = dir.join("bunny.pvis");
-    let mut command = Command::new(env!("CARGO_BIN_EXE_patchvis"));
-    command.args([
-        "bake",
-        BUNNY,
-        "-o",
-        out.to_str().unwrap(),
+/// `patchvis bake` of a small bunny with `extra` flags and `env` set, successful or not.
+fn bake(extra: &[&str], env: &[(&str, &str)]) -> Baked {
+    let mut bake = Bake::new(&[
         "--patches",
         "50",
         "--level",
@@ -154,42 +143,34 @@ fn bake(dir: &std::path::Path, extra: &[&str], env: &[(&str, &str)]) -> Output {
         "--resolution",
         "64",
         "--quiet",
-    ]);
-    command.args(extra);
+    ])
+    .args(extra);
     for (k, v) in env {
-        command.env(k, v);
+        bake = bake.env(k, v);
     }
-    command.output().expect("run patchvis")
+    bake.attempt()
 }
-
-/// Environment under which the Vulkan loader finds no driver, so wgpu finds no adapter.
-const NO_VULKAN: [(&str, &str); 3] = [
-    ("WGPU_BACKEND", "vulkan"),
-    ("VK_ICD_FILENAMES", "/nonexistent.json"),
-    ("VK_DRIVER_FILES", "/nonexistent.json"),
-];
 
 #[test]
 fn backend_gpu_without_an_adapter_fails_in_one_line_and_auto_falls_back() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = bake(dir.path(), &["--backend", "gpu"], &NO_VULKAN);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
-    assert_eq!(stderr.trim_end().lines().count(), 1, "stderr: {stderr}");
+    let gpu = bake(&["--backend", "gpu"], &NO_VULKAN);
+    let err = stderr(&gpu.output);
+    assert_eq!(gpu.output.status.code(), Some(1), "stderr: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "stderr: {err}");
     assert!(
-        stderr.starts_with("error: --backend gpu: no GPU adapter found"),
-        "stderr: {stderr}"
+        err.starts_with("error: --backend gpu: no GPU adapter found"),
+        "stderr: {err}"
     );
-    assert!(!dir.path().join("bunny.pvis").exists());
+    assert!(!gpu.pvis.exists());
 
-    let out = bake(dir.path(), &["--backend", "auto"], &NO_VULKAN);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "stderr: {stderr}");
+    let auto = bake(&["--backend", "auto"], &NO_VULKAN);
+    let err = stderr(&auto.output);
+    assert!(auto.output.status.success(), "stderr: {err}");
     assert!(
-        stderr.contains("--backend auto: sampling on the CPU"),
-        "stderr: {stderr}"
+        err.contains("--backend auto: sampling on the CPU"),
+        "stderr: {err}"
     );
-    assert!(dir.path().join("bunny.pvis").exists());
+    assert!(auto.pvis.exists());
 }
 
 #[test]
@@ -197,37 +178,20 @@ fn backend_gpu_bakes_a_file_that_verifies() {
     if gpu("bake --backend gpu").is_none() {
         return;
     }
-    let dir = tempfile::tempdir().unwrap();
-    let out = bake(
-        dir.path(),
-        &["--backend", "gpu", "--view-supersample", "1"],
-        &[],
-    );
+    let gpu = bake(&["--backend", "gpu", "--view-supersample", "1"], &[]);
     assert!(
-        out.status.success(),
+        gpu.output.status.success(),
         "stderr: {}",
-        String::from_utf8_lossy(&out.stderr)
+        stderr(&gpu.output)
     );
-    let pvis = dir.path().join("bunny.pvis");
-    let verify = Command::new(env!("CARGO_BIN_EXE_patchvis"))
-        .args(["verify", pvis.to_str().unwrap()])
-        .output()
-        .expect("run patchvis");
-    assert!(
-        verify.status.success(),
-        "verify: {}",
-        String::from_utf8_lossy(&verify.stderr)
-    );
+    let verify = patchvis(&["verify", gpu.pvis_arg()]);
+    assert!(verify.status.success(), "verify: {}", stderr(&verify));
 
-    let out = bake(
-        dir.path(),
-        &["--backend", "gpu", "--conservative-raster"],
-        &[],
-    );
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
+    let refused = bake(&["--backend", "gpu", "--conservative-raster"], &[]);
+    let err = stderr(&refused.output);
+    assert_eq!(refused.output.status.code(), Some(2), "stderr: {err}");
     assert!(
-        stderr.contains("--conservative-raster needs the CPU backend"),
-        "{stderr}"
+        err.contains("--conservative-raster needs the CPU backend"),
+        "{err}"
     );
 }

@@ -2,6 +2,9 @@
 //! same cube, every malformed case with its error kind and position, welding under a tiny
 //! memory budget, and cache hits, misses and invalidation.
 
+mod common;
+
+use common::{patchvis_with_env, path_str, stderr};
 use patchvis::ooc::{ErrorPosition, Mesh, MeshErrorKind, MeshSource, OpenOptions};
 use std::path::Path;
 
@@ -345,22 +348,16 @@ fn cli_refuses_malformed_input_with_exit_1_and_no_output() {
     let input = dir.path().join("bad.obj");
     std::fs::write(&input, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n").unwrap();
     let out = dir.path().join("out.pvis");
-    let run = std::process::Command::new(env!("CARGO_BIN_EXE_patchvis"))
-        .env("XDG_CACHE_HOME", dir.path().join("cache"))
-        .args([
-            "bake",
-            input.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-            "-q",
-        ])
-        .output()
-        .unwrap();
+    let cache = dir.path().join("cache");
+    let run = patchvis_with_env(
+        &["bake", path_str(&input), "-o", path_str(&out), "-q"],
+        &[("XDG_CACHE_HOME", path_str(&cache))],
+    );
     assert_eq!(run.status.code(), Some(1));
-    let stderr = String::from_utf8_lossy(&run.stderr);
+    let err = stderr(&run);
     assert!(
-        stderr.contains("bad.obj: line 4: face refers to vertex 9"),
-        "{stderr}"
+        err.contains("bad.obj: line 4: face refers to vertex 9"),
+        "{err}"
     );
     assert!(!out.exists());
 }

@@ -1,42 +1,17 @@
-//! **Invariant** check: the reader never allocates. A counting global allocator watches
-//! `Pvis::parse`, `query`, `view_row`, streaming and expanded queries, and iterating the answer.
+//! **Invariant** check: the reader never allocates. The library's counting global allocator
+//! watches `Pvis::parse`, `query`, `view_row`, streaming and expanded queries, and iterating
+//! the answer. It counts per thread, so the harness's threads, which may allocate at any
+//! time, do not disturb the count of the test's own.
 #![cfg(feature = "bake")]
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-use std::sync::atomic::{AtomicUsize, Ordering};
-
 use patchvis::format::{BakeContents, encode};
+use patchvis::heap;
 use patchvis::runtime::Pvis;
 use patchvis::sampler::{SamplingParams, VisibilityMatrix};
 use patchvis::tiling::Patch;
 
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-thread_local! {
-    // Only the test's own thread is watched: the harness's threads may allocate at any time.
-    static WATCHED: Cell<bool> = const { Cell::new(false) };
-}
-
-// SAFETY: forwards to the system allocator unchanged; only counts calls.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if WATCHED.try_with(Cell::get).unwrap_or(false) {
-            ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        }
-        // SAFETY: the caller upholds `GlobalAlloc::alloc`'s contract, which we pass on.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: `ptr` came from `System.alloc` with this layout.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static ALLOC: heap::CountingAlloc = heap::CountingAlloc;
 
 #[test]
 fn parse_query_streaming_expanded_and_iteration_allocate_nothing() {
@@ -75,8 +50,7 @@ fn parse_query_streaming_expanded_and_iteration_allocate_nothing() {
     let mut table = vec![0u64; probe.expanded_bound()];
     let mut row = vec![0u64; probe.row_words()];
 
-    WATCHED.with(|w| w.set(true));
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    let before = heap::allocations();
     let pvis = Pvis::parse(&bytes).unwrap();
     let mut seen = 0u32;
     let mut triangles = 0u32;
@@ -99,9 +73,9 @@ fn parse_query_streaming_expanded_and_iteration_allocate_nothing() {
         triangles += 2 * e.count();
         assert!(e.patches().all(|p| !pvis.backfacing(p, eye) || p < 100));
     }
-    let after = ALLOCATIONS.load(Ordering::SeqCst);
-    WATCHED.with(|w| w.set(false));
+    let after = heap::allocations();
 
+    assert!(before > 0, "the counting allocator is not installed");
     assert_eq!(after - before, 0, "the reader allocated");
     assert!(seen >= 3 && triangles == seen);
 }

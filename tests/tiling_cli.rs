@@ -2,63 +2,45 @@
 //! choice and the tiling quality reported in `--stats`, out-of-core bakes byte-identical for
 //! any thread count, and `--mesh-out` written from the memory-mapped outputs.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-const BUNNY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/bunny.ply");
+use common::{Bake, stdout};
 
 /// Bakes the bunny into 300 patches with `--tiling mode --memory memory` on `threads`
 /// threads; returns the `.pvis`, `--mesh-out` and parsed `--stats` files.
-fn bake(
-    dir: &Path,
-    mode: &str,
-    memory: &str,
-    threads: &str,
-) -> (Vec<u8>, Vec<u8>, serde_json::Value) {
-    let name = |ext: &str| -> PathBuf { dir.join(format!("{mode}-{memory}-{threads}.{ext}")) };
-    let (pvis, mesh, stats) = (name("pvis"), name("ply"), name("json"));
-    let out = Command::new(env!("CARGO_BIN_EXE_patchvis"))
+fn bake(mode: &str, memory: &str, threads: &str) -> (Vec<u8>, Vec<u8>, serde_json::Value) {
+    let baked = Bake::new(&["--patches", "300", "--level", "1", "--resolution", "64"])
+        .args(&["--tiling", mode, "--memory", memory])
         .env("RAYON_NUM_THREADS", threads)
-        .args(["bake", BUNNY, "--patches", "300", "--level", "1"])
-        .args(["--resolution", "64", "--tiling", mode, "--memory", memory])
-        .args(["-o", pvis.to_str().unwrap()])
-        .args(["--mesh-out", mesh.to_str().unwrap()])
-        .args(["--stats", stats.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "bake failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let stats: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(stats).unwrap()).expect("stats JSON");
+        .mesh_out()
+        .stats()
+        .run();
+    let stats = baked.stats();
     // The summary names the algorithm that ran, as the stats do.
-    let summary = String::from_utf8_lossy(&out.stdout);
+    let summary = stdout(&baked.output);
     let algorithm = stats["tiling"]["algorithm"].as_str().expect("algorithm");
     assert!(
         summary.contains(&format!("({algorithm}, ")),
         "summary: {summary}"
     );
     (
-        std::fs::read(pvis).unwrap(),
-        std::fs::read(mesh).unwrap(),
+        baked.bytes(),
+        std::fs::read(baked.mesh_out()).unwrap(),
         stats,
     )
 }
 
 #[test]
 fn both_tilings_bake_and_report_their_quality() {
-    let dir = tempfile::tempdir().unwrap();
-    let (in_core, _, a) = bake(dir.path(), "in-core", "64MiB", "2");
+    let (in_core, _, a) = bake("in-core", "64MiB", "2");
     assert_eq!(a["tiling"]["algorithm"], "in-core");
     assert_eq!(a["tiling"]["chunks"], 0);
     assert_eq!(a["tiling"]["components"], 1);
     assert_eq!(a["patches"], 300);
 
     // 8 MiB: chunks of about 15,700 triangles, so the bunny is tiled in 7 chunks.
-    let (pvis1, mesh1, b) = bake(dir.path(), "out-of-core", "8MiB", "1");
-    let (pvis2, mesh2, _) = bake(dir.path(), "out-of-core", "8MiB", "2");
+    let (pvis1, mesh1, b) = bake("out-of-core", "8MiB", "1");
+    let (pvis2, mesh2, _) = bake("out-of-core", "8MiB", "2");
     assert_eq!(b["tiling"]["algorithm"], "out-of-core");
     assert_eq!(b["tiling"]["chunks"], 7);
     assert_eq!(b["tiling"]["merged_components"], 0);
@@ -76,9 +58,9 @@ fn both_tilings_bake_and_report_their_quality() {
     assert!(sizes["median"].as_u64() <= sizes["max"].as_u64());
 
     // Auto: the bunny's in-core estimate (16 MB) fits 64 MiB but not 8 MiB.
-    let (_, _, c) = bake(dir.path(), "auto", "64MiB", "2");
+    let (_, _, c) = bake("auto", "64MiB", "2");
     assert_eq!(c["tiling"]["algorithm"], "in-core");
-    let (pvis3, _, d) = bake(dir.path(), "auto", "8MiB", "2");
+    let (pvis3, _, d) = bake("auto", "8MiB", "2");
     assert_eq!(d["tiling"]["algorithm"], "out-of-core");
     assert_eq!(pvis3, pvis1);
 }

@@ -1,7 +1,7 @@
 //! Memory and scale of the tiling (issue 4), measured with a counting global allocator.
 //!
 //! The one test that runs by default checks the out-of-core promise: tiling a 0.4M-triangle
-//! mesh under a 16 MiB budget never holds more heap than the budget, and the in-core peak per
+//! mesh under an 8 MiB budget never holds more heap than the budget, and the in-core peak per
 //! triangle stays below `IN_CORE_BYTES_PER_TRIANGLE` (the figure `TilingMode::Auto` relies
 //! on). The ignored tests are the benchmarks of BENCHMARKS.md, "Tiling (issue 4)"; run them
 //! one at a time in release:
@@ -12,170 +12,98 @@
 //! cargo test --release --test tiling_scale grid_20m -- --ignored --nocapture
 //! ```
 //!
-//! Meshes are generated here and written as binary little-endian PLY, which `Mesh::open`
+//! Meshes are written as binary little-endian PLY by `patchvis::generate`, which `Mesh::open`
 //! maps in place (no heap): the bundled bunny subdivided by edge midpoints (×4 triangles per
-//! level), and a wavy grid (height field of two sine waves) for the largest sizes.
-//! Only one test runs by default, so the allocator counts nothing but that test.
+//! level, `SubdividedMesh::without_relief`), and a wavy grid (height field of two sine waves,
+//! a `Model` here) for the largest sizes. The heap is measured by the library's counting
+//! allocator (`patchvis::heap`). Only one test runs by default, so the allocator counts
+//! nothing but that test.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::collections::HashMap;
-use std::io::{BufWriter, Write};
+mod common;
+
+use std::io;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
+use patchvis::generate::subdivide::SubdividedMesh;
+use patchvis::generate::{Model, write_ply};
+use patchvis::heap;
 use patchvis::ooc::Mesh;
 use patchvis::tiling::{IN_CORE_BYTES_PER_TRIANGLE, Tiling, TilingMode, TilingOptions, tile_with};
 
-struct CountingAlloc;
-
-static CURRENT: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: every method forwards to `System` unchanged; the counters only observe sizes.
-unsafe impl GlobalAlloc for CountingAlloc {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        // SAFETY: same contract as the caller's.
-        let p = unsafe { System.alloc(layout) };
-        if !p.is_null() {
-            grow(layout.size());
-        }
-        p
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) };
-        CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        // SAFETY: same contract as the caller's.
-        let p = unsafe { System.realloc(ptr, layout, new_size) };
-        if !p.is_null() {
-            CURRENT.fetch_sub(layout.size(), Ordering::Relaxed);
-            grow(new_size);
-        }
-        p
-    }
-}
-
 #[global_allocator]
-static ALLOC: CountingAlloc = CountingAlloc;
-
-fn grow(bytes: usize) {
-    let now = CURRENT.fetch_add(bytes, Ordering::Relaxed) + bytes;
-    PEAK.fetch_max(now, Ordering::Relaxed);
-}
+static ALLOC: heap::CountingAlloc = heap::CountingAlloc;
 
 /// Runs `f` and returns its result with the heap it added at the peak (bytes above what was
 /// live before) and its wall time.
 fn measured<T>(f: impl FnOnce() -> T) -> (T, usize, f64) {
-    let base = CURRENT.load(Ordering::Relaxed);
-    PEAK.store(base, Ordering::Relaxed);
+    heap::reset_peak();
+    let base = heap::current();
     let start = Instant::now();
     let out = f();
     let secs = start.elapsed().as_secs_f64();
-    (out, PEAK.load(Ordering::Relaxed) - base, secs)
+    (out, heap::peak() - base, secs)
 }
 
-/// Writes a binary little-endian PLY with `int` indices, streaming.
-fn write_ply(
-    path: &Path,
-    vertex_count: usize,
-    positions: impl Iterator<Item = [f32; 3]>,
-    triangle_count: usize,
-    triangles: impl Iterator<Item = [u32; 3]>,
-) {
-    let mut out = BufWriter::new(std::fs::File::create(path).expect("create PLY"));
-    write!(
-        out,
-        "ply\nformat binary_little_endian 1.0\nelement vertex {vertex_count}\n\
-         property float x\nproperty float y\nproperty float z\nelement face {triangle_count}\n\
-         property list uchar int vertex_indices\nend_header\n"
-    )
-    .expect("write PLY");
-    for p in positions {
-        for c in p {
-            out.write_all(&c.to_le_bytes()).expect("write PLY");
-        }
-    }
-    for t in triangles {
-        out.write_all(&[3]).expect("write PLY");
-        for i in t {
-            out.write_all(&i.to_le_bytes()).expect("write PLY");
-        }
-    }
-    out.flush().expect("write PLY");
+/// Writes `model` as binary little-endian PLY at `path`, streaming.
+fn write(path: &Path, model: &dyn Model) {
+    let file = std::fs::File::create(path).expect("create PLY");
+    write_ply(file, model, "tests/tiling_scale.rs").expect("write PLY");
 }
 
-/// The bundled bunny (99,785 triangles) with every triangle split in four `levels` times.
+/// The bundled bunny (99,785 triangles) with every triangle split in four `levels` times
+/// (midpoint subdivision, no relief).
 fn subdivided_bunny(dir: &Path, levels: u32) -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let bunny = Mesh::open(&root.join("assets/bunny.ply")).expect("bundled bunny");
-    let mut positions: Vec<[f32; 3]> = (0..bunny.vertex_count())
-        .map(|v| bunny.position(v))
-        .collect();
-    let mut triangles: Vec<[u32; 3]> = (0..bunny.triangle_count())
-        .map(|t| bunny.triangle(t))
-        .collect();
-    for _ in 0..levels {
-        let mut midpoint: HashMap<(u32, u32), u32> = HashMap::new();
-        let mut mid = |a: u32, b: u32, positions: &mut Vec<[f32; 3]>| {
-            *midpoint.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                let (p, q) = (positions[a as usize], positions[b as usize]);
-                positions.push([0, 1, 2].map(|k| 0.5 * (p[k] + q[k])));
-                positions.len() as u32 - 1
-            })
-        };
-        let mut next = Vec::with_capacity(triangles.len() * 4);
-        for [a, b, c] in triangles {
-            let (ab, bc, ca) = (
-                mid(a, b, &mut positions),
-                mid(b, c, &mut positions),
-                mid(c, a, &mut positions),
-            );
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        triangles = next;
-    }
+    let bunny = common::bunny();
     let path = dir.join(format!("bunny-{levels}.ply"));
-    write_ply(
-        &path,
-        positions.len(),
-        positions.into_iter(),
-        triangles.len(),
-        triangles.into_iter(),
-    );
+    write(&path, &SubdividedMesh::without_relief(&bunny, 1 << levels));
     path
 }
 
 /// A `side` × `side` grid of quads (two triangles each) over a height field of two sine
-/// waves, streamed to disk without holding it.
+/// waves, emitted without holding it.
+struct WavyGrid {
+    side: u32,
+}
+
+impl Model for WavyGrid {
+    fn vertex_count(&self) -> u64 {
+        u64::from(self.side + 1).pow(2)
+    }
+
+    fn triangle_count(&self) -> u64 {
+        2 * u64::from(self.side).pow(2)
+    }
+
+    fn vertices(&self, emit: &mut dyn FnMut([f32; 3]) -> io::Result<()>) -> io::Result<()> {
+        let side = self.side;
+        for y in 0..=side {
+            for x in 0..=side {
+                let (u, v) = (x as f32 / side as f32, y as f32 / side as f32);
+                let h = 0.05 * (u * 37.0).sin() * (v * 23.0).cos();
+                emit([u, v, h])?;
+            }
+        }
+        Ok(())
+    }
+
+    fn triangles(&self, emit: &mut dyn FnMut([u32; 3]) -> io::Result<()>) -> io::Result<()> {
+        let row = self.side + 1;
+        let v = |x: u32, y: u32| y * row + x;
+        for y in 0..self.side {
+            for x in 0..self.side {
+                emit([v(x, y), v(x + 1, y), v(x + 1, y + 1)])?;
+                emit([v(x, y), v(x + 1, y + 1), v(x, y + 1)])?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The [`WavyGrid`] of `side` written to `dir`.
 fn wavy_grid(dir: &Path, side: u32) -> PathBuf {
     let path = dir.join(format!("grid-{side}.ply"));
-    let row = side + 1;
-    let positions = (0..row).flat_map(move |y| {
-        (0..row).map(move |x| {
-            let (u, v) = (x as f32 / side as f32, y as f32 / side as f32);
-            let h = 0.05 * (u * 37.0).sin() * (v * 23.0).cos();
-            [u, v, h]
-        })
-    });
-    let triangles = (0..side).flat_map(move |y| {
-        (0..side).flat_map(move |x| {
-            let v = |x: u32, y: u32| y * row + x;
-            [
-                [v(x, y), v(x + 1, y), v(x + 1, y + 1)],
-                [v(x, y), v(x + 1, y + 1), v(x, y + 1)],
-            ]
-        })
-    });
-    write_ply(
-        &path,
-        (row * row) as usize,
-        positions,
-        (2 * side * side) as usize,
-        triangles,
-    );
+    write(&path, &WavyGrid { side });
     path
 }
 

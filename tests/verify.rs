@@ -4,16 +4,16 @@
 
 #![cfg(feature = "cli")]
 
+mod common;
+
+use common::{patchvis, stdout};
 use patchvis::runtime::consts::VERSION;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
+/// `patchvis verify ARGS`.
 fn verify(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_patchvis"))
-        .arg("verify")
-        .args(args)
-        .output()
-        .expect("run patchvis")
+    patchvis(&[&["verify"], args].concat())
 }
 
 fn vectors(kind: &str) -> Vec<PathBuf> {
@@ -28,10 +28,6 @@ fn vectors(kind: &str) -> Vec<PathBuf> {
     files.sort();
     assert!(!files.is_empty(), "no {kind} vectors");
     files
-}
-
-fn stdout(out: &Output) -> String {
-    String::from_utf8(out.stdout.clone()).unwrap()
 }
 
 #[test]

@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::runtime::{PatchInfo, Sampling};
+use crate::test_kit::rng::Rng;
 use proptest::prelude::*;
 
 /// Patches with the given triangle counts, ranges contiguous from 0, bounds derived from `i`.
@@ -122,13 +123,8 @@ fn check_queries(pvis: &Pvis<'_>, matrix: &VisibilityMatrix, seed: u64) {
         assert_eq!(expanded.row(v), matrix.row(v), "expanded row {v}");
     }
     let s = pvis.sampling();
-    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
-    let mut next = || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-    };
+    let mut rng = Rng::new(seed);
+    let mut next = || rng.signed();
     let mut eyes: Vec<[f32; 3]> = (0..40)
         .map(|_| {
             let d = [next(), next(), next()];
@@ -262,12 +258,10 @@ proptest! {
     ) {
         let views = sphere::view_count(level);
         let mut matrix = VisibilityMatrix::new(views, counts.len() as u32);
-        let mut state = seed | 1;
+        let mut rng = Rng::new(seed);
         for v in 0..views {
             for p in 0..counts.len() as u32 {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
+                let state = rng.next_u64();
                 // Correlated with the view's parents, like real visibility, so the coder's
                 // contexts are exercised in every state.
                 let parent_sees = sphere::parents(v).is_some_and(|[a, _]| matrix.get(a, p));

@@ -95,6 +95,20 @@ impl<'a> SubdividedMesh<'a> {
         }
     }
 
+    /// Prepares `source` split `k × k` per triangle without relief: every point stays on its
+    /// source triangle, so for `k = 2^L` the output is exactly L levels of midpoint subdivision
+    /// (each midpoint is `½a + ½b`, the same `f32` as `½(a + b)`).
+    ///
+    /// # Panics
+    ///
+    /// When `k` is 0 (a caller contract).
+    pub fn without_relief(source: &'a Mesh, k: u32) -> SubdividedMesh<'a> {
+        SubdividedMesh {
+            amplitude: 0.0,
+            ..SubdividedMesh::new(source, k)
+        }
+    }
+
     /// The split factor.
     pub fn k(&self) -> u32 {
         self.k

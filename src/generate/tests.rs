@@ -2,17 +2,13 @@
 //! closed and nested engine parts, determinism, and a zero-copy read back through `Mesh`.
 
 use std::collections::HashMap;
-use std::path::Path;
 
 use super::engine::{Engine, casing_inside};
 use super::grid::BunnyGrid;
 use super::subdivide::SubdividedMesh;
 use super::*;
 use crate::ooc::Mesh;
-
-fn bunny() -> Mesh {
-    Mesh::open(&Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bunny.ply")).unwrap()
-}
+use crate::test_kit::bunny::bunny;
 
 fn collect(model: &dyn Model) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
     let (mut v, mut t) = (Vec::new(), Vec::new());
@@ -111,6 +107,37 @@ fn subdivision_shares_edge_points_and_keeps_the_topology() {
     }
     assert_eq!(SubdividedMesh::factor_for(&source, 20_000_000), 14);
     assert_eq!(SubdividedMesh::factor_for(&source, 10), 1);
+}
+
+/// Without relief, `k = 2` is one level of midpoint subdivision: the source vertices unmoved,
+/// then one vertex per source edge at exactly `½(a + b)`.
+#[test]
+fn subdivision_without_relief_is_midpoint_subdivision() {
+    let source = bunny();
+    let (vertices, triangles) = collect(&SubdividedMesh::without_relief(&source, 2));
+    let mut midpoints = HashMap::new();
+    for t in 0..source.triangle_count() {
+        let tri = source.triangle(t);
+        for e in 0..3 {
+            let (a, b) = (tri[e], tri[(e + 1) % 3]);
+            let (p, q) = (source.position(a), source.position(b));
+            let mid = [0, 1, 2].map(|k| (0.5 * (p[k] + q[k])).to_bits());
+            midpoints.insert((a.min(b), a.max(b)), mid);
+        }
+    }
+    let v = source.vertex_count() as usize;
+    assert_eq!(vertices.len(), v + midpoints.len());
+    assert_eq!(triangles.len(), 4 * source.triangle_count() as usize);
+    for (i, p) in vertices[..v].iter().enumerate() {
+        assert_eq!(*p, source.position(i as u32), "source vertex {i}");
+    }
+    let expected: std::collections::HashSet<[u32; 3]> = midpoints.into_values().collect();
+    for (i, p) in vertices[v..].iter().enumerate() {
+        assert!(
+            expected.contains(&p.map(f32::to_bits)),
+            "edge point {i}: {p:?}"
+        );
+    }
 }
 
 #[test]

@@ -7,6 +7,7 @@ use proptest::prelude::*;
 
 use super::*;
 use crate::mapped::FileBytes;
+use crate::test_kit::bunny::BUNNY_PATH;
 
 fn corpus(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -296,9 +297,8 @@ fn corpus_copies_match_the_shared_folder() {
 
 #[test]
 fn bunny_opens_zero_copy() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bunny.ply");
     let start = std::time::Instant::now();
-    let mesh = Mesh::open(&path).unwrap();
+    let mesh = Mesh::open(Path::new(BUNNY_PATH)).unwrap();
     eprintln!("bunny opened in {:?}", start.elapsed());
     assert!(mesh.is_mapped());
     assert_eq!(mesh.vertex_count(), 50_000);

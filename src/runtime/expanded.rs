@@ -344,6 +344,7 @@ fn walk_cell(faces: &[u64], level: u32, oct: usize, corners: &[[f64; 3]; 4]) -> 
 mod tests {
     use super::*;
     use crate::sphere::{direction, locate, normalize};
+    use crate::test_kit::rng::Rng;
 
     /// The walk started from the grid reaches the same leaf as the walk from the root and as
     /// `sphere::locate`, at levels 0 to 5, for every vertex of the next level (so every face
@@ -351,13 +352,8 @@ mod tests {
     /// by 10⁻⁷–10⁻⁴, scaled by 2⁻⁴⁰–2⁴⁰, and seeded random directions.
     #[test]
     fn grid_start_is_exact_on_and_near_boundaries() {
-        let mut state = 0x2545_F491_4F6C_DD1Du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 23) as f32 - 1.0
-        };
+        let mut rng = Rng::new(0x2545_F491_4F6C_DD1D);
+        let mut next = || rng.signed();
         let ulps = |x: f32, n: i32| {
             if x == 0.0 {
                 x

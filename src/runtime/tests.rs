@@ -7,6 +7,7 @@ use std::vec;
 use std::vec::Vec;
 
 use super::*;
+use crate::test_kit::rng::Rng;
 use proptest::prelude::*;
 
 /// Lays out a file: header, table, each section 8-aligned in the given order, CRC trailer.
@@ -559,13 +560,8 @@ proptest! {
 /// the octant planes, and does not depend on what the table held before `expand`.
 #[test]
 fn expanded_leaves_are_sphere_locate() {
-    let mut state = 0x9E37_79B9_7F4A_7C15u64;
-    let mut next = || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 40) as f32 / (1u64 << 23) as f32 - 1.0
-    };
+    let mut rng = Rng::new(0x9E37_79B9_7F4A_7C15);
+    let mut next = || rng.signed();
     for level in 0..=4 {
         let views = 4 * 4u32.pow(level) + 2;
         let file = assemble(&[

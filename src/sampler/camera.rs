@@ -374,6 +374,7 @@ pub(super) fn normalize(a: [f64; 3]) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_kit::rng::Rng;
 
     fn params(center: [f32; 3], radius: f32) -> SamplingParams {
         SamplingParams {
@@ -509,13 +510,8 @@ mod tests {
                 250.0 + 0.3 * s(0) + 0.05 * s(2),
             ]
         });
-        let mut seed = 7u64;
-        let mut unit = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = Rng::new(7);
+        let mut unit = || rng.unit();
         for dir in DIRECTIONS {
             let camera = Camera::sampling(&p, dir);
             let SphereBounds::Rect { rect, nearest } = camera.hull_bounds(&corners) else {

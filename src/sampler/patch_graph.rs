@@ -131,7 +131,7 @@ mod tests {
 
     #[test]
     fn faces_away_agrees_with_may_face_away_from_the_boundary() {
-        let mut rng = crate::sampler::test_meshes::Rng(12345);
+        let mut rng = crate::test_kit::rng::Rng::new(12345);
         let mut next = || f64::from(rng.signed());
         for _ in 0..20_000 {
             let axis = [next(), next(), next()];

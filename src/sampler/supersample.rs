@@ -209,18 +209,16 @@ pub fn fold_into_with(
 mod tests {
     use super::*;
     use crate::sphere::{Face, children, root_faces};
+    use crate::test_kit::rng::Rng;
     use proptest::prelude::*;
 
-    /// A fine matrix whose rows are pseudo-random (xorshift from `seed`), ~1/8 of bits set.
+    /// A fine matrix whose rows are pseudo-random (seeded by `seed`), ~1/8 of bits set.
     fn random_matrix(views: u32, patches: u32, seed: u64) -> VisibilityMatrix {
         let mut m = VisibilityMatrix::new(views, patches);
-        let mut s = seed | 1;
+        let mut rng = Rng::new(seed);
         for v in 0..views {
             for p in 0..patches {
-                s ^= s << 13;
-                s ^= s >> 7;
-                s ^= s << 17;
-                if s.is_multiple_of(8) {
+                if rng.next_u64().is_multiple_of(8) {
                     m.set(v, p);
                 }
             }

@@ -1,8 +1,10 @@
 //! Tests of the sampling loop: known visibility, determinism, and the timing harness.
 
-use super::test_meshes::{bounding_sphere, bunny, fibonacci_directions, noisy_sphere, push_cube};
 use super::*;
 use crate::progress::NoProgress;
+use crate::test_kit::bunny::bunny;
+use crate::test_kit::directions::fibonacci_directions;
+use crate::test_kit::meshes::{noisy_sphere, push_cube};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 fn params(center: [f32; 3], radius: f32, resolution: u32) -> SamplingParams {

@@ -4,9 +4,11 @@
 
 use super::conservative::scan_triangle_conservative;
 use super::raster::{DEFAULT_PATHS, draw_triangle, project, scan_triangle, view_planes};
-use super::test_meshes::{Rng, bunny, noisy_sphere, push_cube};
 use super::*;
 use crate::progress::NoProgress;
+use crate::test_kit::bunny::bunny;
+use crate::test_kit::meshes::{noisy_sphere, push_cube};
+use crate::test_kit::rng::Rng;
 use crate::tiling::{Patch, Tiling, TilingQuality, TilingStats, TriangleMap};
 
 /// A tiling with the given patch of each triangle: bounding spheres around the patch's
@@ -113,7 +115,7 @@ fn assert_same(a: &VisibilityMatrix, b: &VisibilityMatrix) {
 fn boxes_in_a_box() -> Mesh {
     let (mut positions, mut triangles) = (Vec::new(), Vec::new());
     push_cube([0.0; 3], 1.0, &mut positions, &mut triangles);
-    let mut rng = Rng(11);
+    let mut rng = Rng::new(11);
     for i in 0..4 {
         for j in 0..4 {
             for k in 0..4 {

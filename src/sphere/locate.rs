@@ -127,6 +127,7 @@ pub(crate) fn child_containing(face: &Face, dir: [f32; 3]) -> Face {
 mod tests {
     use super::super::{direction, face_count, parents, view_count};
     use super::*;
+    use crate::test_kit::rng::Rng;
     use proptest::prelude::*;
 
     fn leaves(level: u32) -> Vec<Face> {
@@ -198,13 +199,8 @@ mod tests {
         // nearest corner is never farther than one edge length.
         let level = 4;
         let views: Vec<[f32; 3]> = (0..view_count(level)).map(direction).collect();
-        let mut state = 0x9E37_79B9_7F4A_7C15u64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut rng = Rng::new(0x9E37_79B9_7F4A_7C15);
+        let mut next = || rng.signed();
         let (mut hits, total) = (0, 4000);
         for _ in 0..total {
             let d = normalize([next(), next(), next()]);

@@ -263,9 +263,9 @@ mod tests {
 
     #[test]
     fn sorts_across_runs_and_merge_levels() {
-        let mut noise = super::super::test_meshes::Noise::new(11);
+        let mut noise = crate::test_kit::rng::Rng::new(11);
         let records: Vec<(u64, u32)> = (0..10_000u32)
-            .map(|i| ((noise.next().abs() * 1000.0) as u64, i % 7))
+            .map(|i| ((noise.signed().abs() * 1000.0) as u64, i % 7))
             .collect();
         let mut expected = records.clone();
         expected.sort_unstable();

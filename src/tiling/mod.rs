@@ -38,8 +38,6 @@ mod reorder;
 mod triangle_map;
 
 #[cfg(test)]
-mod test_meshes;
-#[cfg(test)]
 mod tests;
 
 use rayon::prelude::*;

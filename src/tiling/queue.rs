@@ -133,9 +133,9 @@ mod tests {
 
     #[test]
     fn pops_in_sorted_order_across_seeds_and_heap() {
-        let mut rng = super::super::test_meshes::Noise::new(3);
+        let mut rng = crate::test_kit::rng::Rng::new(3);
         let seeds: Vec<Entry> = (0..500)
-            .map(|i| entry(f64::from(rng.next()).abs(), i, 0))
+            .map(|i| entry(f64::from(rng.signed()).abs(), i, 0))
             .collect();
         let mut q = FusionQueue::new(seeds.clone());
         let mut all = seeds;
@@ -146,7 +146,7 @@ mod tests {
                     out.push(e);
                 }
             } else {
-                let e = entry(f64::from(rng.next()).abs() * 2.0, 1000 + i, 1);
+                let e = entry(f64::from(rng.signed()).abs() * 2.0, 1000 + i, 1);
                 all.push(e);
                 q.push(e);
             }

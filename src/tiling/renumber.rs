@@ -67,7 +67,8 @@ impl Tiling {
 
 #[cfg(test)]
 mod tests {
-    use crate::tiling::test_meshes::grid;
+    use crate::test_kit::meshes::grid;
+    use crate::test_kit::rng::Rng;
     use crate::tiling::tile;
     use proptest::prelude::*;
 
@@ -81,12 +82,11 @@ mod tests {
             let mesh = grid(9, 7, 0.2, seed, |_, _| false).mesh();
             let tiling = tile(&mesh, patches).unwrap();
             let count = tiling.patches.len();
-            // A seeded permutation (Fisher–Yates with a small LCG).
+            // A seeded permutation (Fisher–Yates).
             let mut order: Vec<u32> = (0..count as u32).collect();
-            let mut state = seed | 1;
+            let mut rng = Rng::new(seed);
             for i in (1..count).rev() {
-                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                order.swap(i, (state >> 33) as usize % (i + 1));
+                order.swap(i, (rng.next_u64() >> 33) as usize % (i + 1));
             }
             let renumbered = tiling.renumbered(&order).unwrap();
             let mut next = 0;

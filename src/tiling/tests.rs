@@ -6,8 +6,8 @@ use std::collections::HashMap;
 use proptest::prelude::*;
 
 use super::bounds::{corners, cross_normal};
-use super::test_meshes::{Soup, grid, icosphere};
 use super::*;
+use crate::test_kit::meshes::{Soup, grid, icosphere};
 
 /// Components and per-triangle neighbours by a naive hash of edges, independent of the
 /// sorted-edge construction under test.

@@ -1,6 +1,7 @@
 use super::*;
 use crate::sampler::NO_PATCH;
-use crate::sampler::test_meshes::{Rng, fan, grid};
+use crate::test_kit::meshes::{fan, square_grid};
+use crate::test_kit::rng::Rng;
 use proptest::prelude::*;
 
 const ALWAYS_SPANS: ScanPaths = ScanPaths {
@@ -129,7 +130,7 @@ fn assert_covers_polygon_once(counts: &[u32], resolution: u32, polygon: &[[f64; 
 
 #[test]
 fn jittered_grid_is_watertight_from_odd_viewpoints() {
-    let mesh = grid(23, 0.3, 7, |u, v| [u, v, 0.0]);
+    let mesh = square_grid(23, 0.3, 7, |u, v| [u, v, 0.0]);
     let eyes = [
         [0.013, -0.021, 3.0],
         [0.7, 0.4, 2.5],
@@ -186,7 +187,7 @@ fn large_floor_crossing_the_near_plane_covers_the_lower_half() {
 #[test]
 fn floor_grid_clipped_at_the_near_plane_stays_watertight() {
     let half = 10.0;
-    let mesh = grid(40, 0.2, 11, |u, v| [u * half, 0.0, v * half]);
+    let mesh = square_grid(40, 0.2, 11, |u, v| [u * half, 0.0, v * half]);
     let eye = [0.1f32, 0.5, 0.3];
     let camera = Camera::look_at(eye, [0.3, 0.2, -2.0], 70.0, 64);
     let counts = coverage_counts(&mesh, &camera);
@@ -271,7 +272,7 @@ fn nearer_quad_wins_in_either_order() {
 
 #[test]
 fn random_fans_never_overdraw() {
-    let mut rng = Rng(99);
+    let mut rng = Rng::new(99);
     for _ in 0..50 {
         let (cx, cy) = (
             20.0 + 5.0 * rng.signed() as f64,
@@ -302,7 +303,7 @@ fn random_fans_never_overdraw() {
 fn unclipped_projection_is_used_only_where_it_equals_the_full_one() {
     let camera = Camera::look_at([0.0, 0.0, 5.0], [0.0, 0.0, 0.0], 60.0, 64);
     let planes = view_planes(&camera);
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     // A ball well inside the view: every point projects the same either way.
     assert!(sphere_needs_no_clip(&camera, [0.3, -0.2, 0.5], 1.0));
     for _ in 0..1000 {
@@ -324,7 +325,7 @@ fn unclipped_projection_is_used_only_where_it_equals_the_full_one() {
 
 #[test]
 fn batched_projection_equals_the_single_one_bit_for_bit() {
-    let mut rng = Rng(11);
+    let mut rng = Rng::new(11);
     // Eight lanes where the CPU has AVX2, and four lanes always.
     for mut batch in [ScreenBatch::default(), ScreenBatch::default().four_lanes()] {
         for (eye, resolution) in [([0.0, 0.0, 5.0], 64), ([3.0, -2.0, 4.0], 512)] {
