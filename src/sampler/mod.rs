@@ -22,12 +22,8 @@ mod patch_mesh;
 mod raster;
 mod supersample;
 #[cfg(test)]
-mod test_meshes;
-#[cfg(test)]
 mod tests;
 mod tiled;
-#[cfg(test)]
-mod tiled_tests;
 
 pub use camera::{Camera, MAX_RESOLUTION, NEAR_FRACTION};
 pub use id_buffer::{IdBuffer, NO_PATCH};

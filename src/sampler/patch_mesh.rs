@@ -428,7 +428,7 @@ impl PatchMesh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampler::test_meshes::noisy_sphere;
+    use crate::test_kit::meshes::noisy_sphere;
 
     #[test]
     fn mapped_and_heap_copies_hold_the_same_patches() {

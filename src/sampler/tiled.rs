@@ -656,3 +656,6 @@ impl ViewContext<'_> {
         self.marks.apply(self.tiling, camera.eye(), seen, row);
     }
 }
+
+#[cfg(test)]
+mod tests;
