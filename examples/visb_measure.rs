@@ -1,7 +1,7 @@
 //! Measures alternatives for coding the visibility matrix of a `.pvis` file (issue 5).
 //!
 //! Usage: `cargo run --release --example visb_measure -- FILE.pvis`. Prints the raw size,
-//! zstd -19 and xz -9 of the raw row-major matrix (via the `zstd` / `xz` tools when installed),
+//! zstd -19 and xz -9 of the raw row-major matrix (the zstd and liblzma crates, in process),
 //! XOR residual against the parent prediction with gap varints, and the empirical conditional
 //! entropy of each view's bits under several context sets (static per-level probabilities).
 //!
@@ -19,22 +19,19 @@ use patchvis::runtime::Pvis;
 use patchvis::sampler::VisibilityMatrix;
 use patchvis::sphere::{level_of, parents};
 use std::collections::HashMap;
-use std::io::Write;
-use std::process::{Command, Stdio};
 
 fn bit(row: &[u64], p: usize) -> usize {
     (row[p / 64] >> (p % 64) & 1) as usize
 }
 
-fn external(tool: &str, args: &[&str], data: &[u8]) -> Option<usize> {
-    let mut child = Command::new(tool)
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .spawn()
-        .ok()?;
-    child.stdin.take()?.write_all(data).ok()?;
-    Some(child.wait_with_output().ok()?.stdout.len())
+/// Bytes of `data` after `zstd -19`.
+fn zstd19(data: &[u8]) -> Option<usize> {
+    zstd::bulk::compress(data, 19).ok().map(|c| c.len())
+}
+
+/// Bytes of `data` after `xz -9`.
+fn xz9(data: &[u8]) -> Option<usize> {
+    liblzma::encode_all(data, 9).ok().map(|c| c.len())
 }
 
 fn main() {
@@ -72,8 +69,8 @@ fn main() {
         Some(s) => println!("{name:<26}{s:>8} B"),
         None => println!("{name:<26}     n/a (tool missing)"),
     };
-    show("zstd -19", external("zstd", &["-19", "-c", "-q"], &raw));
-    show("xz -9", external("xz", &["-9", "-c", "-q"], &raw));
+    show("zstd -19", zstd19(&raw));
+    show("xz -9", xz9(&raw));
     show("VISB in this file", Some(pvis.visibility_bytes() as usize));
     let mut matrix = VisibilityMatrix::new(views, p as u32);
     for v in 0..views {
@@ -119,10 +116,7 @@ fn main() {
         b.truncate(p.div_ceil(8));
         xz.extend(b);
     }
-    show(
-        "XOR parent a, zstd -19",
-        external("zstd", &["-19", "-c", "-q"], &xz),
-    );
+    show("XOR parent a, zstd -19", zstd19(&xz));
 
     // Empirical conditional entropy: context = f(a, b, neighbours); static probabilities per
     // (level, context).
@@ -586,8 +580,8 @@ fn orders_study(rows: &[Vec<u64>], views: u32, p: usize, pvis: &Pvis) {
         println!(
             "order {oname}: tour hamming {}, zstd -19 {:?} B, xz -9 {:?} B",
             tour(order),
-            external("zstd", &["-19", "-c", "-q"], &raw),
-            external("xz", &["-9", "-c", "-q"], &raw)
+            zstd19(&raw),
+            xz9(&raw)
         );
         for (cname, c, n) in &ctxs {
             let (st, a4, a5) = model_cost(rows, views, order, *c, *n);

@@ -1,15 +1,21 @@
 //! patchvis bakes precomputed visibility for huge triangle meshes into a small `.pvis` file,
 //! and reads it back in a `no_std`, allocation-free reader.
 //!
-//! The pipeline follows Meruvia 2002, "Visibility preprocessing using spherical sampling of
-//! polygonal patches", and the modules follow the data:
+//! The technique is Meruvia 2002, "Visibility preprocessing using spherical sampling of
+//! polygonal patches". Two stacks:
 //!
-//! [`ooc`] (memory-mapped mesh) → [`tiling`] (patches) → [`sphere`] (sampling directions) →
-//! [`sampler`] (ID buffers → bitfields) → [`format`](mod@format) (`.pvis` writer) → [`runtime`] (reader), and [`eval`] measures what
-//! a renderer drawing only the answer shows.
+//! - the reader, `no_std` and allocation-free: [`sphere`] (sampling directions, point
+//!   location) and [`runtime`] (`.pvis` parsing and queries), plus `capi` (feature `capi`);
+//!   they need nothing but `core` and `libm`;
+//! - the bake pipeline (feature `bake`), following the data: `ooc` (memory-mapped mesh) →
+//!   `tiling` (patches) → `sampler` (ID buffers → bitfields) → `format` (`.pvis` writer),
+//!   run as one recipe by `bake` (settings, the `memory` budget split, the sampling backend,
+//!   stages); `visibility` holds the plain data the stages pass on, `gpu` the device code
+//!   the GPU backend and eval share, and `eval` measures what a renderer drawing only the
+//!   answer shows.
 //!
-//! Only [`sphere`] and [`runtime`] exist without the `bake` feature; they need nothing but
-//! `core`. See `ARCHITECTURE.md` for the invariants and `spec/FORMAT.md` for the file format.
+//! See `ARCHITECTURE.md` for the code map and invariants and `spec/FORMAT.md` for the file
+//! format.
 #![cfg_attr(not(any(feature = "std", test)), no_std)]
 #![warn(missing_docs)]
 

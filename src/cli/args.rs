@@ -34,7 +34,7 @@ pub enum Command {
 /// `patchvis bake`.
 #[derive(Debug, clap::Args)]
 pub struct BakeArgs {
-    /// Input mesh (PLY).
+    /// Input mesh: PLY, OBJ, STL or glTF 2.0 (.gltf / .glb).
     pub input: PathBuf,
     /// Output .pvis file.
     #[arg(short, long, value_name = "OUT.pvis")]
@@ -56,8 +56,8 @@ pub struct BakeArgs {
     #[arg(long, value_name = "MESH.ply")]
     pub mesh_out: Option<PathBuf>,
     /// Heap budget for the bake, e.g. 512MiB, 2GiB, 1G (default: half the available memory,
-    /// at least 256 MiB). The mesh input and the tiling honour it; the page cache is not
-    /// counted.
+    /// at least 256 MiB). Split between the stages in one place (src/memory.rs) and reported
+    /// in --stats; the memory-mapped mesh and the page cache are not counted.
     #[arg(long, value_name = "SIZE", value_parser = parse_size)]
     pub memory: Option<u64>,
     /// Tiling algorithm: the seed algorithm in memory, the chunked out-of-core one, or

@@ -126,15 +126,7 @@ pub fn run(args: EvalArgs) -> Result<()> {
         tiling: tiling_mode(args.tiling),
     };
     let mut stages = Stages::new();
-    let mesh = stages.run("input", || {
-        Mesh::open_with(
-            &args.mesh,
-            &patchvis::ooc::OpenOptions {
-                memory_budget: options.memory.split().input,
-                ..Default::default()
-            },
-        )
-    })?;
+    let mesh = stages.run("input", || open_mesh(&args, options.memory))?;
     let bytes = std::fs::read(&file).with_context(|| format!("{}: cannot read", file.display()))?;
     let pvis = Pvis::parse(&bytes).map_err(|e| anyhow!("{}: {e}", file.display()))?;
     let evaluator = stages
@@ -291,6 +283,17 @@ pub fn run(args: EvalArgs) -> Result<()> {
 fn memory_budget(args: &EvalArgs) -> MemoryBudget {
     args.memory
         .map_or_else(MemoryBudget::from_available_memory, MemoryBudget::new)
+}
+
+/// Opens MESH within the input's share of `memory`.
+fn open_mesh(args: &EvalArgs, memory: MemoryBudget) -> Result<Mesh> {
+    Ok(Mesh::open_with(
+        &args.mesh,
+        &patchvis::ooc::OpenOptions {
+            memory_budget: memory.split().input,
+            ..Default::default()
+        },
+    )?)
 }
 
 /// `--tiling`.
@@ -571,7 +574,7 @@ fn run_sweep(args: &EvalArgs) -> Result<()> {
             }
         ),
     };
-    let mesh = Mesh::open(&args.mesh)?;
+    let mesh = open_mesh(args, memory)?;
     let bars = Bars::new(!args.quiet && !args.json);
     let start = Instant::now();
     let verbose = !args.quiet;

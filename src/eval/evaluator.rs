@@ -19,8 +19,8 @@ use crate::ooc::Mesh;
 use crate::progress::Progress;
 use crate::runtime::Pvis;
 use crate::sampler::{Camera, IdBuffer, NO_PATCH, Rasterizer};
-use crate::visibility::SamplingParams;
 use crate::tiling::{self, PatchId, Tiling, TilingMode, TilingOptions, TriangleMap};
+use crate::visibility::SamplingParams;
 use rayon::prelude::*;
 use std::collections::{HashMap, VecDeque};
 use std::ops::Range;
@@ -353,8 +353,13 @@ impl<'m> Evaluator<'m> {
         s.full.clear();
         let everything = 0..mesh.triangle_count();
         let start = Instant::now();
-        s.rasterizer
-            .render_runs(mesh, order, std::slice::from_ref(&everything), camera, &mut s.full);
+        s.rasterizer.render_runs(
+            mesh,
+            order,
+            std::slice::from_ref(&everything),
+            camera,
+            &mut s.full,
+        );
         let full_seconds = start.elapsed().as_secs_f64();
 
         let visible = pvis.query(eye, &mut s.scratch);

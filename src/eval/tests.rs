@@ -249,7 +249,10 @@ fn a_mesh_in_the_files_patch_order_evaluates_without_tiling_and_like_the_origina
     let from_original = Evaluator::new(&mesh, &pvis, &options()).unwrap();
     assert!(from_original.order().is_some());
     let in_order = Evaluator::new(&reordered, &pvis, &options()).unwrap();
-    assert!(in_order.order().is_none(), "no tiling for a mesh in file order");
+    assert!(
+        in_order.order().is_none(),
+        "no tiling for a mesh in file order"
+    );
     assert_eq!(metrics(&from_original), metrics(&in_order));
     // A budget for one worker at a time changes nothing but the pace.
     let tight = EvalOptions {

@@ -52,7 +52,7 @@ pub enum VisibilityEncoding {
     /// per level. Readable by version-2 readers.
     Hierarchical,
     /// Encoding 2: as encoding 1, with probabilities from a context tree over wider features
-    /// of the parents' rows (8–10% smaller on the bunny). The default.
+    /// of the parents' rows (5–9% smaller on the bunny, spec/FORMAT.md). The default.
     Tree,
 }
 

@@ -16,9 +16,9 @@ use crate::runtime::consts::*;
 use crate::runtime::model::{
     FEATURES, LEAF, MAX_TREE_DEPTH, MAX_TREE_NODES, ViewState, facing, key, tree_p0, window,
 };
-use crate::visibility::VisibilityMatrix;
 use crate::sphere::{lattice_point, level_of, parents};
 use crate::tiling::Patch;
+use crate::visibility::VisibilityMatrix;
 use rayon::prelude::*;
 use std::collections::{HashMap, VecDeque};
 

@@ -11,8 +11,8 @@
 
 use crate::runtime::consts::*;
 use crate::runtime::context;
-use crate::visibility::VisibilityMatrix;
 use crate::sphere::{level_of, parents};
+use crate::visibility::VisibilityMatrix;
 use rayon::prelude::*;
 
 /// Encodes `matrix` (rows of `view_count(level)` views) as a VISB body with encoding 1.

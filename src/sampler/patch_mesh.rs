@@ -11,15 +11,14 @@
 //! **Blocks.** A section's vertices are stored four to a block, `[x0..x3, y0..y3, z0..z3]`
 //! ([`PointBlock`], the last block filled with copies of the last vertex), so that the
 //! projection's four lanes of a coordinate are one plain load: as `[f32; 3]` records they
-//! took twelve single loads and nine shuffles per four vertices (6.4M −4 %, 1.6M −8 %;
-//! BENCHMARKS.md, "Ninth pass").
+//! took twelve single loads and nine shuffles per four vertices.
 //!
 //! **Sections.** A patch's triangles are cut, in the tiling's order, into *sections* of at
 //! most [`SECTION_VERTICES`] distinct vertices (65,536: one section per patch unless a patch
 //! holds more than about 130,000 triangles), each with its own vertex run, so that a corner
 //! is a `u16`. That halves the bytes a view streams per triangle (6 instead of 12), and the
-//! sampler looks corners up in a 65,536-entry table without bounds checks: together −28 % of
-//! a view at 6.4M triangles (BENCHMARKS.md, "Seventh pass"). A section border duplicates
+//! sampler looks corners up in a 65,536-entry table without bounds checks (measured in
+//! docs/benchmarks/sampling.md). A section border duplicates
 //! vertices the way a patch border does, with the same bits.
 //!
 //! **Clusters.** A section's vertices are numbered by first use, and its triangles are cut

@@ -26,9 +26,9 @@
 //! a little smaller than a pixel, where its outcome is a coin toss, that test is branch-free
 //! (a batch of kept triangles is drawn after). A view streams the patches it draws from
 //! memory (about 55 MB per view at 6.4M triangles), so their vertices and triangles are
-//! prefetched a little ahead of use. (Rendering a batch of views together, patch by patch,
-//! so that a patch streams from memory once per batch, paid before the prefetching: 6.4M
-//! −14 %. With it, it costs: 6.4M +6 %, 20M ±2 %; BENCHMARKS.md, "Tenth pass".)
+//! prefetched a little ahead of use; with that, rendering a batch of views together patch by
+//! patch no longer pays for its larger buffers, so each task renders one view
+//! (docs/benchmarks/sampling.md).
 //!
 //! Options: `min_pixels` (a patch counts only if it covers that many pixels), `dilate` (also
 //! mark edge neighbours of visible patches that may face the eye), `always_visible` (patches

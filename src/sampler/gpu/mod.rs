@@ -3,7 +3,7 @@
 //!
 //! Technique: Meruvia 2002, section 3, on graphics hardware as the paper ran it, with the
 //! ID-bitfield reduction of the second paper done in a compute pass. The mesh is uploaded
-//! once, regrouped by patch (`upload.rs`: each patch's own vertices, holding the position
+//! once, regrouped by patch (`crate::gpu` mesh upload: each patch's own vertices, holding the position
 //! relative to the bounding-sphere centre and the patch id, and its triangles as indices). Views go in batches, one command
 //! buffer per batch: every view of the batch renders into its own layer of an R32Uint array
 //! texture (the patch id; empty pixels keep [`NO_PATCH`]) with a `Depth32Float` layer

@@ -63,7 +63,7 @@ impl Default for ScreenBatch {
 /// prefetched. Without it the loads of the blocks were a quarter of the projection's time
 /// (memory latency: the hardware prefetcher starts late on runs of a few kB). Tuned at 6.4M
 /// triangles, level 4, 512²: 16 was −6 % against none; 8, 16 and 32 within noise of each
-/// other, 32 best in both rounds (BENCHMARKS.md, "Tenth pass").
+/// other, 32 best in both rounds (docs/benchmarks/sampling.md, "Tenth pass").
 const BLOCKS_AHEAD: usize = 32;
 
 /// Asks the CPU to bring the cache line holding `items[at]` into its caches, ahead of use;
@@ -91,7 +91,7 @@ fn has_avx2() -> bool {
 }
 
 /// Points per step of [`ScreenBatch::project`]: four `f32` lanes, one SSE2 register per
-/// value (BENCHMARKS.md, "Fifth pass": plain lane arrays left the division and the
+/// value (docs/benchmarks/sampling.md, "Fifth pass": plain lane arrays left the division and the
 /// conversions scalar, `wide`'s `f32x4` does not).
 const LANES: usize = 4;
 
@@ -385,7 +385,7 @@ pub(crate) fn covers_no_centre(tri: [ScreenVertex; 3]) -> bool {
 /// and [`snap_lanes`], on 256-bit registers, so the same bits on every CPU (no fused
 /// multiply-add: it would round once where they round twice). Where projection is a quarter
 /// of sampling (6.4M triangles) four lanes took about 26 cycles per four points, bound by
-/// instruction count; eight lanes halve that (6.4M −7 %, BENCHMARKS.md, "Tenth pass").
+/// instruction count; eight lanes halve that (6.4M −7 %, docs/benchmarks/sampling.md, "Tenth pass").
 #[cfg(target_arch = "x86_64")]
 mod wide8 {
     use super::super::{COORD_LIMIT32, HALF_PIXEL, SUBPIXEL, SUBPIXEL_BITS};

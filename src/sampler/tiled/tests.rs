@@ -2,11 +2,11 @@
 //! (including nested boxes of high depth complexity), options against an independent
 //! sequential reference, thread-count independence, checkpoints and resuming.
 
+use super::*;
+use crate::progress::NoProgress;
 use crate::sampler::conservative::scan_triangle_conservative;
 use crate::sampler::raster::{DEFAULT_PATHS, draw_triangle, project, scan_triangle, view_planes};
-use super::*;
 use crate::sampler::*;
-use crate::progress::NoProgress;
 use crate::test_kit::bunny::bunny;
 use crate::test_kit::meshes::{noisy_sphere, push_cube};
 use crate::test_kit::rng::Rng;
