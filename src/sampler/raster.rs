@@ -150,7 +150,7 @@ impl Rasterizer {
             let id = patch_of[t as usize];
             keep(id).then_some((t, id))
         });
-        self.rasterize(mesh, camera, triangles, |id, index, q, covered| {
+        self.rasterize(mesh, camera, triangles, true, |id, index, q, covered| {
             buffer.plot(index, q, id, covered)
         });
     }
@@ -158,8 +158,8 @@ impl Rasterizer {
     /// Draws the triangles at positions `runs` (ascending, disjoint) of `order` — the
     /// mesh's own triangle order when `None` — each with its position as its id: the
     /// evaluator's renders of a whole mesh and of a query's answer, drawn in the same relative
-    /// order so that equally near fragments resolve alike. Only the vertices the drawn
-    /// triangles use are projected, as an indexed draw on a GPU would.
+    /// order so that equally near fragments resolve alike. A culled draw projects only the
+    /// vertices its triangles use, as an indexed draw on a GPU would.
     pub fn render_runs(
         &mut self,
         mesh: &Mesh,
@@ -173,27 +173,63 @@ impl Rasterizer {
             camera.resolution(),
             "ID buffer and camera resolutions differ"
         );
+        let drawn: u64 = runs.iter().map(|r| u64::from(r.end - r.start)).sum();
         let triangles = runs.iter().flat_map(|run| {
             run.clone()
                 .map(move |i| (order.map_or(i, |o| o[i as usize]), i))
         });
-        self.rasterize(mesh, camera, triangles, |id, index, q, covered| {
-            buffer.plot(index, q, id, covered)
-        });
+        // A whole-mesh draw projects every vertex in one pass; a culled one only those used.
+        let all_vertices = drawn == u64::from(mesh.triangle_count());
+        self.rasterize(
+            mesh,
+            camera,
+            triangles,
+            all_vertices,
+            |id, index, q, covered| buffer.plot(index, q, id, covered),
+        );
     }
 
     /// Draws each `(triangle, id)` of `triangles` in that order, calling
     /// `plot(id, pixel_index, depth, covered)` for every pixel it may cover (no depth test
-    /// here; see [`scan_triangle`] for `covered`). Vertices are projected on first use.
+    /// here; see [`scan_triangle`] for `covered`). With `all_vertices` every vertex is
+    /// projected first, in one streaming pass (for draws of most of the mesh); otherwise each
+    /// on first use.
     fn rasterize(
         &mut self,
         mesh: &Mesh,
         camera: &Camera,
         triangles: impl Iterator<Item = (u32, u32)>,
+        all_vertices: bool,
         mut plot: impl FnMut(u32, usize, f32, bool),
     ) {
         let resolution = camera.resolution();
         let planes = clip::planes(resolution, camera.near(), GUARD_BAND);
+        let mut draw = |projected: [ProjectedVertex; 3], corners: [u32; 3], id: u32| {
+            draw_triangle(
+                projected,
+                || corners.map(|v| mesh.position(v)),
+                camera,
+                &planes,
+                |tri| {
+                    scan_triangle(tri, resolution, DEFAULT_PATHS, |index, q, covered| {
+                        plot(id, index, q, covered)
+                    })
+                },
+            )
+        };
+        if all_vertices {
+            self.vertices.clear();
+            self.vertices.extend(
+                (0..mesh.vertex_count()).map(|v| project(camera, &planes, mesh.position(v))),
+            );
+            // Stamps from an earlier lazy render no longer match these vertices.
+            self.stamps.clear();
+            for (t, id) in triangles {
+                let corners = mesh.triangle(t);
+                draw(corners.map(|v| self.vertices[v as usize]), corners, id);
+            }
+            return;
+        }
         let vertex_count = mesh.vertex_count() as usize;
         if self.stamps.len() != vertex_count || self.generation == u32::MAX {
             self.stamps.clear();
@@ -215,17 +251,7 @@ impl Rasterizer {
                 }
                 self.vertices[slot]
             });
-            draw_triangle(
-                projected,
-                || corners.map(|v| mesh.position(v)),
-                camera,
-                &planes,
-                |tri| {
-                    scan_triangle(tri, resolution, DEFAULT_PATHS, |index, q, covered| {
-                        plot(id, index, q, covered)
-                    })
-                },
-            );
+            draw(projected, corners, id);
         }
     }
 }
@@ -751,7 +777,7 @@ pub(crate) fn coverage_counts(mesh: &Mesh, camera: &Camera) -> Vec<u32> {
     let resolution = camera.resolution() as usize;
     let mut counts = vec![0; resolution * resolution];
     let triangles = (0..mesh.triangle_count()).map(|t| (t, t));
-    Rasterizer::new().rasterize(mesh, camera, triangles, |_, index, _, covered| {
+    Rasterizer::new().rasterize(mesh, camera, triangles, true, |_, index, _, covered| {
         counts[index] += u32::from(covered)
     });
     counts
