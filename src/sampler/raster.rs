@@ -222,8 +222,7 @@ impl Rasterizer {
             self.vertices.extend(
                 (0..mesh.vertex_count()).map(|v| project(camera, &planes, mesh.position(v))),
             );
-            // Stamps from an earlier lazy render no longer match these vertices.
-            self.stamps.clear();
+            // The stamps stay: none equals the next lazy render's generation.
             for (t, id) in triangles {
                 let corners = mesh.triangle(t);
                 draw(corners.map(|v| self.vertices[v as usize]), corners, id);
@@ -234,10 +233,12 @@ impl Rasterizer {
         if self.stamps.len() != vertex_count || self.generation == u32::MAX {
             self.stamps.clear();
             self.stamps.resize(vertex_count, 0);
+            self.generation = 0;
+        }
+        if self.vertices.len() != vertex_count {
             self.vertices.clear();
             self.vertices
                 .resize(vertex_count, ProjectedVertex::default());
-            self.generation = 0;
         }
         self.generation += 1;
         let generation = self.generation;
