@@ -70,6 +70,7 @@ impl<'a> RangeDecoder<'a> {
     }
 
     /// Bytes the decoder has read so far, counting reads past the end.
+    #[cfg(test)]
     pub fn consumed(&self) -> usize {
         self.pos
     }

@@ -24,7 +24,7 @@ pub mod consts;
 pub mod crc32c;
 mod error;
 mod expanded;
-pub mod model;
+pub(crate) mod model;
 mod parse;
 mod query;
 mod stream;
@@ -34,7 +34,7 @@ mod visb;
 #[cfg(test)]
 mod tests;
 
-pub use coder::{RangeDecoder, context};
+pub(crate) use coder::context;
 pub use error::Error;
 pub use expanded::Expanded;
 pub use query::{Patches, TriangleRanges, Visible, ranges};

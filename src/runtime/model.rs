@@ -26,7 +26,9 @@ pub const LEAF: u16 = 0x8000;
 
 /// Feature bit positions in a key (§ Context tree, Features). The layout lets a decoder build
 /// a key from three packed fields: the parents' 5-bit windows ([`window`]) and the view's
-/// [`ViewState::bits`].
+/// [`ViewState::bits`]; the positions that only those fields set are named here for the
+/// spec and the tests.
+#[allow(dead_code)]
 pub mod feature {
     /// Bits `A + i`, `i = 0..5`: parent `a`'s bit at patch `p − 2 + i` (so `A + 2` is the patch
     /// itself).

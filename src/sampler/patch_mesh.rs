@@ -45,6 +45,7 @@ use bytemuck::Pod;
 use rayon::prelude::*;
 
 use crate::mapped::{RecordWriter, Records};
+use crate::memory::MemoryBudget;
 use crate::ooc::Mesh;
 use crate::tiling::{Tiling, bounding_sphere};
 
@@ -70,12 +71,16 @@ pub(crate) enum Storage {
 }
 
 impl Storage {
-    /// Heap when the copy takes at most a quarter of `budget` (the rest is for the per-thread
-    /// buffers, the tiling's maps and the allocator's slack), mapped otherwise; heap when
-    /// there is no budget.
+    /// Heap when the copy fits the sampling mesh's share of `budget`
+    /// ([`MemoryBudget::split`]: the rest is for the per-thread buffers, the tiling's maps and
+    /// the allocator's slack), mapped otherwise; heap when there is no budget.
     pub(crate) fn for_budget(triangles: u64, budget: Option<u64>) -> Storage {
         match budget {
-            Some(budget) if estimated_bytes(triangles) > budget / 4 => Storage::Mapped,
+            Some(budget)
+                if estimated_bytes(triangles) > MemoryBudget::new(budget).split().sampling_mesh =>
+            {
+                Storage::Mapped
+            }
             _ => Storage::Heap,
         }
     }
