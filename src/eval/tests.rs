@@ -111,20 +111,8 @@ fn random_views_are_deterministic_and_consistent() {
         .into_iter()
         .map(|d| Camera::sampling(&params, d))
         .collect();
-    let strip = |mut m: ViewMetrics| {
-        (m.full_seconds, m.culled_seconds) = (0.0, 0.0);
-        m
-    };
-    let a: Vec<ViewMetrics> = evaluator
-        .evaluate(&pvis, &cameras, &NoProgress)
-        .into_iter()
-        .map(strip)
-        .collect();
-    let b: Vec<ViewMetrics> = evaluator
-        .evaluate(&pvis, &cameras, &NoProgress)
-        .into_iter()
-        .map(strip)
-        .collect();
+    let a = untimed(&evaluator, &pvis, &cameras);
+    let b = untimed(&evaluator, &pvis, &cameras);
     assert_eq!(a, b);
     let mut differing = 0;
     for m in &a {
@@ -192,17 +180,22 @@ fn renumbered_files_evaluate_like_the_tiling_numbering() {
     let metrics = |bytes: &[u8]| -> Vec<ViewMetrics> {
         let pvis = Pvis::parse(bytes).unwrap();
         let evaluator = Evaluator::new(&mesh, &pvis, &options()).unwrap();
-        evaluator
-            .evaluate(&pvis, &cameras, &NoProgress)
-            .into_iter()
-            .map(|mut m| {
-                (m.full_seconds, m.culled_seconds) = (0.0, 0.0);
-                m
-            })
-            .collect()
+        untimed(&evaluator, &pvis, &cameras)
     };
     // Same answers in another numbering: every per-view figure is the same.
     assert_eq!(metrics(&spatial), metrics(&covisible));
+}
+
+/// The metrics of `cameras`, without the timings (which vary from run to run).
+fn untimed(evaluator: &Evaluator<'_>, pvis: &Pvis<'_>, cameras: &[Camera]) -> Vec<ViewMetrics> {
+    evaluator
+        .evaluate(pvis, cameras, &NoProgress)
+        .into_iter()
+        .map(|mut m| {
+            (m.full_seconds, m.culled_seconds) = (0.0, 0.0);
+            m
+        })
+        .collect()
 }
 
 fn options() -> EvalOptions {
@@ -236,16 +229,7 @@ fn a_mesh_in_the_files_patch_order_evaluates_without_tiling_and_like_the_origina
         .into_iter()
         .map(|d| Camera::sampling(&sampling_params(&pvis, RESOLUTION, 1.2), d))
         .collect();
-    let metrics = |evaluator: &Evaluator<'_>| -> Vec<ViewMetrics> {
-        evaluator
-            .evaluate(&pvis, &cameras, &NoProgress)
-            .into_iter()
-            .map(|mut m| {
-                (m.full_seconds, m.culled_seconds) = (0.0, 0.0);
-                m
-            })
-            .collect()
-    };
+    let metrics = |evaluator: &Evaluator<'_>| untimed(evaluator, &pvis, &cameras);
     let from_original = Evaluator::new(&mesh, &pvis, &options()).unwrap();
     assert!(from_original.order().is_some());
     let in_order = Evaluator::new(&reordered, &pvis, &options()).unwrap();

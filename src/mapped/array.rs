@@ -6,8 +6,8 @@
 //! (already unlinked) temporary file mapped read-write: the kernel pages them in and out, the
 //! heap holds nothing per record. Callers see `&[T]` / `&mut [T]` through `Deref` either way.
 //!
-//! One `unsafe` call: `MmapMut::map_mut` of the temporary file; the bytes are viewed as
-//! records by `bytemuck`. Cost: O(1) to create (the file is sparse until written); access is a
+//! One `unsafe` call: `MmapMut::map_mut` of a temporary file (a zeroed one, or one that
+//! `RecordWriter` filled); the bytes are viewed as records by `bytemuck`. Cost: O(1) to create (the file is sparse until written); access is a
 //! plain slice access after a match on the storage kind.
 
 use std::io;
@@ -50,11 +50,22 @@ impl<T: Pod> Array<T> {
         let file = tempfile::tempfile()?;
         // A sparse file of zeros: no disk is used until pages are written.
         file.set_len(bytes as u64)?;
-        // SAFETY: `tempfile()` returns a file that is already unlinked (or, on systems without
-        // that, opened with exclusive sharing), so no other process or handle can truncate or
-        // write it while the map lives; the map keeps its own reference to the file, so
-        // dropping `file` here does not invalidate it.
-        let map = unsafe { MmapMut::map_mut(&file)? };
+        Array::map(&file)
+    }
+
+    /// The records in `file`, an unlinked temporary file this process alone holds, whose
+    /// length is a whole number of records (at least one).
+    pub(crate) fn in_file(file: &std::fs::File) -> io::Result<Array<T>> {
+        Array::map(file)
+    }
+
+    /// Maps `file` read-write.
+    fn map(file: &std::fs::File) -> io::Result<Array<T>> {
+        // SAFETY: the callers pass files from `tempfile()`, which are already unlinked (or, on
+        // systems without that, opened with exclusive sharing), so no other process or handle
+        // can truncate or write them while the map lives; the map keeps its own reference to
+        // the file, so dropping `file` afterwards does not invalidate it.
+        let map = unsafe { MmapMut::map_mut(file)? };
         Ok(Array {
             storage: Storage::Mapped(map),
         })
@@ -99,6 +110,20 @@ impl<T: Pod> Clone for Array<T> {
             return copy;
         }
         Array::from_vec(self.to_vec())
+    }
+}
+
+impl<T> std::fmt::Debug for Array<T> {
+    /// The length and where the records are, not the records.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (len, mapped) = match &self.storage {
+            Storage::Heap(v) => (v.len(), false),
+            Storage::Mapped(map) => (map.len() / size_of::<T>().max(1), true),
+        };
+        f.debug_struct("Array")
+            .field("len", &len)
+            .field("mapped", &mapped)
+            .finish()
     }
 }
 

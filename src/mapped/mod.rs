@@ -11,16 +11,16 @@
 //! - [`Array`] (`array.rs`): a fixed-length array of plain records, zeroed and mutable, on the
 //!   heap or in an unlinked temporary file mapped read-write. What `tiling::TriangleMap`
 //!   stores.
-//! - [`Records`] and [`RecordWriter`] (`records.rs`): records appended one batch after the
-//!   other, then read only, on the heap or in an unlinked temporary file mapped read-only.
-//!   What the sampler's patch-ordered mesh copy (`sampler::patch_mesh`) stores.
+//! - [`RecordWriter`] (`records.rs`): records appended one batch after the other to the heap
+//!   or to an unlinked temporary file, then mapped as an [`Array`]. What the sampler's
+//!   patch-ordered mesh copy (`sampler::patch_mesh`) is written with.
 //!
 //! Records are `bytemuck::Pod` types (no padding, every bit pattern valid), so viewing mapped
 //! bytes as records is `bytemuck::cast_slice`, which checks length and alignment and needs no
 //! `unsafe` (a map starts on a page boundary, so the alignment check always passes). The
-//! only `unsafe` left is the three calls that create maps of files (`Mmap::map`,
-//! `MmapMut::map_mut`), each with a `// SAFETY:` comment; ripgrep's `searcher/mmap.rs` is the
-//! model.
+//! only `unsafe` left is the two calls that create maps of files (`Mmap::map` of an input,
+//! `MmapMut::map_mut` of a temporary file), each with a `// SAFETY:` comment; ripgrep's
+//! `searcher/mmap.rs` is the model.
 //!
 //! # Safety
 //!
@@ -36,4 +36,4 @@ mod records;
 
 pub(crate) use array::Array;
 pub(crate) use file_bytes::FileBytes;
-pub(crate) use records::{RecordWriter, Records};
+pub(crate) use records::RecordWriter;

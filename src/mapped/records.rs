@@ -1,58 +1,23 @@
 //! Plain records written once, in order, then only read: on the heap or in a memory-mapped
 //! temporary file, behind one slice type.
 //!
-//! A [`RecordWriter`] appends batches of records; [`RecordWriter::finish`] turns it into
-//! [`Records`], which derefs to `&[T]`. Writing to a file goes through a 1 MiB buffer, so the
-//! heap holds only the batch in flight; the finished file is mapped read-only and the kernel's
-//! page cache holds it. Records are stored in native byte order: the file lives only as long
-//! as this process.
+//! A [`RecordWriter`] appends batches of records; [`RecordWriter::finish`] turns it into an
+//! [`Array`], which derefs to `&[T]`. Writing to a file goes through a 1 MiB buffer, so the
+//! heap holds only the batch in flight; the finished file is mapped (by `Array`, which holds
+//! the map's `unsafe`) and the kernel's page cache holds it. Records are stored in native byte
+//! order: the file lives only as long as this process.
 //!
-//! One `unsafe` call: `Mmap::map` of the finished file; the bytes are viewed as records by
-//! `bytemuck`. Cost: one buffered write per record and one map per file.
+//! Cost: one buffered write per batch and one map per file.
 
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
-use std::ops::Deref;
 
 use bytemuck::Pod;
-use memmap2::Mmap;
+
+use super::Array;
 
 /// Bytes buffered before a write to the file.
 const WRITE_BUFFER_BYTES: usize = 1 << 20;
-
-/// Records of type `T`, read-only, on the heap or in a mapped temporary file.
-#[derive(Debug)]
-pub(crate) struct Records<T> {
-    storage: Storage<T>,
-}
-
-#[derive(Debug)]
-enum Storage<T> {
-    Heap(Vec<T>),
-    /// Exactly the records' bytes; the file behind the map is unlinked, so this process holds
-    /// the only handle to it.
-    Mapped(Mmap),
-}
-
-impl<T> Records<T> {
-    /// True when the records live in a mapped file rather than on the heap.
-    #[cfg(test)]
-    pub(crate) fn is_mapped(&self) -> bool {
-        matches!(self.storage, Storage::Mapped(_))
-    }
-}
-
-impl<T: Pod> Deref for Records<T> {
-    type Target = [T];
-    #[inline]
-    fn deref(&self) -> &[T] {
-        match &self.storage {
-            Storage::Heap(v) => v,
-            // A map starts on a page boundary and holds whole records: the cast cannot fail.
-            Storage::Mapped(map) => bytemuck::cast_slice(map),
-        }
-    }
-}
 
 /// Where records go while they are written.
 pub(crate) struct RecordWriter<T> {
@@ -106,23 +71,18 @@ impl<T: Pod> RecordWriter<T> {
         }
     }
 
-    /// The records written, read-only; a file is flushed and mapped. An empty file needs no
-    /// map, and its records live on the heap.
-    pub(crate) fn finish(self) -> io::Result<Records<T>> {
-        let storage = match self.target {
-            Target::Heap(v) => Storage::Heap(v),
+    /// The records written; a file is flushed and mapped. An empty file needs no map, and its
+    /// records live on the heap.
+    pub(crate) fn finish(self) -> io::Result<Array<T>> {
+        match self.target {
+            Target::Heap(v) => Ok(Array::from_vec(v)),
             // An empty file cannot be mapped on every system; nothing to map anyway.
-            Target::File { len: 0, .. } => Storage::Heap(Vec::new()),
+            Target::File { len: 0, .. } => Ok(Array::from_vec(Vec::new())),
             Target::File { out, .. } => {
                 let file = out.into_inner().map_err(|e| e.into_error())?;
-                // SAFETY: `tempfile()` returns an already unlinked file (or one opened with
-                // exclusive sharing where unlinking open files is impossible): no other
-                // process or handle can change it while the map lives, and the map keeps its
-                // own reference to the file.
-                Storage::Mapped(unsafe { Mmap::map(&file)? })
+                Array::in_file(&file)
             }
-        };
-        Ok(Records { storage })
+        }
     }
 }
 

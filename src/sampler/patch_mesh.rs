@@ -35,7 +35,7 @@
 //! same slices either way, patch by patch in file order, so a view's reads are sequential
 //! runs of the file.
 //!
-//! Both storages are the crate's record arrays (`crate::mapped::{RecordWriter, Records}`),
+//! Both storages are the crate's record arrays (`crate::mapped::{Array, RecordWriter}`),
 //! which own the temporary file and its map: this file holds no `unsafe` code.
 //! Cost: one pass over the triangles plus a sort per patch.
 
@@ -44,7 +44,7 @@ use std::io;
 use bytemuck::Pod;
 use rayon::prelude::*;
 
-use crate::mapped::{RecordWriter, Records};
+use crate::mapped::{Array, RecordWriter};
 use crate::memory::MemoryBudget;
 use crate::ooc::Mesh;
 use crate::tiling::{Tiling, bounding_sphere};
@@ -152,11 +152,11 @@ fn clusters(positions: &[[f32; 3]], triangles: &[[u16; 3]]) -> Vec<Cluster> {
 pub(crate) struct PatchMesh {
     /// Distinct vertices of every section, four to a block, section after section, patch
     /// after patch.
-    positions: Records<PointBlock>,
+    positions: Array<PointBlock>,
     /// `positions[block_start[s]..block_start[s + 1]]` are section `s`'s vertices.
     block_start: Vec<usize>,
     /// Corners of reordered triangle `i`, as indices into its section's vertex run.
-    triangles: Records<[u16; 3]>,
+    triangles: Array<[u16; 3]>,
     /// `triangle_start[s]..triangle_start[s + 1]` are section `s`'s reordered triangles.
     triangle_start: Vec<usize>,
     /// `section_start[p]..section_start[p + 1]` are patch `p`'s sections.
