@@ -13,6 +13,7 @@ use super::consts::{PROB_BITS, RANGE_TOP};
 /// are the parents' bits at this patch, `a₋₁`, `b₋₁` theirs at the previous patch and `x₋₁` the
 /// view's own previous bit (all 0 before patch 0, and `a = b = 0` for level-0 views).
 #[inline(always)]
+#[cfg_attr(not(feature = "bake"), allow(dead_code))] // the encoding-1 writer's
 pub fn context(a: u64, b: u64, x_prev: u64, a_prev: u64, b_prev: u64) -> usize {
     (a << 4 | b << 3 | x_prev << 2 | a_prev << 1 | b_prev) as usize
 }

@@ -34,6 +34,7 @@ mod visb;
 #[cfg(test)]
 mod tests;
 
+#[cfg(feature = "bake")]
 pub(crate) use coder::context;
 pub use error::Error;
 pub use expanded::Expanded;

@@ -54,6 +54,7 @@ pub mod feature {
 
 /// A bit `p` of a row of `len` bits, 0 outside `0..len`.
 #[inline(always)]
+#[cfg_attr(not(feature = "bake"), allow(dead_code))] // the writer's, and the tests'
 pub fn row_bit(row: &[u64], p: i64, len: u32) -> u32 {
     if p < 0 || p >= len as i64 {
         return 0;
@@ -64,6 +65,7 @@ pub fn row_bit(row: &[u64], p: i64, len: u32) -> u32 {
 
 /// The 5-bit window of `row` around `p`: bit `i` is the row's bit at `p − 2 + i`.
 #[inline(always)]
+#[cfg_attr(not(feature = "bake"), allow(dead_code))] // the writer's, and the tests'
 pub fn window(row: &[u64], p: i64, len: u32) -> u32 {
     (0..5).fold(0, |w, i| w | row_bit(row, p - 2 + i, len) << i)
 }
