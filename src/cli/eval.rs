@@ -363,6 +363,7 @@ fn write_png(path: &Path, image: &RgbImage) -> Result<()> {
 fn summary_fields(out: &mut serde_json::Map<String, Value>, name: &str, s: &Summary) {
     out.insert(format!("{name}_mean"), json!(s.mean));
     out.insert(format!("{name}_p95"), json!(s.p95));
+    out.insert(format!("{name}_p99"), json!(s.p99));
     out.insert(format!("{name}_max"), json!(s.max));
     out.insert(format!("{name}_min"), json!(s.min));
 }
@@ -427,7 +428,10 @@ fn merge(into: &mut Value, from: Value) {
 
 fn print_summary(s: &EvalSummary, is_path: bool) {
     let unit = if is_path { "frames" } else { "views" };
-    println!("{:<22}{:>12}{:>12}{:>12}", "", "mean", "p95", "max");
+    println!(
+        "{:<22}{:>12}{:>12}{:>12}{:>12}",
+        "", "mean", "p95", "p99", "max"
+    );
     let row = |name: &str, x: &Summary, percent: bool| {
         let f = |v: f64| {
             if percent {
@@ -437,9 +441,10 @@ fn print_summary(s: &EvalSummary, is_path: bool) {
             }
         };
         println!(
-            "{name:<22}{:>12}{:>12}{:>12}",
+            "{name:<22}{:>12}{:>12}{:>12}{:>12}",
             f(x.mean),
             f(x.p95),
+            f(x.p99),
             f(x.max)
         );
     };
