@@ -32,24 +32,28 @@ fn bake(extra: &[&str]) -> Baked {
 }
 
 /// The sphere level and all rows of a bake.
+/// The flags of a level-1 bake supersampled one level finer, folding finer patches of at least
+/// `min_pixels` pixels into `corners`.
+fn folded_level_1<'a>(min_pixels: &'a str, corners: &'a str) -> [&'a str; 8] {
+    [
+        "--level",
+        "1",
+        "--view-supersample",
+        "1",
+        "--fold-min-pixels",
+        min_pixels,
+        "--fold-corners",
+        corners,
+    ]
+}
+
 fn rows(baked: &Baked) -> (u32, VisibilityMatrix) {
     common::rows(&baked.bytes())
 }
 
 #[test]
 fn supersampled_rows_contain_the_plain_rows_and_fold_the_finer_bake() {
-    let ss = bake_with(&[
-        "--level",
-        "1",
-        "--view-supersample",
-        "1",
-        "--fold-min-pixels",
-        "0",
-        "--fold-corners",
-        "all",
-    ])
-    .stats()
-    .run();
+    let ss = bake_with(&folded_level_1("0", "all")).stats().run();
     let plain = bake(&["--level", "1", "--view-supersample", "0"]);
     let fine = bake(&["--level", "2", "--view-supersample", "0"]);
 
@@ -84,18 +88,7 @@ fn supersampled_rows_contain_the_plain_rows_and_fold_the_finer_bake() {
 
 #[test]
 fn a_fold_threshold_folds_the_thresholded_finer_rows_into_the_plain_stored_rows() {
-    let ss = bake_with(&[
-        "--level",
-        "1",
-        "--view-supersample",
-        "1",
-        "--fold-min-pixels",
-        "6",
-        "--fold-corners",
-        "all",
-    ])
-    .stats()
-    .run();
+    let ss = bake_with(&folded_level_1("6", "all")).stats().run();
     let plain = bake(&["--level", "1", "--view-supersample", "0"]);
     let fine = bake(&[
         "--level",
@@ -105,16 +98,7 @@ fn a_fold_threshold_folds_the_thresholded_finer_rows_into_the_plain_stored_rows(
         "--min-pixels",
         "6",
     ]);
-    let untouched = bake(&[
-        "--level",
-        "1",
-        "--view-supersample",
-        "1",
-        "--fold-min-pixels",
-        "0",
-        "--fold-corners",
-        "all",
-    ]);
+    let untouched = bake(&folded_level_1("0", "all"));
     let (_, ss_rows) = rows(&ss);
     let (_, plain_rows) = rows(&plain);
     let (fine_level, fine_rows) = rows(&fine);
@@ -140,26 +124,11 @@ fn a_fold_threshold_folds_the_thresholded_finer_rows_into_the_plain_stored_rows(
 
 #[test]
 fn one_fold_corner_folds_each_finer_row_into_one_stored_view() {
-    let one = bake(
-        &[
-            "--level",
-            "1",
-            "--view-supersample",
-            "1",
-            "--fold-min-pixels",
-            "0",
-        ]
-        .into_iter()
-        .chain(["--fold-corners", "one"])
-        .collect::<Vec<_>>(),
-    );
+    let one = bake(&folded_level_1("0", "one"));
     let fine = bake(&["--level", "2", "--view-supersample", "0"]);
     let (_, one_rows) = rows(&one);
     let (fine_level, fine_rows) = rows(&fine);
-    let mut prefix = VisibilityMatrix::new(view_count(1), fine_rows.patches());
-    for v in 0..view_count(1) {
-        prefix.row_mut(v).copy_from_slice(fine_rows.row(v));
-    }
+    let prefix = fine_rows.prefix(view_count(1));
     let all = fold_into(prefix.clone(), &fine_rows, fine_level, 1);
     assert_eq!(
         fold_into_with(prefix, &fine_rows, fine_level, 1, FoldCorners::One),
@@ -172,29 +141,11 @@ fn one_fold_corner_folds_each_finer_row_into_one_stored_view() {
 fn defaults_and_conservative_are_the_documented_flag_combinations() {
     // Default: one level of view supersampling, a 4-pixel fold threshold, one fold corner.
     let default = bake(&["--level", "1"]);
-    let spelled = bake(&[
-        "--level",
-        "1",
-        "--view-supersample",
-        "1",
-        "--fold-min-pixels",
-        "4",
-        "--fold-corners",
-        "one",
-    ]);
+    let spelled = bake(&folded_level_1("4", "one"));
     assert_eq!(default.bytes(), spelled.bytes());
     // --conservative at 32 px: ID buffers of 64 px, every finer patch folded.
     let conservative = bake(&["--level", "1", "--conservative", "--resolution", "32"]);
-    let spelled = bake(&[
-        "--level",
-        "1",
-        "--view-supersample",
-        "1",
-        "--fold-min-pixels",
-        "0",
-        "--fold-corners",
-        "all",
-    ]);
+    let spelled = bake(&folded_level_1("0", "all"));
     let conservative = conservative.bytes();
     assert_eq!(conservative, spelled.bytes());
     assert_eq!(
