@@ -543,3 +543,18 @@ fn info_compare_sizes_the_matrix_with_in_process_zstd_and_xz() {
     assert!(size("zstd -19 (rows)") > 0, "{text}");
     assert!(!text.contains("n/a"), "{text}");
 }
+
+#[test]
+fn dilate_beyond_the_memory_budget_is_refused_before_sampling() {
+    // The bunny's patch graph takes about 4.6 MiB while it is built: more than 1 MiB.
+    let baked = Bake::new(&["--dilate", "--memory", "1MiB", "-q"]).attempt();
+    let err = stderr(&baked.output);
+    assert_eq!(baked.output.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("--dilate") && err.contains("--memory 1 MiB") && err.lines().count() == 1,
+        "{err}"
+    );
+    assert!(!baked.pvis.exists(), "nothing is written");
+    // Within the budget the same bake runs.
+    Bake::new(&["--dilate", "--level", "1", "--resolution", "64", "-q"]).run();
+}
