@@ -187,7 +187,7 @@ impl Recipe {
         Ok(SampledRows {
             plain,
             fine,
-            level: params.level,
+            params,
             supersample: self.supersample,
         })
     }
@@ -243,11 +243,10 @@ impl Recipe {
         let tiling = stages.run("tiling", || spin(progress, "tiling", || self.tile(mesh)))?;
         let rows = stages.run("sampling", || self.sample(mesh, &tiling, backend, progress))?;
         let visibility = rows.stored(self.settings.level);
-        let sampled_views = rows.sampled_views();
+        let (params, sampled_views) = (rows.params(self.settings.level), rows.sampled_views());
         drop(rows);
         let (tiling, visibility, renumbered) =
             stages.run("patch-order", || self.number(tiling, visibility))?;
-        let params = self.sampling_params(mesh);
         let bytes = stages.run("encoding", || {
             spin(progress, "encoding", || {
                 self.encode(&params, mesh.triangle_count(), &tiling, &visibility)

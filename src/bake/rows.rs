@@ -11,25 +11,34 @@
 use super::Supersample;
 use crate::sampler::fold_into_with;
 use crate::sphere::{MAX_LEVEL, view_count};
-use crate::visibility::VisibilityMatrix;
+use crate::visibility::{SamplingParams, VisibilityMatrix};
 
 /// The sampled rows of one tiling (see the module documentation).
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SampledRows {
     /// Every pixel counted: at `level`, or at the finer level when there is no threshold and
     /// this pass serves as both.
     pub(crate) plain: VisibilityMatrix,
     /// The thresholded finer views, at `min(level + K, MAX_LEVEL)`, when there is a threshold.
     pub(crate) fine: Option<VisibilityMatrix>,
-    /// The finest stored level these rows serve.
-    pub(crate) level: u32,
+    /// Where the cameras of the finest stored level were (the mesh's bounding sphere is
+    /// computed once, for every level cut from these rows).
+    pub(crate) params: SamplingParams,
     pub(crate) supersample: Supersample,
 }
 
 impl SampledRows {
     /// The finest stored level these rows serve.
     pub fn level(&self) -> u32 {
-        self.level
+        self.params.level
+    }
+
+    /// Where the cameras of stored level `level` are: the sampled ones, at that level.
+    pub fn params(&self, level: u32) -> SamplingParams {
+        SamplingParams {
+            level,
+            ..self.params
+        }
     }
 
     /// Views rendered to get these rows.
@@ -43,9 +52,9 @@ impl SampledRows {
     /// Panics (caller contract) if `level` is finer than the sampled level.
     pub fn stored(&self, level: u32) -> VisibilityMatrix {
         assert!(
-            level <= self.level,
+            level <= self.level(),
             "level {level} is finer than the sampled level {}",
-            self.level
+            self.level()
         );
         let coarse = self.plain.prefix(view_count(level));
         let fine_level = (level + self.supersample.extra_levels).min(MAX_LEVEL);

@@ -213,9 +213,7 @@ impl<'m> Evaluator<'m> {
     /// An evaluator for files baked from `mesh` with `tiling`, in its numbering (unchecked:
     /// the caller made both).
     pub fn from_tiling(mesh: &'m Mesh, tiling: &Tiling) -> Evaluator<'m> {
-        let mut starts: Vec<u32> = tiling.patches.iter().map(|p| p.first).collect();
-        starts.push(mesh.triangle_count());
-        Evaluator::with_order(mesh, Some(tiling.order.clone()), starts, u64::MAX)
+        Evaluator::with_order(mesh, Some(tiling.order.clone()), tiling.starts(), u64::MAX)
     }
 
     fn with_order(

@@ -78,10 +78,7 @@ pub fn sweep(
             .sample(mesh, &tiling, &Backend::Cpu, progress)
             .map_err(EvalError::bake)?;
         for &level in &levels {
-            let params = crate::visibility::SamplingParams {
-                level,
-                ..recipe.sampling_params(mesh)
-            };
+            let params = rows.params(level);
             let (numbered, visibility, _) = recipe
                 .number(tiling.clone(), rows.stored(level))
                 .map_err(EvalError::bake)?;

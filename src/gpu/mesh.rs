@@ -78,20 +78,13 @@ pub(crate) struct PatchOrder<'a> {
 }
 
 impl<'a> PatchOrder<'a> {
-    /// The patch order of `tiling`; `starts` must hold its patches' starts and the total.
+    /// The patch order of `tiling`; `starts` must be [`Tiling::starts`].
     pub(crate) fn of(tiling: &'a Tiling, starts: &'a [u32]) -> PatchOrder<'a> {
         PatchOrder {
             order: Some(&tiling.order),
             starts,
         }
     }
-}
-
-/// Where each patch of `tiling` starts, and the triangle count after the last.
-pub(crate) fn patch_starts(tiling: &Tiling) -> Vec<u32> {
-    let mut starts: Vec<u32> = tiling.patches.iter().map(|p| p.first).collect();
-    starts.push(tiling.order.len() as u32);
-    starts
 }
 
 /// Uploads `mesh`'s triangles patch by patch (`patches`), each vertex tagged with its patch,

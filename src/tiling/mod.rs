@@ -112,6 +112,16 @@ pub struct Tiling {
     pub quality: TilingQuality,
 }
 
+impl Tiling {
+    /// Where each patch starts in [`Tiling::order`], and the triangle count after the last:
+    /// patch `p` holds positions `starts[p]..starts[p + 1]`.
+    pub fn starts(&self) -> Vec<u32> {
+        let mut starts: Vec<u32> = self.patches.iter().map(|p| p.first).collect();
+        starts.push(self.order.len() as u32);
+        starts
+    }
+}
+
 /// Which algorithm [`tile_with`] runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum TilingMode {

@@ -189,7 +189,7 @@ impl GpuSampler {
         let words32 = 2 * words64;
         let counting = options.min_pixels > 1;
         let batch = batch_views(params.resolution, patches, words32, counting, &limits)?;
-        let starts = upload::patch_starts(tiling);
+        let starts = tiling.starts();
         let host_bytes = options.memory_budget.map_or(u64::MAX, |b| {
             crate::memory::MemoryBudget::new(b).split().gpu_staging
         });
