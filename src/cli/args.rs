@@ -185,6 +185,22 @@ pub enum TilingArg {
     OutOfCore,
 }
 
+impl From<TilingArg> for patchvis::tiling::TilingMode {
+    fn from(arg: TilingArg) -> Self {
+        match arg {
+            TilingArg::Auto => Self::Auto,
+            TilingArg::InCore => Self::InCore,
+            TilingArg::OutOfCore => Self::OutOfCore,
+        }
+    }
+}
+
+/// The budget of `--memory SIZE`, or half the available memory without it.
+pub fn memory_budget(memory: Option<u64>) -> patchvis::bake::MemoryBudget {
+    use patchvis::bake::MemoryBudget;
+    memory.map_or_else(MemoryBudget::from_available_memory, MemoryBudget::new)
+}
+
 /// `patchvis gen`.
 #[derive(Debug, clap::Args)]
 pub struct GenArgs {

@@ -3,18 +3,19 @@
 //! folding, numbering, the memory split) lives in `src/bake`.
 
 use super::UsageError;
-use super::args::{BackendArg, BakeArgs, EncodingArg, FoldCornersArg, PatchOrderArg, TilingArg};
+use super::args::{
+    BackendArg, BakeArgs, EncodingArg, FoldCornersArg, PatchOrderArg, memory_budget,
+};
 use super::progress::Bars;
 use anyhow::{Result, anyhow};
 use patchvis::bake::{
-    Backend, BackendChoice, BakeError, BakeSettings, Baked, MemoryBudget, Outputs, PatchOrder,
-    Recipe, Stages,
+    Backend, BackendChoice, BakeError, BakeSettings, Baked, Outputs, PatchOrder, Recipe, Stages,
 };
 use patchvis::format::VisibilityEncoding;
 use patchvis::ooc::Mesh;
 use patchvis::sampler::FoldCorners;
 use patchvis::sphere::view_count;
-use patchvis::tiling::{PatchId, TilingMode};
+use patchvis::tiling::PatchId;
 use serde_json::json;
 use std::path::Path;
 use std::time::Instant;
@@ -49,14 +50,8 @@ fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
             EncodingArg::Table => VisibilityEncoding::Hierarchical,
             EncodingArg::Raw => VisibilityEncoding::Raw,
         },
-        tiling: match args.tiling {
-            TilingArg::Auto => TilingMode::Auto,
-            TilingArg::InCore => TilingMode::InCore,
-            TilingArg::OutOfCore => TilingMode::OutOfCore,
-        },
-        memory: args
-            .memory
-            .map_or_else(MemoryBudget::from_available_memory, MemoryBudget::new),
+        tiling: args.tiling.into(),
+        memory: memory_budget(args.memory),
         checkpoint: Some(args.output.clone()),
         resume: args.resume,
     })

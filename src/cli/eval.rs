@@ -3,8 +3,7 @@
 //! the worst views and SVG plots.
 
 use super::UsageError;
-use super::args::TilingArg;
-use super::args::{EvalArgs, SweepModeArg};
+use super::args::{EvalArgs, SweepModeArg, memory_budget};
 use super::eval_frame::{FrameBackend, frame_json, print_frame};
 use super::progress::Bars;
 use anyhow::{Context, Result, anyhow};
@@ -25,7 +24,6 @@ use patchvis::runtime::Pvis;
 use patchvis::sampler::FoldCorners;
 use patchvis::sampler::{Camera, MAX_RESOLUTION};
 use patchvis::sphere::{MAX_LEVEL, view_count};
-use patchvis::tiling::TilingMode;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -122,8 +120,8 @@ pub fn run(args: EvalArgs) -> Result<()> {
     let bars = Bars::new(!args.quiet && !args.json);
     let start = Instant::now();
     let options = EvalOptions {
-        memory: memory_budget(&args),
-        tiling: tiling_mode(args.tiling),
+        memory: memory_budget(args.memory),
+        tiling: args.tiling.into(),
     };
     let mut stages = Stages::new();
     let mesh = stages.run("input", || open_mesh(&args, options.memory))?;
@@ -279,12 +277,6 @@ pub fn run(args: EvalArgs) -> Result<()> {
     Ok(())
 }
 
-/// `--memory`, or half the available memory.
-fn memory_budget(args: &EvalArgs) -> MemoryBudget {
-    args.memory
-        .map_or_else(MemoryBudget::from_available_memory, MemoryBudget::new)
-}
-
 /// Opens MESH within the input's share of `memory`.
 fn open_mesh(args: &EvalArgs, memory: MemoryBudget) -> Result<Mesh> {
     Ok(Mesh::open_with(
@@ -294,15 +286,6 @@ fn open_mesh(args: &EvalArgs, memory: MemoryBudget) -> Result<Mesh> {
             ..Default::default()
         },
     )?)
-}
-
-/// `--tiling`.
-fn tiling_mode(arg: TilingArg) -> TilingMode {
-    match arg {
-        TilingArg::Auto => TilingMode::Auto,
-        TilingArg::InCore => TilingMode::InCore,
-        TilingArg::OutOfCore => TilingMode::OutOfCore,
-    }
 }
 
 /// The picture directory: created if missing; anything else there is a usage error.
@@ -548,7 +531,7 @@ fn run_sweep(args: &EvalArgs) -> Result<()> {
             )
         },
     )?;
-    let memory = memory_budget(args);
+    let memory = memory_budget(args.memory);
     let settings = SweepSettings {
         patches: args.sweep_patches.clone(),
         levels: args.sweep_levels.clone(),
@@ -561,7 +544,7 @@ fn run_sweep(args: &EvalArgs) -> Result<()> {
                 SweepModeArg::Plain => Some(0),
                 SweepModeArg::Default => None,
             },
-            tiling: tiling_mode(args.tiling),
+            tiling: args.tiling.into(),
             memory,
             ..BakeSettings::default()
         },
