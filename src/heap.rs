@@ -7,7 +7,7 @@
 //! negligible next to what the stages allocate. A program opts in by installing it
 //! (`#[global_allocator] static A: patchvis::heap::CountingAlloc =
 //! patchvis::heap::CountingAlloc;`, as the `patchvis` binary does); without it, [`peak`],
-//! [`current`] and [`allocations`] stay 0 and [`is_counting`] says so. The one `unsafe impl`
+//! [`current`] and [`allocations`] stay 0. The one `unsafe impl`
 //! forwards every call to `System` unchanged.
 
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -90,9 +90,4 @@ pub fn current() -> usize {
 /// The difference of two readings is what the thread allocated in between.
 pub fn allocations() -> u64 {
     ALLOCATIONS.with(Cell::get)
-}
-
-/// Whether [`CountingAlloc`] is the global allocator (it has seen an allocation).
-pub fn is_counting() -> bool {
-    PEAK.load(Ordering::Relaxed) > 0 || CURRENT.load(Ordering::Relaxed) > 0
 }

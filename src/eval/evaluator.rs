@@ -211,9 +211,14 @@ impl<'m> Evaluator<'m> {
     }
 
     /// An evaluator for files baked from `mesh` with `tiling`, in its numbering (unchecked:
-    /// the caller made both).
-    pub fn from_tiling(mesh: &'m Mesh, tiling: &Tiling) -> Evaluator<'m> {
-        Evaluator::with_order(mesh, Some(tiling.order.clone()), tiling.starts(), u64::MAX)
+    /// the caller made both), rendering as many views at once as `memory` holds.
+    pub fn from_tiling(mesh: &'m Mesh, tiling: &Tiling, memory: MemoryBudget) -> Evaluator<'m> {
+        Evaluator::with_order(
+            mesh,
+            Some(tiling.order.clone()),
+            tiling.starts(),
+            memory.split().eval,
+        )
     }
 
     fn with_order(

@@ -85,7 +85,7 @@ pub fn sweep(
             let bytes = recipe.encode(&params, mesh.triangle_count(), &numbered, &visibility);
             // The encoder's output always parses; a failure here is a bug in the writer.
             let pvis = Pvis::parse(&bytes).expect("the encoder wrote a file the reader rejects");
-            let evaluator = Evaluator::from_tiling(mesh, &numbered);
+            let evaluator = Evaluator::from_tiling(mesh, &numbered, settings.bake.memory);
             let eval_params = sampling_params(&pvis, params.resolution, settings.distance_scale);
             let cameras: Vec<Camera> = directions
                 .iter()
