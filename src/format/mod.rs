@@ -177,8 +177,9 @@ fn ptch(triangle_count: u64, patches: &[Patch]) -> Vec<u8> {
     out
 }
 
-/// § VISB, encoding 0 (what version-1 files hold; kept for tests and comparisons): each row's `u64` words cut into `ceil(P / 8)` little-endian bytes,
-/// which is exactly the spec's "bit p is bit p % 8 of byte p / 8".
+/// § VISB, encoding 0 (what version-1 files hold; kept for tests and comparisons): each row's `u64`
+/// words cut into `ceil(P / 8)` little-endian bytes, which is exactly the spec's "bit p is bit p %
+/// 8 of byte p / 8".
 pub fn encode_raw(matrix: &VisibilityMatrix) -> Vec<u8> {
     let row_len = row_bytes(matrix.patches()) as usize;
     let mut out = Vec::with_capacity(VISB_HEADER_LEN as usize + matrix.views() as usize * row_len);

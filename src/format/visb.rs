@@ -2,12 +2,12 @@
 //! static per-level context probabilities, the context being the view's two parent views' bits
 //! (the endpoints of the sphere edge it splits) and its own previous bit.
 //!
-//! Two passes over the matrix: count each `(level, context)`'s zeros and ones, turn the counts
-//! into 12-bit probabilities, then code every view independently — so a reader can decode any
-//! view from its parents' rows alone. The range encoder is the exact inverse of
-//! the reader's `RangeDecoder` (`runtime/coder.rs`) and ends each code on the shortest byte string whose
-//! zero-extension lies in the final interval. Output is deterministic. Cost: two passes of one
-//! context computation per bit, plus one coder step per bit in the second.
+//! Two passes over the matrix: count each `(level, context)`'s zeros and ones, turn the counts into
+//! 12-bit probabilities, then code every view independently — so a reader can decode any view from
+//! its parents' rows alone. The range encoder is the exact inverse of the reader's `RangeDecoder`
+//! (`runtime/coder.rs`) and ends each code on the shortest byte string whose zero-extension lies in
+//! the final interval. Output is deterministic. Cost: two passes of one context computation per
+//! bit, plus one coder step per bit in the second.
 
 use crate::runtime::consts::*;
 use crate::runtime::context;
@@ -108,8 +108,8 @@ fn encode_view(matrix: &VisibilityMatrix, view: u32, probs: &[u16; CONTEXTS], ou
     enc.finish();
 }
 
-/// The encoder matching the reader's `RangeDecoder` (`runtime/coder.rs`): `low` is a 32-bit window (plus a
-/// carry bit) onto the code, whose earlier bytes are already in `out`.
+/// The encoder matching the reader's `RangeDecoder` (`runtime/coder.rs`): `low` is a 32-bit window
+/// (plus a carry bit) onto the code, whose earlier bytes are already in `out`.
 pub(crate) struct RangeEncoder<'o> {
     out: &'o mut Vec<u8>,
     start: usize,

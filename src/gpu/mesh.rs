@@ -1,7 +1,7 @@
-//! The mesh on the GPU, regrouped by patch (the sampling backend's and the frame cost's): each patch's distinct
-//! vertices (position relative to the bounding-sphere centre, `f32 × 3`, and the patch id,
-//! `u32`, the id the fragment shader writes) and its triangles as 32-bit indices, patch after
-//! patch in the tiling's order.
+//! The mesh on the GPU, regrouped by patch (the sampling backend's and the frame cost's): each
+//! patch's distinct vertices (position relative to the bounding-sphere centre, `f32 × 3`, and the
+//! patch id, `u32`, the id the fragment shader writes) and its triangles as 32-bit indices, patch
+//! after patch in the tiling's order.
 //!
 //! A vertex shared by two patches is stored once per patch, so that every vertex carries one
 //! patch id without any GPU feature beyond vertex and index buffers; both copies hold the same

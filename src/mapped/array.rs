@@ -7,8 +7,8 @@
 //! heap holds nothing per record. Callers see `&[T]` / `&mut [T]` through `Deref` either way.
 //!
 //! One `unsafe` call: `MmapMut::map_mut` of a temporary file (a zeroed one, or one that
-//! `RecordWriter` filled); the bytes are viewed as records by `bytemuck`. Cost: O(1) to create (the file is sparse until written); access is a
-//! plain slice access after a match on the storage kind.
+//! `RecordWriter` filled); the bytes are viewed as records by `bytemuck`. Cost: O(1) to create (the
+//! file is sparse until written); access is a plain slice access after a match on the storage kind.
 
 use std::io;
 use std::ops::{Deref, DerefMut};

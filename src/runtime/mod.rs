@@ -2,17 +2,17 @@
 //! position see?" without allocating and without failing.
 //!
 //! Follows the ttf-parser school: a borrowed `&[u8]`, one `Stream` to read values, checked
-//! arithmetic on every offset, validation at [`Pvis::parse`] and infallible accessors after.
-//! Query technique: Meruvia 2002 — the eye's direction from the model centre falls in one face
-//! of the sampling sphere, and the patches visible from the face's three corner views
-//! approximate those visible from the eye. Rows are stored raw (VISB encoding 0) or range-coded
-//! along the sphere hierarchy (`visb`, `coder`), with probabilities from a context table per
-//! level (encoding 1) or from a context tree stored in the file (encoding 2, `model`). Cost: `parse` is one pass over the
-//! file (CRC) plus one over the patch table and the VISB records; three query modes trade
-//! memory for time — [`Pvis::query`] (one row of scratch, decodes the leaf's `3 + 3·level`
-//! ancestor views in lock step), [`Streaming`] (`4 + 3·level` rows, decodes only where the path
-//! to the leaf changed) and [`Expanded`] (every row decoded once and every leaf's answer
-//! stored; `O(level)` a query).
+//! arithmetic on every offset, validation at [`Pvis::parse`] and infallible accessors after. Query
+//! technique: Meruvia 2002 — the eye's direction from the model centre falls in one face of the
+//! sampling sphere, and the patches visible from the face's three corner views approximate those
+//! visible from the eye. Rows are stored raw (VISB encoding 0) or range-coded along the sphere
+//! hierarchy (`visb`, `coder`), with probabilities from a context table per level (encoding 1) or
+//! from a context tree stored in the file (encoding 2, `model`). Cost: `parse` is one pass over the
+//! file (CRC) plus one over the patch table and the VISB records; three query modes trade memory
+//! for time — [`Pvis::query`] (one row of scratch, decodes the leaf's `3 + 3·level` ancestor views
+//! in lock step), [`Streaming`] (`4 + 3·level` rows, decodes only where the path to the leaf
+//! changed) and [`Expanded`] (every row decoded once and every leaf's answer stored; `O(level)` a
+//! query).
 //!
 //! **Invariant:** nothing here allocates or panics on any input; the only panics are `assert!`s
 //! on caller contracts (an out-of-range patch index, a too-small scratch buffer).

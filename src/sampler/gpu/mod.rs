@@ -2,16 +2,16 @@
 //! buffers rendered by the GPU's rasterizer and reduced to per-view patch bitfields on the GPU.
 //!
 //! Technique: Meruvia 2002, section 3, on graphics hardware as the paper ran it, with the
-//! ID-bitfield reduction of the second paper done in a compute pass. The mesh is uploaded
-//! once, regrouped by patch (`crate::gpu` mesh upload: each patch's own vertices, holding the position
-//! relative to the bounding-sphere centre and the patch id, and its triangles as indices). Views go in batches, one command
-//! buffer per batch: every view of the batch renders into its own layer of an R32Uint array
-//! texture (the patch id; empty pixels keep [`NO_PATCH`]) with a `Depth32Float` layer
-//! (reversed Z: depth `near / w`, cleared to 0, nearest wins), then one compute dispatch over
-//! all layers sets bit `id` of the view's row with `atomicOr` (`reduce.wgsl`; with
-//! `min_pixels` it counts pixels with `atomicAdd` and thresholds them instead), and only the
-//! rows are copied back, never an image. Two read-back buffers let the CPU read batch `k`
-//! while the GPU draws batch `k + 1`.
+//! ID-bitfield reduction of the second paper done in a compute pass. The mesh is uploaded once,
+//! regrouped by patch (`crate::gpu` mesh upload: each patch's own vertices, holding the position
+//! relative to the bounding-sphere centre and the patch id, and its triangles as indices). Views go
+//! in batches, one command buffer per batch: every view of the batch renders into its own layer of
+//! an R32Uint array texture (the patch id; empty pixels keep [`NO_PATCH`]) with a `Depth32Float`
+//! layer (reversed Z: depth `near / w`, cleared to 0, nearest wins), then one compute dispatch over
+//! all layers sets bit `id` of the view's row with `atomicOr` (`reduce.wgsl`; with `min_pixels` it
+//! counts pixels with `atomicAdd` and thresholds them instead), and only the rows are copied back,
+//! never an image. Two read-back buffers let the CPU read batch `k` while the GPU draws batch `k +
+//! 1`.
 //!
 //! The cameras are [`Camera::sampling`]'s (same eye, basis, field of view, near plane and
 //! resolution; `view_matrix` turns one into a clip matrix). The result is not bit-identical

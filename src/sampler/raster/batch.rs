@@ -385,7 +385,8 @@ pub(crate) fn covers_no_centre(tri: [ScreenVertex; 3]) -> bool {
 /// and [`snap_lanes`], on 256-bit registers, so the same bits on every CPU (no fused
 /// multiply-add: it would round once where they round twice). Where projection is a quarter
 /// of sampling (6.4M triangles) four lanes took about 26 cycles per four points, bound by
-/// instruction count; eight lanes halve that (6.4M −7 %, docs/benchmarks/sampling.md, "Tenth pass").
+/// instruction count; eight lanes halve that (6.4M −7 %, docs/benchmarks/sampling.md,
+/// "Tenth pass").
 #[cfg(target_arch = "x86_64")]
 mod wide8 {
     use super::super::{COORD_LIMIT32, HALF_PIXEL, SUBPIXEL, SUBPIXEL_BITS};
