@@ -2,9 +2,9 @@
 //! into a [`Recipe`] whose values are all usable as they are.
 //!
 //! Defaults that depend on other settings are resolved here and nowhere else: view
-//! supersampling (one finer level unless the level is the finest), the fold threshold and
-//! corners (`--conservative` folds every pixel into every corner), the sampled resolution
-//! (`--conservative` doubles it), and the checkpoint files of each sampling pass.
+//! supersampling (one finer level unless the level is the finest), whether a thresholded
+//! fold needs a plain pass of its own, the sampled resolution (`--conservative` doubles it),
+//! and the checkpoint files of each sampling pass.
 
 use crate::format::VisibilityEncoding;
 use crate::sampler::{FoldCorners, MAX_RESOLUTION, MAX_VIEW_SUPERSAMPLE};
@@ -17,12 +17,14 @@ use super::{MemoryBudget, Recipe};
 /// `--view-supersample` unless given: one level finer, which removes most misses between the
 /// stored views for ~4× the sampling time (BENCHMARKS.md, "Quality").
 pub const DEFAULT_VIEW_SUPERSAMPLE: u32 = 1;
-/// `--fold-min-pixels` unless given (and without `--conservative`): finer views fold only
-/// patches of at least this many pixels, which buys back culling for misses of a few pixels.
-pub const DEFAULT_FOLD_MIN_PIXELS: u32 = 4;
-/// `--fold-corners` unless given (and without `--conservative`, which folds into all): one
-/// stored view per finer view.
-pub const DEFAULT_FOLD_CORNERS: FoldCorners = FoldCorners::One;
+/// `--fold-min-pixels` unless given: finer views fold every patch they show. A threshold of 4
+/// bought ~3 points of culling on the bunny but missed 4–15× more pixels on thin-part models
+/// (BENCHMARKS.md, "Quality on the model zoo").
+pub const DEFAULT_FOLD_MIN_PIXELS: u32 = 0;
+/// `--fold-corners` unless given: every stored view around a finer view (the corners the
+/// faces holding it share), so that a query anywhere in a face sees every finer sample of it
+/// from each corner's side, not one.
+pub const DEFAULT_FOLD_CORNERS: FoldCorners = FoldCorners::All;
 /// `--conservative` samples ID buffers this many times finer than `--resolution`, so that a
 /// renderer at up to this multiple of `--resolution` finds no sub-pixel sliver the sampler
 /// skipped (measured, not proven: BENCHMARKS.md, "Quality").
@@ -66,10 +68,10 @@ pub struct BakeSettings {
     /// `None`: [`DEFAULT_VIEW_SUPERSAMPLE`], capped at the finest level.
     pub view_supersample: Option<u32>,
     /// Pixel threshold of the folded finer views (`--fold-min-pixels`); `None`:
-    /// [`DEFAULT_FOLD_MIN_PIXELS`], 0 with `conservative`.
+    /// [`DEFAULT_FOLD_MIN_PIXELS`].
     pub fold_min_pixels: Option<u32>,
     /// Which stored views receive a finer view's patches (`--fold-corners`); `None`:
-    /// [`DEFAULT_FOLD_CORNERS`], all with `conservative`.
+    /// [`DEFAULT_FOLD_CORNERS`].
     pub fold_corners: Option<FoldCorners>,
     /// Patch numbering (`--patch-order`).
     pub patch_order: PatchOrder,
@@ -178,18 +180,10 @@ impl BakeSettings {
                 self.level
             ));
         }
-        let fold_min_pixels = self.fold_min_pixels.unwrap_or(if self.conservative {
-            0
-        } else {
-            DEFAULT_FOLD_MIN_PIXELS
-        });
+        let fold_min_pixels = self.fold_min_pixels.unwrap_or(DEFAULT_FOLD_MIN_PIXELS);
         // A threshold at or below the stored views' own changes nothing: no extra plain pass.
         let thresholded = extra_levels > 0 && fold_min_pixels > self.min_pixels.max(1);
-        let fold_corners = self.fold_corners.unwrap_or(if self.conservative {
-            FoldCorners::All
-        } else {
-            DEFAULT_FOLD_CORNERS
-        });
+        let fold_corners = self.fold_corners.unwrap_or(DEFAULT_FOLD_CORNERS);
         // The supersampled bake samples other rows than a plain one: its own checkpoint, so
         // that resuming finds the right one and a plain bake's checkpoint stays usable. The
         // plain pass of a thresholded fold samples exactly what a plain bake does: it shares
@@ -249,12 +243,19 @@ mod tests {
             (
                 Supersample {
                     extra_levels: DEFAULT_VIEW_SUPERSAMPLE,
-                    fold_min_pixels: DEFAULT_FOLD_MIN_PIXELS,
-                    fold_corners: FoldCorners::One
+                    fold_min_pixels: 0,
+                    fold_corners: FoldCorners::All
                 },
                 512
             )
         );
+        // One pass: the finer views' rows hold the stored ones as their prefix.
+        assert_eq!(c.fine_checkpoint, Some("out.pvis.vs1.ckpt".into()));
+        assert_eq!(c.coarse_checkpoint, None);
+        // A threshold samples the stored level plainly once more, with a checkpoint of its
+        // own, and the finer pass's checkpoint names the threshold.
+        let c = check(|s| s.fold_min_pixels = Some(4)).unwrap();
+        assert_eq!(c.supersample.fold_min_pixels, 4);
         assert_eq!(c.fine_checkpoint, Some("out.pvis.vs1.m4.ckpt".into()));
         assert_eq!(c.coarse_checkpoint, Some("out.pvis.ckpt".into()));
         // The finest level has nothing finer to sample: the default turns itself off there,
@@ -293,7 +294,11 @@ mod tests {
         .unwrap_err();
         assert!(err.0.contains("--conservative"), "{}", err.0);
         // A threshold at or below --min-pixels changes nothing: no extra plain pass.
-        let c = check(|s| s.min_pixels = 4).unwrap();
+        let c = check(|s| {
+            s.min_pixels = 4;
+            s.fold_min_pixels = Some(4)
+        })
+        .unwrap();
         assert_eq!(
             (c.supersample.fold_min_pixels, c.coarse_checkpoint),
             (0, None)

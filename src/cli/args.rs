@@ -80,12 +80,14 @@ pub struct BakeArgs {
     /// which a bake with `--patch-order spatial --mesh-out M.ply` shows.
     #[arg(long, value_name = "IDS|FILE")]
     pub always_visible: Option<String>,
-    /// Conservative mode: ID buffers at twice --resolution (the file records that ID-buffer
-    /// side) and every finer view's patches folded, however small, into all the stored views
-    /// around it (--fold-min-pixels 0 --fold-corners all); on
-    /// the bunny ≥ 99% of random views are pixel-identical at --resolution and at twice it
-    /// (BENCHMARKS.md, "Quality (issue 6)"), for ~4 points of culling and ~1.6× the
-    /// sampling time of the default.
+    /// Conservative mode: the default bake with ID buffers at twice --resolution (the file
+    /// records that ID-buffer side). What it guarantees: every patch that any sampled view
+    /// (the stored sphere level and one finer level, folded into every corner around it)
+    /// shows with at least one pixel centre at twice --resolution is in the answer for every
+    /// direction of the sphere faces around that view, at the sampling distance or farther.
+    /// What it does not: a patch visible only from directions between the sampled ones.
+    /// Measured residual (300 random views at the sampling distance, at --resolution and twice
+    /// it): BENCHMARKS.md, "Quality on the model zoo". About 2× the default's bake time.
     #[arg(long)]
     pub conservative: bool,
     /// Conservative rasterization: a triangle marks every pixel square it touches, at its
@@ -101,13 +103,12 @@ pub struct BakeArgs {
     /// With view supersampling: a finer view's patch is folded into the stored views only if
     /// it covers at least T pixels there (the stored views themselves keep every pixel, at the
     /// cost of sampling the stored level once more); trades a few small misses for culling
-    /// (0 or 1: every pixel). [default: 4; 0 with --conservative]
+    /// (0 or 1: every pixel). [default: 0]
     #[arg(long, value_name = "T")]
     pub fold_min_pixels: Option<u32>,
     /// With view supersampling: a finer view's patches go to all the stored views around it
     /// that every sphere face holding it shares (all), or to just one of them (one: still
-    /// covers every finer sample of a face, culls more). [default: one; all with
-    /// --conservative]
+    /// covers every finer sample of a face, culls more, misses more). [default: all]
     #[arg(long, value_enum, value_name = "WHICH")]
     pub fold_corners: Option<FoldCornersArg>,
     /// Continue an interrupted bake from its checkpoint (OUT.pvis.ckpt, written after every
@@ -230,6 +231,11 @@ pub enum GenKind {
     BunnyGrid,
     /// A closed casing around nested closed machine parts, never visible from outside.
     Engine,
+    /// Machine parts in the open: thin fins, a plate with holes, gears, pipes and narrow gaps,
+    /// so visibility changes quickly with the viewing direction.
+    ExposedEngine,
+    /// A lattice of thin beams with braces and leaf cards, seen through from every direction.
+    Truss,
 }
 
 impl GenKind {
@@ -239,6 +245,8 @@ impl GenKind {
             GenKind::SubdividedBunny => "subdivided-bunny",
             GenKind::BunnyGrid => "bunny-grid",
             GenKind::Engine => "engine",
+            GenKind::ExposedEngine => "exposed-engine",
+            GenKind::Truss => "truss",
         }
     }
 }

@@ -8,8 +8,10 @@ use super::UsageError;
 use super::args::{GenArgs, GenKind};
 use anyhow::{Context, Result};
 use patchvis::generate::engine::Engine;
+use patchvis::generate::exposed::ExposedEngine;
 use patchvis::generate::grid::BunnyGrid;
 use patchvis::generate::subdivide::SubdividedMesh;
+use patchvis::generate::truss::Truss;
 use patchvis::generate::{Model, write_ply};
 use patchvis::ooc::Mesh;
 use std::path::Path;
@@ -34,6 +36,8 @@ pub fn run(args: &GenArgs) -> Result<()> {
             }
         }
         GenKind::Engine => Box::new(Engine::new(args.triangles)),
+        GenKind::ExposedEngine => Box::new(ExposedEngine::new(args.triangles)),
+        GenKind::Truss => Box::new(Truss::new(args.triangles)),
     };
     let dir = match args.output.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,

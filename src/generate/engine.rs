@@ -46,8 +46,9 @@ const ORIENTATIONS: [[[f32; 3]; 3]; 3] = [
     [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
 ];
 
-/// A small integer hash for choosing part kinds; any well-mixed function would do.
-fn cell_hash(i: u32) -> u32 {
+/// A small integer hash for choosing part kinds; any well-mixed function would do. The other
+/// generated models use it too, for their per-part choices.
+pub(super) fn cell_hash(i: u32) -> u32 {
     let mut h = i.wrapping_mul(0x9e37_79b9) ^ 0x5bd1_e995;
     h ^= h >> 15;
     h = h.wrapping_mul(0x2c1b_3c6d);

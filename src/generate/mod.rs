@@ -1,6 +1,6 @@
 //! Huge, real-looking test meshes, generated deterministically and written streaming.
 //!
-//! Three models, each a [`Model`] that can recount and re-emit its vertices and triangles in a
+//! Five models, each a [`Model`] that can recount and re-emit its vertices and triangles in a
 //! fixed order from a small description, so a mesh of any size is written in two passes
 //! (vertices, then faces) with memory bounded by the description, never by the output:
 //!
@@ -13,16 +13,27 @@
 //! - [`engine::Engine`]: a closed outer casing around a closed housing around a lattice of
 //!   closed machine parts (gears, pistons, bearings, shells with parts inside). From outside
 //!   only the casing is visible, which is what visibility culling should discover.
+//! - [`exposed::ExposedEngine`]: an engine-like assembly with nothing hidden: thin cooling
+//!   fins, a plate with square holes, gears, pipes and cylinders with narrow gaps between them,
+//!   so what is visible changes quickly with the viewing direction.
+//! - [`truss::Truss`]: a cubic lattice of thin beams with diagonal braces and crossed leaf
+//!   cards, seen through from every direction.
+//!
+//! The last two are hard cases for culling fidelity rather than for scale: they are built from
+//! boxes, rods and tubes (`parts.rs`) tessellated as finely as the triangle budget allows.
 //!
 //! [`write_ply`] writes any model as binary little-endian PLY that
 //! [`Mesh::open`](crate::ooc::Mesh::open) serves zero copy. Cost: one pass per section; about
 //! 25 bytes written per triangle.
 
 pub mod engine;
+pub mod exposed;
 pub mod grid;
 mod noise;
+mod parts;
 mod shapes;
 pub mod subdivide;
+pub mod truss;
 
 use std::io::{self, BufWriter, Write};
 

@@ -1,11 +1,15 @@
 //! Generator tests: counts as announced, watertightness (shared edges share vertices),
-//! closed and nested engine parts, determinism, and a zero-copy read back through `Mesh`.
+//! closed and nested engine parts, closed and outward parts of the exposed engine and the
+//! truss within their budgets and bounds, determinism, and a zero-copy read back through `Mesh`.
 
 use std::collections::HashMap;
 
 use super::engine::{Engine, casing_inside};
+use super::exposed::ExposedEngine;
 use super::grid::BunnyGrid;
+use super::shapes::{Part, Shape, UNROTATED, axes_along};
 use super::subdivide::SubdividedMesh;
+use super::truss::Truss;
 use super::*;
 use crate::ooc::Mesh;
 use crate::test_kit::bunny::bunny;
@@ -240,4 +244,190 @@ fn written_ply_is_deterministic_and_opens_zero_copy() {
     assert_eq!(mesh.triangle_count() as usize, triangles.len());
     assert_eq!(mesh.triangle(12345), triangles[12345]);
     assert_eq!(mesh.position(54321), vertices[54321]);
+}
+
+/// Checks that every part (a run of `part_vertices` vertices, its triangles indexing only
+/// them) is closed, consistently oriented and outward, and that no triangle has zero area.
+fn assert_closed_outward_parts(
+    vertices: &[[f32; 3]],
+    triangles: &[[u32; 3]],
+    part_vertices: &[u64],
+) {
+    assert_eq!(part_vertices.iter().sum::<u64>(), vertices.len() as u64);
+    let starts: Vec<u64> = part_vertices
+        .iter()
+        .scan(0, |start, &n| {
+            let s = *start;
+            *start += n;
+            Some(s)
+        })
+        .collect();
+    let part_of = |i: u32| starts.partition_point(|&s| s <= u64::from(i)) - 1;
+    let edges = directed_edges(triangles);
+    for (&(a, b), &count) in &edges {
+        assert_eq!(count, 1, "edge {a}-{b} used {count} times in one direction");
+        assert_eq!(edges.get(&(b, a)), Some(&1), "edge {a}-{b} has no twin");
+    }
+    let mut volumes = vec![0.0f64; part_vertices.len()];
+    for (n, t) in triangles.iter().enumerate() {
+        assert!(
+            t.iter().all(|&i| (i as usize) < vertices.len()),
+            "triangle {n} {t:?} out of range"
+        );
+        let part = part_of(t[0]);
+        assert!(
+            t.iter().all(|&i| part_of(i) == part),
+            "triangle {n} spans parts"
+        );
+        // Relative to the part's first vertex, which keeps the sums small and exact enough.
+        let origin = vertices[starts[part] as usize].map(f64::from);
+        let [a, b, c] = t.map(|i| {
+            let p = vertices[i as usize].map(f64::from);
+            [p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]]
+        });
+        let (u, v) = (
+            [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+            [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+        );
+        let normal = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        let twice_area = (normal[0].powi(2) + normal[1].powi(2) + normal[2].powi(2)).sqrt();
+        assert!(twice_area > 1e-12, "triangle {n} {t:?} has zero area");
+        volumes[part] += (a[0] * normal[0] + a[1] * normal[1] + a[2] * normal[2]) / 6.0;
+    }
+    for (part, volume) in volumes.iter().enumerate() {
+        assert!(*volume > 0.0, "part {part} has volume {volume}");
+    }
+}
+
+fn assert_within(vertices: &[[f32; 3]], lo: [f32; 3], hi: [f32; 3]) {
+    for (v, p) in vertices.iter().enumerate() {
+        assert!(
+            (0..3).all(|a| lo[a] <= p[a] && p[a] <= hi[a]),
+            "vertex {v} {p:?} outside {lo:?}..{hi:?}"
+        );
+    }
+}
+
+fn ply_bytes(model: &dyn Model) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    write_ply(&mut bytes, model, "test").unwrap();
+    bytes
+}
+
+#[test]
+fn shapes_for_assemblies_are_closed_and_outward() {
+    let tilted = axes_along([1.0, 2.0, -0.5], 0.7);
+    let shapes = [
+        Shape::Cuboid {
+            half: [0.5, 0.2, 0.01],
+            steps: [3, 2, 1],
+        },
+        Shape::Cuboid {
+            half: [0.3, 0.4, 0.5],
+            steps: [2, 3, 4],
+        },
+        Shape::Prism {
+            radius: 0.1,
+            half_length: 1.0,
+            sides: 8,
+            segments: 3,
+        },
+        Shape::Tube {
+            outer: 0.3,
+            inner: 0.2,
+            half_length: 0.5,
+            sides: 9,
+            segments: 2,
+        },
+    ];
+    for shape in shapes {
+        for axes in [UNROTATED, tilted] {
+            let part = Part {
+                shape,
+                axes,
+                centre: [1.0, -2.0, 0.5],
+            };
+            let mut vertices = Vec::new();
+            part.vertices(&mut |p| {
+                vertices.push(p);
+                Ok(())
+            })
+            .unwrap();
+            let mut triangles = Vec::new();
+            part.triangles(0, &mut |t| {
+                triangles.push(t);
+                Ok(())
+            })
+            .unwrap();
+            assert_eq!(vertices.len() as u64, part.vertex_count(), "{shape:?}");
+            assert_eq!(triangles.len() as u64, part.triangle_count(), "{shape:?}");
+            assert_closed_outward_parts(&vertices, &triangles, &[part.vertex_count()]);
+        }
+    }
+    // A 3 × 2 × 1 box: 12 lattice points on each of its two layers, none inside.
+    let part = Part {
+        shape: shapes[0],
+        axes: UNROTATED,
+        centre: [0.0; 3],
+    };
+    assert_eq!(part.vertex_count(), 24);
+    assert_eq!(part.triangle_count(), 4 * (6 + 2 + 3));
+}
+
+#[test]
+fn exposed_engine_has_closed_parts_within_budget_and_bounds() {
+    for budget in [20_000, 40_000, 60_000] {
+        let model = ExposedEngine::new(budget);
+        let (vertices, triangles) = collect(&model);
+        let n = triangles.len() as u64;
+        assert!(
+            n <= budget && n as f64 >= 0.95 * budget as f64,
+            "{n} triangles for {budget}"
+        );
+        assert!(model.part_count() > 100, "{} parts", model.part_count());
+        assert_closed_outward_parts(&vertices, &triangles, &model.part_vertex_counts());
+        assert_within(&vertices, [-2.0, -1.2, -1.2], [2.0, 1.1, 1.2]);
+    }
+    // Below its fewest triangles it stays whole, at its coarsest.
+    let coarsest = ExposedEngine::new(1);
+    assert!((3_000..8_000).contains(&coarsest.triangle_count()));
+    assert_eq!(
+        coarsest.part_count(),
+        ExposedEngine::new(40_000).part_count()
+    );
+}
+
+#[test]
+fn truss_has_closed_parts_within_budget_and_bounds() {
+    for (budget, cells) in [(20_000, 5), (40_000, 6), (60_000, 7)] {
+        let model = Truss::new(budget);
+        assert_eq!(model.cells_per_side(), cells);
+        let (vertices, triangles) = collect(&model);
+        let n = triangles.len() as u64;
+        assert!(
+            n <= budget && n as f64 >= 0.95 * budget as f64,
+            "{n} triangles for {budget}"
+        );
+        // Nodes and edge beams at least.
+        let lattice = (cells + 1) * (cells + 1);
+        assert!(model.part_count() > (lattice * (cells + 1) + 3 * cells * lattice) as usize);
+        assert_closed_outward_parts(&vertices, &triangles, &model.part_vertex_counts());
+        assert_within(&vertices, [-2.1; 3], [2.1; 3]);
+    }
+    let coarsest = Truss::new(1);
+    assert_eq!(coarsest.cells_per_side(), 2);
+    assert!(coarsest.triangle_count() < 2_000);
+}
+
+#[test]
+fn exposed_engine_and_truss_are_deterministic() {
+    let engine = ply_bytes(&ExposedEngine::new(30_000));
+    assert_eq!(engine, ply_bytes(&ExposedEngine::new(30_000)));
+    let truss = ply_bytes(&Truss::new(30_000));
+    assert_eq!(truss, ply_bytes(&Truss::new(30_000)));
+    assert_ne!(engine, truss);
 }
