@@ -9,9 +9,7 @@
 //!
 //! Memory: the part list (a few kilobytes per thousand parts); cost: one pass per section.
 
-use std::io;
-
-use super::Model;
+use super::parts::{Assembled, Assembly};
 use super::shapes::{Part, Shape, gear_steps, superellipsoid_steps};
 
 /// Casing half-extents: an engine block longer than it is tall and wide.
@@ -35,7 +33,7 @@ const PART_FILL: f32 = 0.9;
 
 /// The engine model.
 pub struct Engine {
-    parts: Vec<Part>,
+    assembly: Assembly,
 }
 
 /// The rotations a part can take: the identity and the two cyclic axis permutations (all
@@ -123,17 +121,25 @@ impl Engine {
                 }
             }
         }
-        Engine { parts }
+        Engine {
+            assembly: Assembly::new(parts),
+        }
     }
 
     /// Number of closed parts, casing and housing included.
     pub fn part_count(&self) -> usize {
-        self.parts.len()
+        self.assembly.part_count()
     }
 
     /// Vertices of each part in emission order (casing first, then housing, then the lattice).
     pub fn part_vertex_counts(&self) -> Vec<u64> {
-        self.parts.iter().map(Part::vertex_count).collect()
+        self.assembly.part_vertex_counts()
+    }
+}
+
+impl Assembled for Engine {
+    fn assembly(&self) -> &Assembly {
+        &self.assembly
     }
 }
 
@@ -158,30 +164,6 @@ fn gear(radius: f32, triangles: f64, teeth: u32) -> Shape {
         tooth_depth: 0.15 * radius,
         nu,
         nv,
-    }
-}
-
-impl Model for Engine {
-    fn vertex_count(&self) -> u64 {
-        self.parts.iter().map(Part::vertex_count).sum()
-    }
-
-    fn triangle_count(&self) -> u64 {
-        self.parts.iter().map(Part::triangle_count).sum()
-    }
-
-    fn vertices(&self, emit: &mut dyn FnMut([f32; 3]) -> io::Result<()>) -> io::Result<()> {
-        self.parts.iter().try_for_each(|p| p.vertices(emit))
-    }
-
-    fn triangles(&self, emit: &mut dyn FnMut([u32; 3]) -> io::Result<()>) -> io::Result<()> {
-        let mut base = 0u64;
-        for part in &self.parts {
-            // The total was checked against u32 before writing.
-            part.triangles(base as u32, emit)?;
-            base += part.vertex_count();
-        }
-        Ok(())
     }
 }
 

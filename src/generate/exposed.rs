@@ -17,11 +17,8 @@
 //!
 //! Memory: the part list; cost: one pass per section.
 
-use std::io;
-
-use super::Model;
 use super::engine::cell_hash;
-use super::parts::{self, Assembler, Assembly};
+use super::parts::{self, Assembled, Assembler, Assembly};
 
 /// Top of the base plate; everything stands on it.
 const FLOOR: f32 = -1.0;
@@ -65,24 +62,6 @@ impl ExposedEngine {
     /// Vertices of each part in emission order.
     pub fn part_vertex_counts(&self) -> Vec<u64> {
         self.assembly.part_vertex_counts()
-    }
-}
-
-impl Model for ExposedEngine {
-    fn vertex_count(&self) -> u64 {
-        self.assembly.vertex_count()
-    }
-
-    fn triangle_count(&self) -> u64 {
-        self.assembly.triangle_count()
-    }
-
-    fn vertices(&self, emit: &mut dyn FnMut([f32; 3]) -> io::Result<()>) -> io::Result<()> {
-        self.assembly.vertices(emit)
-    }
-
-    fn triangles(&self, emit: &mut dyn FnMut([u32; 3]) -> io::Result<()>) -> io::Result<()> {
-        self.assembly.triangles(emit)
     }
 }
 
@@ -223,4 +202,10 @@ fn pipes(a: &mut Assembler) {
     // Crosses just above the two, 0.01 clear of them.
     a.rod([-0.1, 0.9, -1.15], [-0.1, 0.9, 1.15], 0.04);
     a.tube([-0.1, -0.55, -1.1], [-0.1, -0.55, 1.1], 0.17, 0.12);
+}
+
+impl Assembled for ExposedEngine {
+    fn assembly(&self) -> &Assembly {
+        &self.assembly
+    }
 }

@@ -34,6 +34,11 @@ pub(crate) struct Assembly {
 }
 
 impl Assembly {
+    /// The parts, emitted in this order.
+    pub(crate) fn new(parts: Vec<Part>) -> Assembly {
+        Assembly { parts }
+    }
+
     /// Vertices of each part in emission order.
     pub(crate) fn part_vertex_counts(&self) -> Vec<u64> {
         self.parts.iter().map(Part::vertex_count).collect()
@@ -66,6 +71,30 @@ impl Model for Assembly {
             base += part.vertex_count();
         }
         Ok(())
+    }
+}
+
+/// A model that is one [`Assembly`]: it is emitted as its assembly is.
+pub(crate) trait Assembled {
+    /// The parts.
+    fn assembly(&self) -> &Assembly;
+}
+
+impl<T: Assembled> Model for T {
+    fn vertex_count(&self) -> u64 {
+        self.assembly().vertex_count()
+    }
+
+    fn triangle_count(&self) -> u64 {
+        self.assembly().triangle_count()
+    }
+
+    fn vertices(&self, emit: &mut dyn FnMut([f32; 3]) -> io::Result<()>) -> io::Result<()> {
+        self.assembly().vertices(emit)
+    }
+
+    fn triangles(&self, emit: &mut dyn FnMut([u32; 3]) -> io::Result<()>) -> io::Result<()> {
+        self.assembly().triangles(emit)
     }
 }
 

@@ -17,11 +17,9 @@
 //! Memory: the part list (a few hundred bytes per cell); cost: one pass per section.
 
 use std::f32::consts::TAU;
-use std::io;
 
-use super::Model;
 use super::engine::cell_hash;
-use super::parts::{self, Assembler, Assembly};
+use super::parts::{self, Assembled, Assembler, Assembly};
 use super::shapes::{UNROTATED, axes_along};
 
 /// The lattice's side: it spans `-2..2` on every axis.
@@ -78,24 +76,6 @@ impl Truss {
     /// Vertices of each part in emission order.
     pub fn part_vertex_counts(&self) -> Vec<u64> {
         self.assembly.part_vertex_counts()
-    }
-}
-
-impl Model for Truss {
-    fn vertex_count(&self) -> u64 {
-        self.assembly.vertex_count()
-    }
-
-    fn triangle_count(&self) -> u64 {
-        self.assembly.triangle_count()
-    }
-
-    fn vertices(&self, emit: &mut dyn FnMut([f32; 3]) -> io::Result<()>) -> io::Result<()> {
-        self.assembly.vertices(emit)
-    }
-
-    fn triangles(&self, emit: &mut dyn FnMut([u32; 3]) -> io::Result<()>) -> io::Result<()> {
-        self.assembly.triangles(emit)
     }
 }
 
@@ -189,5 +169,11 @@ fn leaf_cluster(a: &mut Assembler, centre: [f32; 3], cell: f32, h: u32) {
         let [x, y, z] = axes_along(axis, spin + TAU / 6.0 * card as f32);
         let axes = [x, z, y.map(|c| -c)];
         a.cuboid(centre, half, axes);
+    }
+}
+
+impl Assembled for Truss {
+    fn assembly(&self) -> &Assembly {
+        &self.assembly
     }
 }
