@@ -18,7 +18,7 @@ use super::{MemoryBudget, Recipe};
 /// stored views for ~4× the sampling time (BENCHMARKS.md, "Quality").
 pub const DEFAULT_VIEW_SUPERSAMPLE: u32 = 1;
 /// `--fold-min-pixels` unless given: finer views fold every patch they show. A threshold of 4
-/// bought ~3 points of culling on the bunny but missed 4–15× more pixels on thin-part models
+/// bought ~3 points of culling on the bunny but missed 1.6–22× more pixels on the model zoo
 /// (BENCHMARKS.md, "Quality on the model zoo").
 pub const DEFAULT_FOLD_MIN_PIXELS: u32 = 0;
 /// `--fold-corners` unless given: every stored view around a finer view (the corners the
