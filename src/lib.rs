@@ -51,6 +51,8 @@ pub mod tiling;
 #[cfg(feature = "bake")]
 pub mod visibility;
 
+#[cfg(any(test, feature = "bake"))]
+mod splitmix;
 #[cfg(test)]
 pub(crate) mod test_kit;
 

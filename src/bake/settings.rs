@@ -59,8 +59,8 @@ pub struct BakeSettings {
     pub dilate: bool,
     /// Patches never culled, in the tiling's spatial numbering (`--always-visible`).
     pub always_visible: Vec<PatchId>,
-    /// ID buffers at [`CONSERVATIVE_RESOLUTION_SCALE`]× the resolution, every finer patch
-    /// folded into every corner (`--conservative`).
+    /// ID buffers at [`CONSERVATIVE_RESOLUTION_SCALE`]× the resolution, folded as by default
+    /// (`--conservative`).
     pub conservative: bool,
     /// A triangle marks every pixel it touches (`--conservative-raster`).
     pub conservative_raster: bool,

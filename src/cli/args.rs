@@ -87,7 +87,7 @@ pub struct BakeArgs {
     /// direction of the sphere faces around that view, at the sampling distance or farther.
     /// What it does not: a patch visible only from directions between the sampled ones.
     /// Measured residual (300 random views at the sampling distance, at --resolution and twice
-    /// it): BENCHMARKS.md, "Quality on the model zoo". About 2× the default's bake time.
+    /// it): BENCHMARKS.md, "Quality on the model zoo". About 2.5× the default's bake time.
     #[arg(long)]
     pub conservative: bool,
     /// Conservative rasterization: a triangle marks every pixel square it touches, at its

@@ -168,30 +168,29 @@ impl Assembler {
 
     /// A solid rod of `radius` from `from` to `to`.
     pub(crate) fn rod(&mut self, from: [f32; 3], to: [f32; 3], radius: f32) {
-        let (centre, d, length) = span(from, to);
-        let shape = Shape::Prism {
+        self.along(from, to, |a, length| Shape::Prism {
             radius,
             half_length: 0.5 * length,
-            sides: self.cells(TAU * radius, MIN_ROUND_SIDES),
-            segments: self.cells(length, 1),
-        };
-        self.parts.push(Part {
-            shape,
-            axes: axes_along(d, 0.0),
-            centre,
+            sides: a.cells(TAU * radius, MIN_ROUND_SIDES),
+            segments: a.cells(length, 1),
         });
     }
 
     /// A pipe from `from` to `to`, open along its axis: it can be looked through.
     pub(crate) fn tube(&mut self, from: [f32; 3], to: [f32; 3], outer: f32, inner: f32) {
-        let (centre, d, length) = span(from, to);
-        let shape = Shape::Tube {
+        self.along(from, to, |a, length| Shape::Tube {
             outer,
             inner,
             half_length: 0.5 * length,
-            sides: self.cells(TAU * outer, MIN_ROUND_SIDES),
-            segments: self.cells(length, 1),
-        };
+            sides: a.cells(TAU * outer, MIN_ROUND_SIDES),
+            segments: a.cells(length, 1),
+        });
+    }
+
+    /// Places `shape(self, length)`, a shape along its `z` axis, from `from` to `to`.
+    fn along(&mut self, from: [f32; 3], to: [f32; 3], shape: impl FnOnce(&Self, f32) -> Shape) {
+        let (centre, d, length) = span(from, to);
+        let shape = shape(self, length);
         self.parts.push(Part {
             shape,
             axes: axes_along(d, 0.0),

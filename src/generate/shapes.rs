@@ -13,6 +13,8 @@
 use std::f32::consts::{PI, TAU};
 use std::io;
 
+use crate::sphere::{cross, dot};
+
 /// A closed surface in its own frame, centred at the origin.
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Shape {
@@ -76,18 +78,6 @@ pub(crate) fn axes_along(d: [f32; 3], angle: f32) -> [[f32; 3]; 3] {
     let turned_x = [0, 1, 2].map(|a| c * x[a] + s * y[a]);
     let turned_y = [0, 1, 2].map(|a| c * y[a] - s * x[a]);
     [turned_x, turned_y, z]
-}
-
-fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 fn normalised(a: [f32; 3]) -> [f32; 3] {
