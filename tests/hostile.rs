@@ -1,0 +1,17 @@
+//! The hostile-input suite (issue 21): invocations a careless or hostile user would try, each
+//! checked for the fixed behaviour. No panic (exit 101), no hang, no data loss, no stale or
+//! silently truncated result; one clear line on stderr and the documented exit code (0 success,
+//! 1 bad input or failed check, 2 usage error).
+//!
+//! One module per side of the tool: what it writes, what it reads, and the geometry it accepts.
+
+mod common;
+
+#[path = "hostile/outputs.rs"]
+mod outputs;
+
+#[path = "hostile/inputs.rs"]
+mod inputs;
+
+#[path = "hostile/geometry.rs"]
+mod geometry;

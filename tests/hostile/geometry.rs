@@ -1,0 +1,1 @@
+//! Hostile geometry: see tests/hostile.rs.

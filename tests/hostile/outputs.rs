@@ -1,0 +1,1 @@
+//! Hostile outputs: see tests/hostile.rs.
