@@ -43,6 +43,8 @@ pub mod memory;
 #[cfg(feature = "bake")]
 pub mod ooc;
 #[cfg(feature = "bake")]
+pub mod output;
+#[cfg(feature = "bake")]
 pub mod progress;
 #[cfg(feature = "bake")]
 pub mod sampler;

@@ -1,12 +1,16 @@
 //! The `patchvis` command-line tool: thin glue over the library.
 //!
 //! Exit codes: 0 success, 1 bad input or failed check, 2 usage error. Every error is one
-//! line on stderr naming the file, the position and what was expected.
+//! line on stderr naming the file, the position and what was expected. A closed stdout pipe
+//! ends a command quietly with the code it had reached (`cli::out`).
+
+#![deny(clippy::print_stdout)]
 
 mod cli;
 
 use clap::Parser;
 use cli::args::{Cli, Command};
+use std::io::Write;
 use std::process::ExitCode;
 
 #[global_allocator]
@@ -31,23 +35,32 @@ fn main() -> ExitCode {
         }
     };
     let result = match parsed.command {
-        Command::Bake(args) => cli::bake::run(args),
-        Command::Info(args) => cli::inspect::info(&args),
-        Command::Query(args) => cli::inspect::query(&args),
-        Command::Eval(args) => cli::eval::run(args),
-        Command::Gen(args) => cli::generate::run(&args),
-        Command::Verify(args) => return cli::verify::run(&args),
+        Command::Bake(args) => cli::bake::run(args).map(|()| ExitCode::SUCCESS),
+        Command::Info(args) => cli::inspect::info(&args).map(|()| ExitCode::SUCCESS),
+        Command::Query(args) => cli::inspect::query(&args).map(|()| ExitCode::SUCCESS),
+        Command::Eval(args) => cli::eval::run(args).map(|()| ExitCode::SUCCESS),
+        Command::Gen(args) => cli::generate::run(&args).map(|()| ExitCode::SUCCESS),
+        Command::Verify(args) => cli::verify::run(&args),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(err) => {
+            let stdout = err
+                .chain()
+                .find_map(|e| e.downcast_ref::<cli::out::StdoutError>());
+            if stdout.is_some_and(|e| e.is_closed_pipe()) {
+                // The reader has what it wanted; nothing to report. `verify` returns its
+                // verdict before this can happen (see `cli::verify::run`).
+                return ExitCode::SUCCESS;
+            }
             let code = if err.downcast_ref::<cli::UsageError>().is_some() {
                 2
             } else {
                 1
             };
-            // `{:#}` joins the context chain on one line: "FILE: what went wrong".
-            eprintln!("error: {err:#}");
+            // `{:#}` joins the context chain on one line: "FILE: what went wrong". A stderr
+            // that cannot be written either leaves nothing to tell.
+            let _ = writeln!(std::io::stderr(), "error: {err:#}");
             ExitCode::from(code)
         }
     }

@@ -18,6 +18,13 @@
 //! | `--dilate` patch graph | whole | refused with a clear error when it cannot fit |
 //! | encoding | whole | the rows, a few counts and the file (kilobytes to megabytes) |
 //! | eval | whole | per-triangle maps bounded by a check, pixels per worker |
+//!
+//! **The minimum.** Some needs do not shrink with the budget: the sampler's per-worker ID
+//! buffers, the batch of the patch-ordered mesh it builds, the visibility rows, and the
+//! out-of-core tiling's merge buffers and small patch graph. [`MemoryBudget::minimum`] adds
+//! them up for one bake (constants measured with `--stats` on the bunny and a 400K-triangle
+//! mesh, with margin), and the bake refuses a budget below it before any work, naming the
+//! minimum, so that every budget it accepts is honoured.
 
 /// Smallest default budget: below this the machine is too small to bake anything large
 /// anyway, and a tiny budget would only make conversion slow.
@@ -32,6 +39,56 @@ const MAX_GPU_STAGING: u64 = 256 << 20;
 /// Bytes the `--dilate` patch graph takes while it is built, per triangle: three sorted
 /// edge entries of 16 bytes (the neighbour lists after them are smaller).
 pub const PATCH_GRAPH_BYTES_PER_TRIANGLE: u64 = 48;
+
+/// Heap of the sampler per triangle of the batch of its patch-ordered mesh being built
+/// (whole patches, at most `MAPPED_BATCH_TRIANGLES`, 2^19 triangles, when the copy is
+/// mapped): measured 18 (400K triangles) to 34 (bunny, 100 triangles a patch) bytes.
+pub const SAMPLING_BUILD_BYTES_PER_TRIANGLE: u64 = 36;
+
+/// Triangles of the sampler's mesh batch (`sampler::patch_mesh`'s `MAPPED_BATCH_TRIANGLES`).
+const SAMPLING_BATCH_TRIANGLES: u64 = 1 << 19;
+
+/// Heap of each sampling worker per ID-buffer pixel: an 8-byte depth/patch key, the tiles,
+/// and the back faces put off until the tiles exist: measured 8 to 12 bytes on the bunny at
+/// 128 to 1024 pixels.
+pub const SAMPLING_BYTES_PER_PIXEL: u64 = 12;
+
+/// Heap a bake takes whatever its budget: the out-of-core tiling's merge buffers and patch
+/// graph (3.0 to 4.0 MB measured on the bunny and a 400K-triangle mesh at budgets of 1 to
+/// 8 MiB), per-patch records and the allocator's slack.
+pub const MIN_FIXED_BYTES: u64 = 4 << 20;
+
+/// Slack on top of the sampler's measured needs (per-patch scratch, allocator rounding).
+const SAMPLING_SLACK_BYTES: u64 = 1 << 20;
+
+/// What one bake needs from the heap whatever its budget ([`MemoryBudget::minimum`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FixedNeeds {
+    /// Triangles of the mesh.
+    pub triangles: u32,
+    /// Side of the sampled ID buffers, in pixels.
+    pub resolution: u32,
+    /// Sampling workers (threads), each with its own ID buffer.
+    pub workers: usize,
+    /// Bytes of the visibility rows sampled (one bit per view and patch).
+    pub row_bytes: u64,
+}
+
+impl FixedNeeds {
+    /// The sampler's heap besides the patch-ordered mesh copy (which is mapped when the rest
+    /// of the budget cannot hold it).
+    pub fn sampling(&self) -> u64 {
+        let batch = u64::from(self.triangles).min(SAMPLING_BATCH_TRIANGLES);
+        let pixels = u64::from(self.resolution).pow(2);
+        SAMPLING_SLACK_BYTES
+            .saturating_add(batch.saturating_mul(SAMPLING_BUILD_BYTES_PER_TRIANGLE))
+            .saturating_add(
+                (self.workers as u64)
+                    .saturating_mul(pixels.saturating_mul(SAMPLING_BYTES_PER_PIXEL)),
+            )
+            .saturating_add(self.row_bytes.saturating_mul(2))
+    }
+}
 
 /// A heap budget in bytes and its split between the stages (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -108,6 +165,13 @@ impl MemoryBudget {
         }
     }
 
+    /// The smallest budget a bake with `needs` keeps to, in bytes, rounded up to a MiB:
+    /// the larger of [`MIN_FIXED_BYTES`] and the sampler's needs ([`FixedNeeds::sampling`]).
+    pub fn minimum(needs: &FixedNeeds) -> u64 {
+        let bytes = needs.sampling().max(MIN_FIXED_BYTES);
+        bytes.div_ceil(1 << 20).saturating_mul(1 << 20)
+    }
+
     /// Whether the `--dilate` patch graph of `triangles` triangles fits.
     pub fn fits_patch_graph(&self, triangles: u32) -> bool {
         u64::from(triangles) * PATCH_GRAPH_BYTES_PER_TRIANGLE <= self.split().patch_graph
@@ -144,5 +208,36 @@ mod tests {
             assert!(s.gpu_staging <= MAX_GPU_STAGING);
         }
         assert!(MemoryBudget::from_available_memory().total() >= MIN_DEFAULT.min(FALLBACK));
+    }
+
+    #[test]
+    fn the_minimum_grows_with_the_fixed_needs_and_is_whole_mebibytes() {
+        let bunny = FixedNeeds {
+            triangles: 99_785,
+            resolution: 128,
+            workers: 2,
+            row_bytes: 66 * 1000 / 8,
+        };
+        let m = MemoryBudget::minimum(&bunny);
+        assert_eq!(m % (1 << 20), 0);
+        // The bunny's measured sampling peak at 1 MiB was 3.78 MB: the minimum covers it.
+        assert!((3_780_000..8 << 20).contains(&m), "{m}");
+        let finer = MemoryBudget::minimum(&FixedNeeds {
+            resolution: 1024,
+            ..bunny
+        });
+        assert!(finer > m + (20 << 20), "{finer}");
+        let tiny = FixedNeeds {
+            triangles: 1,
+            resolution: 32,
+            workers: 1,
+            row_bytes: 1,
+        };
+        assert_eq!(MemoryBudget::minimum(&tiny), MIN_FIXED_BYTES);
+        let huge = FixedNeeds {
+            row_bytes: u64::MAX,
+            ..tiny
+        };
+        assert_eq!(MemoryBudget::minimum(&huge), u64::MAX);
     }
 }

@@ -12,6 +12,10 @@ pub trait Progress: Sync {
     fn inc(&self, n: u64);
     /// Ends the current step.
     fn finish(&self);
+    /// Reports something the user should know but that does not stop the stage (one line,
+    /// e.g. an input read differently from what its header says). Ignored by default; the
+    /// binary prints it on stderr, also under `--quiet`.
+    fn warn(&self, _message: &str) {}
 }
 
 /// A [`Progress`] that ignores everything.

@@ -21,21 +21,24 @@
 //! ```
 //!
 //! Files: `settings.rs` (options, defaults, checks), `recipe.rs` (the stages), `rows.rs`
-//! (sampled rows and the fold), `backend.rs` (CPU or GPU), `stages.rs` (time and heap).
+//! (sampled rows and the fold), `backend.rs` (CPU or GPU), `stages.rs` (time and heap),
+//! `frame.rs` (the working frame of coordinates `f32` cameras cannot handle).
 
 mod backend;
+mod frame;
 mod recipe;
 mod rows;
 mod settings;
 mod stages;
 
-pub use crate::memory::{MemoryBudget, StageBudgets};
+pub use crate::memory::{FixedNeeds, MemoryBudget, StageBudgets};
 pub use backend::{Backend, BackendChoice};
 pub use recipe::{Baked, Outputs, Recipe};
 pub use rows::SampledRows;
 pub use settings::{
     BakeSettings, CONSERVATIVE_RESOLUTION_SCALE, DEFAULT_FOLD_CORNERS, DEFAULT_FOLD_MIN_PIXELS,
-    DEFAULT_VIEW_SUPERSAMPLE, PatchOrder, SettingsError, Supersample,
+    DEFAULT_VIEW_SUPERSAMPLE, MIN_RESOLUTION, PatchOrder, SettingsError, Supersample,
+    WARN_RESOLUTION,
 };
 pub use stages::{StageRecord, Stages};
 

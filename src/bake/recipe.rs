@@ -3,11 +3,13 @@
 //! `eval --sweep` runs the same stages, sampling once per patch count and cutting every level
 //! it evaluates from those rows ([`SampledRows::stored`]).
 
+use super::frame::Frame;
 use super::settings::{BakeSettings, PatchOrder, Supersample};
 use super::{Backend, BakeError, SampledRows, Stages};
 use crate::format::{self, BakeContents};
-use crate::memory::MemoryBudget;
-use crate::ooc::{Mesh, OpenOptions, default_cache_dir};
+use crate::memory::{FixedNeeds, MemoryBudget};
+use crate::ooc::{Mesh, MeshError, MeshErrorKind, OpenOptions, default_cache_dir};
+use crate::output::{AtomicFile, NamedPath};
 use crate::progress::Progress;
 use crate::runtime::Pvis;
 use crate::sampler::SamplingOptions;
@@ -71,6 +73,25 @@ pub struct Outputs {
     pub mesh: Option<PathBuf>,
 }
 
+impl Outputs {
+    /// Every file a bake with `recipe` writes to these outputs, named as the user knows them:
+    /// the `.pvis` (`-o`), the mesh (`--mesh-out`) and the checkpoints beside the `.pvis`.
+    /// Check them with [`crate::output::check_outputs`] before the bake reads its input.
+    pub fn paths(&self, recipe: &Recipe) -> Vec<NamedPath> {
+        let mut paths = vec![NamedPath::flag("-o", &self.pvis)];
+        if let Some(mesh) = &self.mesh {
+            paths.push(NamedPath::flag("--mesh-out", mesh));
+        }
+        for checkpoint in [&recipe.fine_checkpoint, &recipe.coarse_checkpoint]
+            .into_iter()
+            .flatten()
+        {
+            paths.push(NamedPath::new("the checkpoint of -o", "-o", checkpoint));
+        }
+        paths
+    }
+}
+
 impl Recipe {
     /// The heap budget.
     pub fn memory(&self) -> MemoryBudget {
@@ -108,9 +129,10 @@ impl Recipe {
         Ok(Mesh::open_with(path, &self.open_options())?)
     }
 
-    /// Tiles `mesh` and checks what depends on its size: the always-visible ids against the
-    /// patch count, the `--dilate` patch graph against the budget.
-    pub fn tile(&self, mesh: &Mesh) -> Result<Tiling, BakeError> {
+    /// Checks what depends on the mesh before any work: the `--dilate` patch graph against
+    /// the budget, that some triangle has an area, and that the budget is at least what the
+    /// stages need whatever it is ([`MemoryBudget::minimum`]).
+    pub fn check_mesh(&self, mesh: &Mesh) -> Result<(), BakeError> {
         let settings = &self.settings;
         if settings.dilate && !self.memory().fits_patch_graph(mesh.triangle_count()) {
             return Err(BakeError::Budget(format!(
@@ -121,6 +143,61 @@ impl Recipe {
                 self.memory().total() >> 20
             )));
         }
+        if mesh.first_with_area().is_none() {
+            return Err(BakeError::Mesh(MeshError::whole(
+                mesh.path(),
+                MeshErrorKind::Degenerate,
+                format!(
+                    "all {} triangles are degenerate (zero area); nothing to bake",
+                    mesh.triangle_count()
+                ),
+            )));
+        }
+        let level = (settings.level + self.supersample.extra_levels).min(crate::sphere::MAX_LEVEL);
+        let patches = u64::from(settings.patches.min(mesh.triangle_count()));
+        let needs = FixedNeeds {
+            triangles: mesh.triangle_count(),
+            resolution: self.resolution,
+            workers: rayon::current_num_threads(),
+            row_bytes: u64::from(crate::sphere::view_count(level)) * patches.div_ceil(64) * 8,
+        };
+        let minimum = MemoryBudget::minimum(&needs);
+        if self.memory().total() < minimum {
+            return Err(BakeError::Settings(format!(
+                "--memory {}: below the {} MiB this bake needs whatever its budget ({} \
+                 triangles, {} px ID buffers on {} threads, {} views × {} patches); use at \
+                 least {} MiB",
+                size_text(self.memory().total()),
+                minimum >> 20,
+                mesh.triangle_count(),
+                self.resolution,
+                needs.workers,
+                crate::sphere::view_count(level),
+                patches,
+                minimum >> 20
+            )));
+        }
+        Ok(())
+    }
+
+    /// The warning for ID buffers coarse enough to miss many patches (below
+    /// [`WARN_RESOLUTION`](super::settings::WARN_RESOLUTION) pixels), or `None`.
+    pub fn resolution_warning(&self) -> Option<String> {
+        (self.resolution < super::settings::WARN_RESOLUTION).then(|| {
+            format!(
+                "--resolution {}: ID buffers this coarse miss many patches (the bunny's views \
+                 see 7 % of its patches at 16 px, 22 % at 32, 44 % at 256); use {} px or more",
+                self.settings.resolution,
+                super::settings::WARN_RESOLUTION
+            )
+        })
+    }
+
+    /// Tiles `mesh` after [`Recipe::check_mesh`], and checks the always-visible ids against
+    /// the patch count.
+    pub fn tile(&self, mesh: &Mesh) -> Result<Tiling, BakeError> {
+        let settings = &self.settings;
+        self.check_mesh(mesh)?;
         let tiling = tiling::tile_with(mesh, settings.patches, &self.tiling_options())?;
         let patch_count = tiling.patches.len() as u32;
         if let Some(&bad) = settings.always_visible.iter().find(|&&p| p >= patch_count) {
@@ -240,13 +317,34 @@ impl Recipe {
         progress: &dyn Progress,
         stages: &mut Stages,
     ) -> Result<Baked, BakeError> {
-        let tiling = stages.run("tiling", || spin(progress, "tiling", || self.tile(mesh)))?;
-        let rows = stages.run("sampling", || self.sample(mesh, &tiling, backend, progress))?;
+        for warning in mesh
+            .warnings()
+            .iter()
+            .cloned()
+            .chain(self.resolution_warning())
+        {
+            progress.warn(&warning);
+        }
+        self.check_mesh(mesh)?;
+        // Coordinates binary32 cameras cannot handle are tiled and sampled in a frame of
+        // their own (`frame.rs`); the file gets the original's camera and patch records.
+        let frame = Frame::choose(mesh, self.settings.fov_deg)?;
+        let local = match &frame {
+            Some(frame) => Some(stages.run("frame", || frame.apply(mesh))?),
+            None => None,
+        };
+        let work = local.as_ref().unwrap_or(mesh);
+        let tiling = stages.run("tiling", || spin(progress, "tiling", || self.tile(work)))?;
+        let rows = stages.run("sampling", || self.sample(work, &tiling, backend, progress))?;
         let visibility = rows.stored(self.settings.level);
-        let (params, sampled_views) = (rows.params(self.settings.level), rows.sampled_views());
+        let (mut params, sampled_views) = (rows.params(self.settings.level), rows.sampled_views());
         drop(rows);
-        let (tiling, visibility, renumbered) =
+        let (mut tiling, visibility, renumbered) =
             stages.run("patch-order", || self.number(tiling, visibility))?;
+        if frame.is_some() {
+            params = Frame::world_params(mesh, params);
+            tiling = Frame::world_tiling(mesh, tiling);
+        }
         let bytes = stages.run("encoding", || {
             spin(progress, "encoding", || {
                 self.encode(&params, mesh.triangle_count(), &tiling, &visibility)
@@ -302,12 +400,23 @@ impl Recipe {
             }
         }
         if let (Some(tmp), Some(path)) = (mesh_tmp, &outputs.mesh) {
-            tmp.persist(path).map_err(|e| BakeError::Write {
+            tmp.commit().map_err(|source| BakeError::Write {
                 path: path.clone(),
-                source: e.error,
+                source,
             })?;
         }
         Ok(())
+    }
+}
+
+/// A byte count as `--memory` spells it: whole MiB, KiB or bytes.
+fn size_text(bytes: u64) -> String {
+    if bytes >= 1 << 20 && bytes.is_multiple_of(1 << 20) {
+        format!("{} MiB", bytes >> 20)
+    } else if bytes >= 1 << 10 && bytes.is_multiple_of(1 << 10) {
+        format!("{} KiB", bytes >> 10)
+    } else {
+        format!("{bytes} bytes")
     }
 }
 
@@ -319,23 +428,16 @@ fn spin<T>(progress: &dyn Progress, what: &str, f: impl FnOnce() -> T) -> T {
     out
 }
 
-/// The reordered, patch-coloured PLY of `--mesh-out` in a temporary file beside `path`.
-fn write_mesh_tmp(
-    path: &Path,
-    mesh: &Mesh,
-    tiling: &Tiling,
-) -> Result<tempfile::NamedTempFile, BakeError> {
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
+/// The reordered, patch-coloured PLY of `--mesh-out` in its temporary file beside `path`
+/// (with the permissions of a plain create), to be committed once the `.pvis` is in place.
+fn write_mesh_tmp(path: &Path, mesh: &Mesh, tiling: &Tiling) -> Result<AtomicFile, BakeError> {
     let failed = |source| BakeError::Write {
         path: path.to_path_buf(),
         source,
     };
-    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(failed)?;
+    let mut tmp = AtomicFile::create(path).map_err(failed)?;
     {
-        let mut out = BufWriter::new(tmp.as_file_mut());
+        let mut out = BufWriter::new(tmp.file());
         crate::ooc::write_ply::write_patch_ply(&mut out, mesh, &tiling.order, &tiling.patch_of)
             .and_then(|()| out.flush())
             .map_err(failed)?;

@@ -448,7 +448,14 @@ pub fn parse_size(s: &str) -> Result<u64, String> {
         .parse()
         .map_err(|_| format!("expected a size such as 512MiB, found '{s}'"))?;
     let bytes = value * (1u64 << shift) as f64;
-    if !(bytes >= 1.0 && bytes < u64::MAX as f64) {
+    // `u64::MAX as f64` rounds up to 2^64, the first size that does not fit.
+    if bytes >= u64::MAX as f64 {
+        return Err(format!(
+            "'{s}' is too large: at most 16 EiB ({} bytes)",
+            u64::MAX
+        ));
+    }
+    if bytes < 1.0 {
         return Err(format!("'{s}': expected a size of at least 1 byte"));
     }
     Ok(bytes as u64)
@@ -472,5 +479,10 @@ mod tests {
         );
         assert!(parse_size("MiB").is_err());
         assert!(parse_size("0").is_err());
+        // Past what 64 bits hold: said so, not "at least 1 byte".
+        let err = parse_size("99999999999TiB").unwrap_err();
+        assert!(err.contains("too large") && err.contains("16 EiB"), "{err}");
+        assert!(parse_size("16777216TiB").unwrap_err().contains("too large"));
+        assert_eq!(parse_size("16777215TiB"), Ok(16_777_215 << 40));
     }
 }

@@ -6,6 +6,7 @@ use super::UsageError;
 use super::args::{
     BackendArg, BakeArgs, EncodingArg, FoldCornersArg, PatchOrderArg, memory_budget,
 };
+use super::out::{StdoutError, outln};
 use super::progress::Bars;
 use anyhow::{Result, anyhow};
 use patchvis::bake::{
@@ -13,6 +14,7 @@ use patchvis::bake::{
 };
 use patchvis::format::VisibilityEncoding;
 use patchvis::ooc::Mesh;
+use patchvis::output::{NamedPath, check_outputs};
 use patchvis::sampler::FoldCorners;
 use patchvis::sphere::view_count;
 use patchvis::tiling::PatchId;
@@ -69,17 +71,12 @@ fn report(input: &Path, e: BakeError) -> anyhow::Error {
 
 /// Runs `patchvis bake`.
 pub fn run(args: BakeArgs) -> Result<()> {
-    for out in [
-        Some(&args.output),
-        args.mesh_out.as_ref(),
-        args.stats.as_ref(),
-    ]
-    .into_iter()
-    .flatten()
-    {
-        check_output_path(out)?;
-    }
     let recipe = settings(&args)?.check().map_err(|e| UsageError(e.0))?;
+    let outputs = Outputs {
+        pvis: args.output.clone(),
+        mesh: args.mesh_out.clone(),
+    };
+    check_paths(&args, &recipe, &outputs)?;
     let bars = Bars::new(!args.quiet);
     let start = Instant::now();
     // Before any work, so that a missing GPU fails at once.
@@ -102,10 +99,6 @@ pub fn run(args: BakeArgs) -> Result<()> {
     let baked = recipe
         .run(&mesh, &backend, &bars, &mut stages)
         .map_err(|e| report(&args.input, e))?;
-    let outputs = Outputs {
-        pvis: args.output.clone(),
-        mesh: args.mesh_out.clone(),
-    };
     recipe
         .write(&baked, &mesh, &outputs, &mut stages)
         .map_err(|e| report(&args.input, e))?;
@@ -125,7 +118,7 @@ pub fn run(args: BakeArgs) -> Result<()> {
             .map_err(|e| anyhow!("{}: cannot write: {e}", path.display()))?;
     }
     if !args.quiet {
-        summary.print();
+        summary.print()?;
     }
     Ok(())
 }
@@ -207,24 +200,24 @@ impl Summary<'_> {
     }
 
     /// The summary on stdout.
-    fn print(&self) {
+    fn print(&self) -> Result<(), StdoutError> {
         let (s, r, b) = (&self.recipe.settings, self.recipe, self.baked);
         let secs = |name| self.stages.seconds(name);
         let q = b.tiling.quality;
         let patch_count = b.tiling.patches.len();
-        println!(
+        outln!(
             "{}: {} triangles, {} vertices (read in {:.2} s)",
             self.args.input.display(),
             self.mesh.triangle_count(),
             self.mesh.vertex_count(),
             secs("input")
-        );
+        )?;
         let chunks = if b.tiling.stats.out_of_core {
             format!(", {} chunks", b.tiling.stats.chunks)
         } else {
             String::new()
         };
-        println!(
+        outln!(
             "tiling:   {} patches, {}/{}/{} triangles min/median/max, compactness {:.2} median {:.2} p95 ({}{chunks}, {:.2} s)",
             patch_count,
             q.triangles_min,
@@ -234,14 +227,16 @@ impl Summary<'_> {
             q.compactness_p95,
             self.algorithm(),
             secs("tiling")
-        );
+        )?;
         if b.tiling.stats.merged_components > 0 {
-            println!(
+            outln!(
                 "          the mesh has {} connected components, more than {} patches: {} nearby components were merged",
-                b.tiling.stats.components, patch_count, b.tiling.stats.merged_components
-            );
+                b.tiling.stats.components,
+                patch_count,
+                b.tiling.stats.merged_components
+            )?;
         }
-        println!(
+        outln!(
             "sampling: {} views (level {}) at {}x{} px, fov {}°; a view sees {:.1}% of patches on average ({:.2} s)",
             b.visibility.views(),
             s.level,
@@ -250,35 +245,37 @@ impl Summary<'_> {
             s.fov_deg,
             100.0 * b.visible_fraction(),
             secs("sampling")
-        );
+        )?;
         if !self.backend.is_cpu() {
-            println!("          sampled on the {}", self.backend.describe());
+            outln!("          sampled on the {}", self.backend.describe())?;
         }
         let k = r.supersample.extra_levels;
         if k > 0 {
-            println!(
+            outln!(
                 "          view supersampling: sampled {} views (level {}), folded into level {}",
                 view_count(s.level + k),
                 s.level + k,
                 s.level
-            );
+            )?;
             if r.supersample.fold_min_pixels > 0 {
-                println!(
+                outln!(
                     "          folding only patches of at least {} pixels; level {} sampled plain too",
-                    r.supersample.fold_min_pixels, s.level
-                );
+                    r.supersample.fold_min_pixels,
+                    s.level
+                )?;
             }
         }
-        println!(
+        outln!(
             "wrote {}: {} bytes, visibility {} bytes ({:.2} s total)",
             self.args.output.display(),
             b.bytes.len(),
             b.visibility_bytes,
             self.seconds
-        );
+        )?;
         if let Some(path) = &self.args.mesh_out {
-            println!("wrote {}: triangles reordered by patch", path.display());
+            outln!("wrote {}: triangles reordered by patch", path.display())?;
         }
+        Ok(())
     }
 }
 
@@ -321,24 +318,20 @@ fn parse_patch_ids(spec: &str) -> Result<Vec<PatchId>, UsageError> {
     list(&text, spec)
 }
 
-/// An output must be a file in an existing directory; found out before hours of work.
-pub fn check_output_path(path: &Path) -> Result<(), UsageError> {
-    if path.is_dir() {
-        return Err(UsageError(format!(
-            "{}: is a directory, expected an output file path",
-            path.display()
-        )));
+/// Every file the bake writes, checked against its inputs, each other and the file system
+/// before any work: a clash, a device node or an unwritable directory is a usage error.
+fn check_paths(args: &BakeArgs, recipe: &Recipe, outputs: &Outputs) -> Result<(), UsageError> {
+    let mut inputs = vec![NamedPath::new("the input mesh", "INPUT", &args.input)];
+    if let Some(spec) = &args.always_visible {
+        inputs.push(NamedPath::new(
+            "the --always-visible file",
+            "--always-visible",
+            spec,
+        ));
     }
-    let parent = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    if !parent.is_dir() {
-        return Err(UsageError(format!(
-            "{}: directory {} does not exist",
-            path.display(),
-            parent.display()
-        )));
+    let mut written = outputs.paths(recipe);
+    if let Some(stats) = &args.stats {
+        written.push(NamedPath::flag("--stats", stats));
     }
-    Ok(())
+    check_outputs(&inputs, &written).map_err(|e| UsageError(e.to_string()))
 }

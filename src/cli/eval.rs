@@ -5,6 +5,7 @@
 use super::UsageError;
 use super::args::{EvalArgs, SweepModeArg, memory_budget};
 use super::eval_frame::{FrameBackend, frame_json, print_frame};
+use super::out::{StdoutError, outln};
 use super::progress::Bars;
 use anyhow::{Context, Result, anyhow};
 use patchvis::bake::{
@@ -18,8 +19,9 @@ use patchvis::eval::{
     EvalOptions, EvalSummary, Evaluator, SweepPoint, SweepSettings, ViewMetrics, metrics::Summary,
     sampling_params,
 };
-use patchvis::format::write_atomic;
+use patchvis::format::{PvisFile, write_atomic};
 use patchvis::ooc::Mesh;
+use patchvis::output::{NamedPath, check_outputs};
 use patchvis::runtime::Pvis;
 use patchvis::sampler::FoldCorners;
 use patchvis::sampler::{Camera, MAX_RESOLUTION};
@@ -115,7 +117,12 @@ pub fn run(args: EvalArgs) -> Result<()> {
         .ok_or_else(|| UsageError("expected FILE.pvis (or --sweep)".into()))?;
 
     if let Some(stats) = &args.stats {
-        super::bake::check_output_path(stats)?;
+        let inputs = [
+            NamedPath::new("the mesh", "MESH", &args.mesh),
+            NamedPath::new("the .pvis file", "FILE", &file),
+        ];
+        check_outputs(&inputs, &[NamedPath::flag("--stats", stats)])
+            .map_err(|e| UsageError(e.to_string()))?;
     }
     let bars = Bars::new(!args.quiet && !args.json);
     let start = Instant::now();
@@ -124,9 +131,10 @@ pub fn run(args: EvalArgs) -> Result<()> {
         tiling: args.tiling.into(),
     };
     let mut stages = Stages::new();
-    let mesh = stages.run("input", || open_mesh(&args, options.memory))?;
-    let bytes = std::fs::read(&file).with_context(|| format!("{}: cannot read", file.display()))?;
+    // The file first: refusing it costs nothing, converting the mesh may cost minutes.
+    let bytes = PvisFile::open(&file).map_err(|e| anyhow!("{}: {e}", file.display()))?;
     let pvis = Pvis::parse(&bytes).map_err(|e| anyhow!("{}: {e}", file.display()))?;
+    let mesh = stages.run("input", || open_mesh(&args, options.memory))?;
     let evaluator = stages
         .run("patches", || Evaluator::new(&mesh, &pvis, &options))
         .map_err(|e| {
@@ -247,9 +255,9 @@ pub fn run(args: EvalArgs) -> Result<()> {
         });
         merge(&mut report, extra);
         merge(&mut report, frame_json(&frame_backend, gpu.as_ref()));
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?)?;
     } else {
-        println!(
+        outln!(
             "{} with {}: {} patches over {} triangles, level {} ({} views), {} bytes",
             args.mesh.display(),
             file.display(),
@@ -258,8 +266,8 @@ pub fn run(args: EvalArgs) -> Result<()> {
             sampling.level,
             sampling.views,
             pvis.total_bytes()
-        );
-        println!(
+        )?;
+        outln!(
             "eval: {} views ({mode}{}) at {resolution}x{resolution} px, distance x{} ({seconds:.1} s)",
             summary.views,
             match views {
@@ -267,11 +275,11 @@ pub fn run(args: EvalArgs) -> Result<()> {
                 _ => String::new(),
             },
             args.distance_scale
-        );
-        print_summary(&summary, is_path);
-        print_frame(&frame_backend, gpu.as_ref());
+        )?;
+        print_summary(&summary, is_path)?;
+        print_frame(&frame_backend, gpu.as_ref())?;
         for path in &written {
-            println!("wrote {}", path.display());
+            outln!("wrote {}", path.display())?;
         }
     }
     Ok(())
@@ -301,6 +309,15 @@ fn check_output_dir(dir: &Path) -> Result<()> {
 }
 
 fn path_cameras(path: &Path, center: &[f32; 3], fov: f32, resolution: u32) -> Result<Vec<Camera>> {
+    // A FIFO would block the read, a device never end it.
+    let metadata =
+        std::fs::metadata(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    if !metadata.is_file() {
+        return Err(anyhow!(
+            "{}: not a regular file, expected a camera path file",
+            path.display()
+        ));
+    }
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("{}: cannot read", path.display()))?;
     let cameras =
@@ -409,12 +426,16 @@ fn merge(into: &mut Value, from: Value) {
     }
 }
 
-fn print_summary(s: &EvalSummary, is_path: bool) {
+fn print_summary(s: &EvalSummary, is_path: bool) -> Result<(), StdoutError> {
     let unit = if is_path { "frames" } else { "views" };
-    println!(
+    outln!(
         "{:<22}{:>12}{:>12}{:>12}{:>12}",
-        "", "mean", "p95", "p99", "max"
-    );
+        "",
+        "mean",
+        "p95",
+        "p99",
+        "max"
+    )?;
     let row = |name: &str, x: &Summary, percent: bool| {
         let f = |v: f64| {
             if percent {
@@ -423,36 +444,39 @@ fn print_summary(s: &EvalSummary, is_path: bool) {
                 format!("{v:.1}")
             }
         };
-        println!(
+        outln!(
             "{name:<22}{:>12}{:>12}{:>12}{:>12}",
             f(x.mean),
             f(x.p95),
             f(x.p99),
             f(x.max)
-        );
+        )
     };
-    row("missed pixels", &s.missed_pixels, false);
-    row("missed patches", &s.missed_patches, false);
-    row("triangles drawn", &s.triangles_drawn, false);
-    row("culling rate", &s.culling_rate, true);
-    row("ideal culling", &s.ideal_culling_rate, true);
-    println!(
+    row("missed pixels", &s.missed_pixels, false)?;
+    row("missed patches", &s.missed_patches, false)?;
+    row("triangles drawn", &s.triangles_drawn, false)?;
+    row("culling rate", &s.culling_rate, true)?;
+    row("ideal culling", &s.ideal_culling_rate, true)?;
+    outln!(
         "pixel-identical {unit}: {}/{} ({:.1}%); {unit} missing a visible patch: {}",
         s.identical_views,
         s.views,
         100.0 * s.identical_views_fraction(),
         s.views_missing_a_patch
-    );
+    )?;
     if let Some(p) = &s.psnr_db_differing {
-        println!(
+        outln!(
             "PSNR of the {unit} that differ: mean {:.1} dB, worst {:.1} dB",
-            p.mean, p.min
-        );
+            p.mean,
+            p.min
+        )?;
     }
-    println!(
+    outln!(
         "frame cost (CPU rasterizer, median per view): full {:.2} ms, culled {:.2} ms, speed-up {:.2}x",
-        s.frame_cost.full_ms_median, s.frame_cost.culled_ms_median, s.frame_cost.speedup
-    );
+        s.frame_cost.full_ms_median,
+        s.frame_cost.culled_ms_median,
+        s.frame_cost.speedup
+    )
 }
 
 /// Missed pixels and PSNR per frame, and where a visible patch is missing.
@@ -620,23 +644,23 @@ fn run_sweep(args: &EvalArgs) -> Result<()> {
             "points": rows,
             "pictures": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
         });
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?)?;
     } else {
-        println!(
+        outln!(
             "{}: {} triangles; {} random views (seed {}) at {} px; bakes sampled {mode_name}",
             args.mesh.display(),
             mesh.triangle_count(),
             settings.views,
             settings.seed,
             settings.bake.resolution
-        );
-        println!(
+        )?;
+        outln!(
             "| patches | level | views | file bytes | culling | ideal culling | identical views | views with a miss | missed px mean / p95 / max |"
-        );
-        println!("|---|---|---|---|---|---|---|---|---|");
+        )?;
+        outln!("|---|---|---|---|---|---|---|---|---|")?;
         for p in &points {
             let s = &p.summary;
-            println!(
+            outln!(
                 "| {} | {} | {} | {} | {:.1}% | {:.1}% | {:.1}% | {}/{} | {:.1} / {} / {} |",
                 p.patches,
                 p.level,
@@ -650,10 +674,10 @@ fn run_sweep(args: &EvalArgs) -> Result<()> {
                 s.missed_pixels.mean,
                 s.missed_pixels.p95,
                 s.missed_pixels.max
-            );
+            )?;
         }
         for path in &written {
-            println!("wrote {}", path.display());
+            outln!("wrote {}", path.display())?;
         }
     }
     Ok(())

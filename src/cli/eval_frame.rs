@@ -6,6 +6,7 @@
 //! figure alone and says why; `gpu` times whatever adapter there is.
 
 use super::args::FrameBackendArg;
+use super::out::{StdoutError, outln};
 use super::progress::Bars;
 use anyhow::Result;
 use patchvis::eval::{Evaluator, FrameCost};
@@ -183,26 +184,29 @@ pub fn frame_json(backend: &FrameBackend, gpu: Option<&GpuReport>) -> Value {
 }
 
 /// The text report's lines on the frame backend.
-pub fn print_frame(backend: &FrameBackend, gpu: Option<&GpuReport>) {
+pub fn print_frame(backend: &FrameBackend, gpu: Option<&GpuReport>) -> Result<(), StdoutError> {
     let Some(g) = gpu else {
-        println!("frame cost on the GPU: not measured ({})", backend.why());
-        return;
+        return outln!("frame cost on the GPU: not measured ({})", backend.why());
     };
     let kind = if g.software {
         "software rasterizer, not GPU hardware"
     } else {
         "hardware"
     };
-    println!(
+    outln!(
         "frame cost (GPU: {}, {kind}; {}, median per view): full {:.2} ms, culled {:.2} ms, speed-up {:.2}x",
-        g.adapter, g.clock, g.cost.full_ms_median, g.cost.culled_ms_median, g.cost.speedup
-    );
-    println!(
+        g.adapter,
+        g.clock,
+        g.cost.full_ms_median,
+        g.cost.culled_ms_median,
+        g.cost.speedup
+    )?;
+    outln!(
         "  wall clock, submit to completion: full {:.2} ms, culled {:.2} ms, speed-up {:.2}x; {:.1} draws per culled frame; {} warm-up frames",
         g.wall.full_ms_median,
         g.wall.culled_ms_median,
         g.wall.speedup,
         g.draws_mean,
         g.warmup_frames
-    );
+    )
 }

@@ -2,19 +2,22 @@
 //!
 //! The models live in [`patchvis::generate`]; this file resolves the flags, reads the source
 //! mesh through [`Mesh`], and writes through a temporary file that is renamed into place only
-//! when complete, so an interrupted run leaves no half-written mesh behind.
+//! when complete ([`AtomicFile`]), so an interrupted run leaves no half-written mesh behind.
+//! The output is checked before any work: not the source, a regular file or a new one, in a
+//! writable directory. Sizes past [`MAX_TRIANGLES`] are refused.
 
 use super::UsageError;
 use super::args::{GenArgs, GenKind};
+use super::out::outln;
 use anyhow::{Context, Result};
 use patchvis::generate::engine::Engine;
 use patchvis::generate::exposed::ExposedEngine;
 use patchvis::generate::grid::BunnyGrid;
 use patchvis::generate::subdivide::SubdividedMesh;
 use patchvis::generate::truss::Truss;
-use patchvis::generate::{Model, write_ply};
+use patchvis::generate::{MAX_TRIANGLES, Model, write_ply};
 use patchvis::ooc::Mesh;
-use std::path::Path;
+use patchvis::output::{AtomicFile, NamedPath, check_outputs};
 use std::time::Instant;
 
 /// Runs `patchvis gen`.
@@ -22,6 +25,22 @@ pub fn run(args: &GenArgs) -> Result<()> {
     if args.triangles == 0 {
         return Err(UsageError("--triangles 0: expected at least 1 triangle".into()).into());
     }
+    if args.triangles > MAX_TRIANGLES {
+        return Err(UsageError(format!(
+            "--triangles {}: expected at most {MAX_TRIANGLES} (about {} GB of PLY); patchvis gen refuses larger meshes",
+            args.triangles,
+            MAX_TRIANGLES * 25 / 1_000_000_000
+        ))
+        .into());
+    }
+    let reads_source = matches!(args.kind, GenKind::SubdividedBunny | GenKind::BunnyGrid);
+    let inputs = if reads_source {
+        vec![NamedPath::new("the source mesh", "--source", &args.source)]
+    } else {
+        Vec::new()
+    };
+    check_outputs(&inputs, &[NamedPath::flag("-o", &args.output)])
+        .map_err(|e| UsageError(e.to_string()))?;
     let start = Instant::now();
     let source;
     let model: Box<dyn Model + '_> = match args.kind {
@@ -39,28 +58,24 @@ pub fn run(args: &GenArgs) -> Result<()> {
         GenKind::ExposedEngine => Box::new(ExposedEngine::new(args.triangles)),
         GenKind::Truss => Box::new(Truss::new(args.triangles)),
     };
-    let dir = match args.output.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
     let cannot_write = || format!("{}: cannot write", args.output.display());
-    let mut tmp = tempfile::NamedTempFile::new_in(dir).with_context(cannot_write)?;
+    let mut tmp = AtomicFile::create(&args.output).with_context(cannot_write)?;
     let comment = format!(
         "patchvis gen --kind {} --triangles {}",
         args.kind.name(),
         args.triangles
     );
-    write_ply(tmp.as_file_mut(), model.as_ref(), &comment).with_context(cannot_write)?;
-    tmp.persist(&args.output).with_context(cannot_write)?;
+    write_ply(tmp.file(), model.as_ref(), &comment).with_context(cannot_write)?;
+    tmp.commit().with_context(cannot_write)?;
     if !args.quiet {
-        println!(
+        outln!(
             "wrote {}: {} triangles, {} vertices ({} kind) in {:.2} s",
             args.output.display(),
             model.triangle_count(),
             model.vertex_count(),
             args.kind.name(),
             start.elapsed().as_secs_f64()
-        );
+        )?;
     }
     Ok(())
 }

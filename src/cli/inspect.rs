@@ -2,14 +2,17 @@
 //! (`info --compare`, `query --bench`) measure its payload and its three query modes.
 
 use super::args::{InfoArgs, QueryArgs};
+use super::out::outln;
 use anyhow::{Context, Result, anyhow};
+use patchvis::format::PvisFile;
 use patchvis::runtime::Pvis;
 use serde_json::json;
 use std::path::Path;
 use std::time::Instant;
 
-fn read(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))
+/// The file, mapped once its signature is checked (a FIFO or device is refused unopened).
+fn read(path: &Path) -> Result<PvisFile> {
+    PvisFile::open(path).map_err(|e| anyhow!("{}: {e}", path.display()))
 }
 
 fn parse<'a>(path: &Path, bytes: &'a [u8]) -> Result<Pvis<'a>> {
@@ -37,32 +40,40 @@ pub fn info(args: &InfoArgs) -> Result<()> {
             },
             "bytes": {"total": pvis.total_bytes(), "visibility": pvis.visibility_bytes()},
         });
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?)?;
     } else {
-        println!(
+        outln!(
             "{}: patchvis file version {}",
             args.file.display(),
             pvis.version()
-        );
-        println!(
+        )?;
+        outln!(
             "  {} patches over {} triangles",
             pvis.patch_count(),
             pvis.triangle_count()
-        );
-        println!(
+        )?;
+        outln!(
             "  {} views (sphere level {}), {}x{} px, fov {}°",
-            s.views, s.level, s.resolution, s.resolution, s.fov_deg
-        );
-        println!(
+            s.views,
+            s.level,
+            s.resolution,
+            s.resolution,
+            s.fov_deg
+        )?;
+        outln!(
             "  centre [{}, {}, {}], radius {}, camera distance {}",
-            s.center[0], s.center[1], s.center[2], s.radius, s.distance
-        );
-        println!(
+            s.center[0],
+            s.center[1],
+            s.center[2],
+            s.radius,
+            s.distance
+        )?;
+        outln!(
             "  {} bytes, of which visibility {} (encoding {})",
             pvis.total_bytes(),
             pvis.visibility_bytes(),
             pvis.encoding()
-        );
+        )?;
     }
     if args.compare {
         compare(&pvis)?;
@@ -119,29 +130,29 @@ fn compare(pvis: &Pvis<'_>) -> Result<()> {
     let zstd_spatial = zstd_size(&spatial, 19)?;
     let ours = pvis.visibility_bytes() as usize;
     let show = |name: &str, s: usize| {
-        println!(
+        outln!(
             "  {name:<28}{s:>10} B  {:>6.3} x raw  {:>6.3} x zstd",
             s as f64 / raw.len() as f64,
             s as f64 / zstd as f64
         )
     };
-    println!(
+    outln!(
         "visibility payload, {} views x {} patches:",
         pvis.sampling().views,
         pvis.patch_count()
-    );
-    show("raw rows", raw.len());
-    show("zstd -19 (raw rows)", zstd);
-    show("xz -9 (raw rows)", xz);
-    show("VISB in this file", ours);
+    )?;
+    show("raw rows", raw.len())?;
+    show("zstd -19 (raw rows)", zstd)?;
+    show("xz -9 (raw rows)", xz)?;
+    show("VISB in this file", ours)?;
     // A file numbered by co-visibility has rows that zstd also compresses better; the same
     // matrix with the patches in spatial (Z-order) numbering is the baseline before that.
-    println!("  same matrix, patches in Z-order of their centres (spatial numbering):");
-    println!(
+    outln!("  same matrix, patches in Z-order of their centres (spatial numbering):")?;
+    outln!(
         "  {:<28}{zstd_spatial:>10} B  VISB in this file: {:.3} x this",
         "zstd -19 (rows)",
         ours as f64 / zstd_spatial as f64
-    );
+    )?;
     Ok(())
 }
 
@@ -172,9 +183,9 @@ pub fn query(args: &QueryArgs) -> Result<()> {
             "triangles": triangles,
             "views": visible.leaf,
         });
-        println!("{}", serde_json::to_string(&report)?);
+        outln!("{}", serde_json::to_string(&report)?)?;
     } else {
-        println!(
+        outln!(
             "{} of {} patches visible, {} of {} triangles in {} ranges (views {:?})",
             patches.len(),
             pvis.patch_count(),
@@ -182,9 +193,9 @@ pub fn query(args: &QueryArgs) -> Result<()> {
             pvis.triangle_count(),
             ranges.len(),
             visible.leaf
-        );
+        )?;
         if visible.inside_sphere {
-            println!("the camera is inside the sampling sphere: draw everything");
+            outln!("the camera is inside the sampling sphere: draw everything")?;
         }
     }
     Ok(())
@@ -234,7 +245,7 @@ fn bench(pvis: &Pvis<'_>, n: u32) -> Result<()> {
         .iter()
         .map(|&eye| {
             let t = Instant::now();
-            sink += u64::from(pvis.query(eye, &mut scratch).count());
+            sink = sink.wrapping_add(u64::from(pvis.query(eye, &mut scratch).count()));
             t.elapsed().as_nanos() as f64
         })
         .collect();
@@ -248,7 +259,7 @@ fn bench(pvis: &Pvis<'_>, n: u32) -> Result<()> {
         .map(|b| {
             let t = Instant::now();
             for &eye in &eyes[b * BATCH..(b + 1) * BATCH] {
-                sink += expanded.query(eye).bits()[0];
+                sink = sink.wrapping_add(expanded.query(eye).bits()[0]);
             }
             t.elapsed().as_nanos() as f64 / BATCH as f64
         })
@@ -263,7 +274,7 @@ fn bench(pvis: &Pvis<'_>, n: u32) -> Result<()> {
         .map(|b| {
             let t = Instant::now();
             for i in 0..BATCH as u32 {
-                sink += expanded.query(orbit_eye(b * BATCH as u32 + i)).bits()[0];
+                sink = sink.wrapping_add(expanded.query(orbit_eye(b * BATCH as u32 + i)).bits()[0]);
             }
             t.elapsed().as_nanos() as f64 / BATCH as f64
         })
@@ -280,7 +291,7 @@ fn bench(pvis: &Pvis<'_>, n: u32) -> Result<()> {
             .collect();
         let t = Instant::now();
         for &eye in &jitter {
-            sink += streaming.query(eye).bits()[0];
+            sink = sink.wrapping_add(streaming.query(eye).bits()[0]);
         }
         stay.push(t.elapsed().as_nanos() as f64 / BATCH as f64);
     }
@@ -299,7 +310,7 @@ fn bench(pvis: &Pvis<'_>, n: u32) -> Result<()> {
         let t = Instant::now();
         let visible = streaming.query(eye);
         let ns = t.elapsed().as_nanos() as f64;
-        sink += visible.bits()[0];
+        sink = sink.wrapping_add(visible.bits()[0]);
         orbit_all.push(ns);
         if visible.leaf != last_leaf {
             last_leaf = visible.leaf;
@@ -310,44 +321,44 @@ fn bench(pvis: &Pvis<'_>, n: u32) -> Result<()> {
         (streaming.decoded_rows() - decoded_before) as f64 / changes.len().max(1) as f64;
     std::hint::black_box(sink);
 
-    println!(
+    outln!(
         "{} patches, level {} ({} views), VISB encoding {}; medians over {} queries per mode",
         pvis.patch_count(),
         s.level,
         s.views,
         pvis.encoding(),
         n
-    );
-    println!(
+    )?;
+    outln!(
         "  stateless Pvis::query (lock-step decode) {:>10.0} ns   (baseline; {} queries)",
         median(&mut stateless),
         stateless_n
-    );
-    println!(
+    )?;
+    outln!(
         "  expanded query, random eyes              {:>10.0} ns   (expand once: {:.1} ms, {} KiB table)",
         median(&mut exp),
         expand_ms,
         pvis.expanded_bound() * 8 / 1024
-    );
-    println!(
+    )?;
+    outln!(
         "  expanded query, smooth orbit             {:>10.0} ns",
         median(&mut exp_orbit)
-    );
-    println!(
+    )?;
+    outln!(
         "  streaming, camera staying in its leaf    {:>10.0} ns   ({} KiB scratch)",
         median(&mut stay),
         pvis.scratch_bound() * 8 / 1024
-    );
-    println!(
+    )?;
+    outln!(
         "  streaming, leaf change on smooth orbit   {:>10.0} ns   ({} changes in {} steps, {:.1} rows decoded per change)",
         median(&mut changes),
         changes.len(),
         n - 1,
         rows_per_change
-    );
-    println!(
+    )?;
+    outln!(
         "  streaming, every orbit step              {:>10.0} ns",
         median(&mut orbit_all)
-    );
+    )?;
     Ok(())
 }

@@ -6,6 +6,7 @@ pub mod eval;
 pub mod eval_frame;
 pub mod generate;
 pub mod inspect;
+pub mod out;
 pub mod progress;
 pub mod verify;
 

@@ -71,4 +71,13 @@ impl Progress for Bars {
             bar.finish_and_clear();
         }
     }
+
+    /// One line on stderr, whatever `--quiet` says: a warning is not progress.
+    fn warn(&self, message: &str) {
+        let line = || eprintln!("warning: {message}");
+        match self.bar.lock().ok().as_deref().and_then(Option::as_ref) {
+            Some(bar) => bar.suspend(line),
+            None => line(),
+        }
+    }
 }

@@ -5,9 +5,13 @@
 //! re-checks what a query relies on — patch ranges contiguous from 0 and summing to the
 //! triangle count, no bit set past the last patch — so a reader bug shows up here too rather
 //! than in a renderer. Exit 0 with a one-line summary, or exit 1 with one line
-//! `FILE: <first violation>`. Cost: one parse plus one pass over every row.
+//! `FILE: <first violation>`. Cost: one parse plus one pass over every row; the file is
+//! mapped, and anything that is not a regular file starting with the signature is refused
+//! before the rest is read.
 
 use super::args::VerifyArgs;
+use super::out::{StdoutError, outln};
+use patchvis::format::PvisFile;
 use patchvis::runtime::Pvis;
 use serde_json::json;
 use std::fmt::Write as _;
@@ -26,13 +30,33 @@ struct Summary {
 }
 
 /// Runs `patchvis verify`; prints the verdict and returns the exit code (0 valid, 1 not).
-pub fn run(args: &VerifyArgs) -> ExitCode {
+/// A closed stdout pipe still returns the verdict; a stdout that cannot be written is an
+/// error (exit 1, one line on stderr).
+pub fn run(args: &VerifyArgs) -> anyhow::Result<ExitCode> {
     let file = args.file.display().to_string();
-    let verdict = std::fs::read(&args.file)
-        .map_err(|e| format!("cannot read: {e}"))
+    // The signature is checked before the rest is read, and the file is mapped, not read.
+    let verdict = PvisFile::open(&args.file)
+        .map_err(|e| e.to_string())
         .and_then(|bytes| verify(&bytes));
+    let code = match verdict {
+        Ok(_) => ExitCode::SUCCESS,
+        Err(_) => ExitCode::from(1),
+    };
+    match report(args, &file, &verdict) {
+        Err(e) if e.is_closed_pipe() => Ok(code),
+        Err(e) => Err(e.into()),
+        Ok(()) => Ok(code),
+    }
+}
+
+/// Prints the verdict, as text or JSON.
+fn report(
+    args: &VerifyArgs,
+    file: &str,
+    verdict: &Result<Summary, String>,
+) -> Result<(), StdoutError> {
     if args.json {
-        let report = match &verdict {
+        let report = match verdict {
             Ok(s) => json!({
                 "file": file, "ok": true, "version": s.version, "patches": s.patches,
                 "triangles": s.triangles, "level": s.level, "views": s.views, "bytes": s.bytes,
@@ -40,26 +64,21 @@ pub fn run(args: &VerifyArgs) -> ExitCode {
             }),
             Err(violation) => json!({"file": file, "ok": false, "error": violation}),
         };
-        println!("{report}");
-    } else {
-        match &verdict {
-            Ok(s) => println!(
-                "{file}: OK (version {}, {} patches, {} triangles, {} views at level {}, \
-                 {} bytes, {:.1}% of view-patch pairs visible)",
-                s.version,
-                s.patches,
-                s.triangles,
-                s.views,
-                s.level,
-                s.bytes,
-                100.0 * s.visible_pairs as f64 / (s.views as f64 * s.patches as f64)
-            ),
-            Err(violation) => println!("{file}: {violation}"),
-        }
+        return outln!("{report}");
     }
     match verdict {
-        Ok(_) => ExitCode::SUCCESS,
-        Err(_) => ExitCode::from(1),
+        Ok(s) => outln!(
+            "{file}: OK (version {}, {} patches, {} triangles, {} views at level {}, \
+             {} bytes, {:.1}% of view-patch pairs visible)",
+            s.version,
+            s.patches,
+            s.triangles,
+            s.views,
+            s.level,
+            s.bytes,
+            100.0 * s.visible_pairs as f64 / (s.views as f64 * s.patches as f64)
+        ),
+        Err(violation) => outln!("{file}: {violation}"),
     }
 }
 

@@ -17,7 +17,7 @@ use crate::bake::BakeError;
 use crate::memory::MemoryBudget;
 use crate::ooc::Mesh;
 use crate::progress::Progress;
-use crate::runtime::Pvis;
+use crate::runtime::{PatchInfo, Pvis};
 use crate::sampler::{Camera, IdBuffer, NO_PATCH, Rasterizer};
 use crate::tiling::{self, PatchId, Tiling, TilingMode, TilingOptions, TriangleMap};
 use crate::visibility::SamplingParams;
@@ -40,21 +40,31 @@ pub enum EvalError {
         mesh: u32,
     },
     /// The mesh is neither in the file's patch order with the file's bounds (a `--mesh-out`
-    /// mesh) nor tiles into the file's patches.
-    #[error(
-        "patch {patch}: the file has triangles {file_first}+{file_count}, the mesh gives {mesh_first}+{mesh_count} (or other bounds): the file was not baked from this mesh with these settings (evaluate the bake's --mesh-out mesh, or pass the bake's --memory and --tiling)"
-    )]
+    /// mesh) nor tiles into the file's patches. The message says which of the patch's
+    /// values differ, and what to evaluate instead.
+    #[error("{}", patch_mismatch(*.patch, .file, .mesh, *.in_file_order))]
     PatchMismatch {
-        /// First differing patch.
+        /// First patch of the file without an equal in the mesh.
         patch: u32,
-        /// Its first triangle in the file.
-        file_first: u32,
-        /// Its triangle count in the file.
-        file_count: u32,
-        /// Its first triangle in the mesh (or its re-tiling).
-        mesh_first: u32,
-        /// Its triangle count there.
-        mesh_count: u32,
+        /// The file's record of it.
+        file: PatchInfo,
+        /// What the mesh gives instead: for a mesh in the file's order, the same triangles'
+        /// bounds; for a mesh tiled again, the patch of the tiling nearest to it (its bounding
+        /// sphere's centre; `first_triangle` is then its place in the tiling's order).
+        mesh: PatchInfo,
+        /// Whether the mesh was taken for one in the file's order (a `--mesh-out` mesh,
+        /// because patch 0 matched), rather than tiled again.
+        in_file_order: bool,
+    },
+    /// Tiling the mesh gave another number of patches than the file has.
+    #[error(
+        "the file has {file} patches, tiling the mesh gives {mesh}: eval needs the mesh file the bake read, or its --mesh-out mesh, and the bake's --memory and --tiling"
+    )]
+    PatchCount {
+        /// Patches in the file.
+        file: u32,
+        /// Patches of the tiling.
+        mesh: u32,
     },
     /// Tiling the mesh failed.
     #[error("tiling the mesh failed: {0}")]
@@ -179,13 +189,12 @@ impl<'m> Evaluator<'m> {
                 .into_par_iter()
                 .find_first(|&p| !in_file_order(mesh, pvis, p))
             {
-                let f = pvis.patch(p);
+                let file = pvis.patch(p);
                 return Err(EvalError::PatchMismatch {
                     patch: p,
-                    file_first: f.first_triangle,
-                    file_count: f.triangle_count,
-                    mesh_first: f.first_triangle,
-                    mesh_count: f.triangle_count,
+                    file,
+                    mesh: bounds_in_file_order(mesh, file),
+                    in_file_order: true,
                 });
             }
             return Ok(Evaluator::with_order(mesh, None, starts, budget));
@@ -564,28 +573,111 @@ fn match_tiling(tiling: &Tiling, pvis: &Pvis<'_>) -> Result<Vec<PatchId>, EvalEr
         match found {
             Some(id) => order.push(id),
             None => {
-                let mesh = tiling.patches.get(p as usize);
-                return Err(EvalError::PatchMismatch {
-                    patch: p,
-                    file_first: f.first_triangle,
-                    file_count: f.triangle_count,
-                    mesh_first: mesh.map_or(0, |m| m.first),
-                    mesh_count: mesh.map_or(0, |m| m.count),
+                return Err(match nearest(tiling, f.center) {
+                    Some(mesh) => EvalError::PatchMismatch {
+                        patch: p,
+                        file: f,
+                        mesh,
+                        in_file_order: false,
+                    },
+                    None => EvalError::PatchCount {
+                        file: count,
+                        mesh: 0,
+                    },
                 });
             }
         }
     }
     if order.len() != tiling.patches.len() {
-        let mesh = tiling.patches.get(order.len());
-        return Err(EvalError::PatchMismatch {
-            patch: count,
-            file_first: 0,
-            file_count: 0,
-            mesh_first: mesh.map_or(0, |m| m.first),
-            mesh_count: mesh.map_or(0, |m| m.count),
+        return Err(EvalError::PatchCount {
+            file: count,
+            mesh: tiling.patches.len() as u32,
         });
     }
     Ok(order)
+}
+
+/// The bounds that triangles `file.first_triangle..+triangle_count` of `mesh` give, in the
+/// file's record form.
+fn bounds_in_file_order(mesh: &Mesh, file: PatchInfo) -> PatchInfo {
+    let triangles: Vec<u32> =
+        (file.first_triangle..file.first_triangle + file.triangle_count).collect();
+    let (m, _) = tiling::patch_bounds(mesh, &triangles, file.first_triangle);
+    PatchInfo {
+        center: m.center,
+        radius: m.radius,
+        cone_axis: m.cone_axis,
+        cone_cos: m.cone_cos,
+        ..file
+    }
+}
+
+/// The tiling's patch whose bounding sphere's centre is nearest `center` (lowest id on a
+/// tie), as a record; `None` for an empty tiling.
+fn nearest(tiling: &Tiling, center: [f32; 3]) -> Option<PatchInfo> {
+    let distance = |c: [f32; 3]| -> f64 {
+        (0..3)
+            .map(|i| (f64::from(c[i]) - f64::from(center[i])).powi(2))
+            .sum()
+    };
+    tiling
+        .patches
+        .iter()
+        .min_by(|a, b| distance(a.center).total_cmp(&distance(b.center)))
+        .map(|m| PatchInfo {
+            first_triangle: m.first,
+            triangle_count: m.count,
+            center: m.center,
+            radius: m.radius,
+            cone_axis: m.cone_axis,
+            cone_cos: m.cone_cos,
+        })
+}
+
+/// The message of [`EvalError::PatchMismatch`]: the file's patch, what the mesh gives in its
+/// place (only the values that differ), and what the user must evaluate instead.
+fn patch_mismatch(patch: u32, file: &PatchInfo, mesh: &PatchInfo, in_file_order: bool) -> String {
+    let sphere = |p: &PatchInfo| format!("bounding sphere at {:?} radius {}", p.center, p.radius);
+    let cone = |p: &PatchInfo| format!("normal cone axis {:?} cos {}", p.cone_axis, p.cone_cos);
+    let mut differences = Vec::new();
+    if mesh.triangle_count != file.triangle_count {
+        differences.push(format!("{} triangles", mesh.triangle_count));
+    }
+    let bits = |c: [f32; 3], r: f32| (c.map(f32::to_bits), r.to_bits());
+    if bits(mesh.center, mesh.radius) != bits(file.center, file.radius) {
+        differences.push(sphere(mesh));
+    }
+    if bits(mesh.cone_axis, mesh.cone_cos) != bits(file.cone_axis, file.cone_cos) {
+        differences.push(cone(mesh));
+    }
+    let differences = if differences.is_empty() {
+        // Unreachable for a real mismatch; said plainly rather than as two equal values.
+        "values equal to the file's in every bit shown".to_string()
+    } else {
+        differences.join(", ")
+    };
+    let record = format!(
+        "{} triangles from triangle {}, {}, {}",
+        file.triangle_count,
+        file.first_triangle,
+        sphere(file),
+        cone(file)
+    );
+    let found = if in_file_order {
+        format!(
+            "the mesh holds patch 0 in the file's triangle order, but its triangles {}..{} give {differences}",
+            file.first_triangle,
+            u64::from(file.first_triangle) + u64::from(file.triangle_count)
+        )
+    } else {
+        format!("no patch of the mesh tiled again has these values; the nearest has {differences}")
+    };
+    format!(
+        "patch {patch} of the file ({record}): {found}; evaluate the exact mesh file that was \
+         baked (another export of the same model, e.g. .glb against .ply, can hold other \
+         triangles, vertices or order), or the bake's --mesh-out mesh, with the bake's \
+         --memory and --tiling"
+    )
 }
 
 /// The sampling parameters stored in `pvis`, rendered at `resolution` with the cameras

@@ -1,21 +1,24 @@
 //! The `.pvis` writer: lays out header, section table, CAMR, PTCH, VISB and the CRC-32C
-//! trailer (spec `spec/FORMAT.md`), and writes files atomically.
+//! trailer (spec `spec/FORMAT.md`); files are written atomically by [`write_atomic`], re-exported
+//! from [`crate::output`].
 //!
 //! Every offset, length and limit comes from [`crate::runtime::consts`], so writer and reader
 //! cannot drift apart; `encode` also runs the reader over its own output. Output is
 //! byte-deterministic: the same contents give the same bytes. VISB is written with encoding 2
 //! (`tree`: rows range-coded given their parent views, probabilities from a context tree);
 //! encodings 0 and 1 on request (`visb`). Cost: a few passes over the visibility matrix plus
-//! one CRC and one validation pass over the output.
+//! one CRC and one validation pass over the output. `file.rs` is the other direction: a
+//! `.pvis` on disk opened for the reader ([`PvisFile`]).
 
-mod atomic;
+mod file;
 mod patch_order;
 #[cfg(test)]
 mod tests;
 mod tree;
 mod visb;
 
-pub use atomic::write_atomic;
+pub use crate::output::write_atomic;
+pub use file::{PvisFile, PvisFileError};
 pub use patch_order::{MAX_TOUR_WORK, centre_order, covisibility_order};
 pub use tree::encode_tree;
 pub use visb::{encode_hierarchical, probabilities};

@@ -37,6 +37,11 @@ pub mod truss;
 
 use std::io::{self, BufWriter, Write};
 
+/// The most triangles `patchvis gen` makes: about 25 GB of PLY, a quarter of what the bake's
+/// `u32` triangle ids allow. A stated limit, so that a mistyped size fails at once rather
+/// than running for hours and filling the disk.
+pub const MAX_TRIANGLES: u64 = 1_000_000_000;
+
 /// Output buffer: large sequential writes, a fixed 1 MiB whatever the mesh size.
 const WRITE_BUFFER_BYTES: usize = 1 << 20;
 

@@ -32,8 +32,10 @@
 
 mod array;
 mod file_bytes;
+mod input;
 mod records;
 
 pub(crate) use array::Array;
 pub(crate) use file_bytes::FileBytes;
+pub(crate) use input::open_regular;
 pub(crate) use records::RecordWriter;

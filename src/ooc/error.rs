@@ -37,6 +37,13 @@ pub enum MeshErrorKind {
     Empty,
     /// A count does not fit the `u32` vertex and triangle indices the pipeline uses.
     TooLarge,
+    /// The data go on after the elements the header declares: its counts are too small.
+    CountMismatch,
+    /// Every triangle has zero area: nothing could ever be seen (found by the bake).
+    Degenerate,
+    /// The coordinates span more than the binary32 camera a `.pvis` stores can represent
+    /// (found by the bake).
+    OutOfRange,
 }
 
 /// Where in the file a problem was found.
@@ -78,6 +85,12 @@ impl MeshError {
     /// The file (or the name given to [`Mesh::from_memory`](super::Mesh::from_memory)).
     pub fn path(&self) -> &Path {
         &self.path
+    }
+
+    /// An error about the mesh at `path` as a whole (no position), for checks made after it
+    /// opened: the bake's.
+    pub(crate) fn whole(path: &Path, kind: MeshErrorKind, message: impl Into<String>) -> MeshError {
+        Fault::new(kind, None, message).in_file(path)
     }
 
     pub(crate) fn io(path: &Path, err: &std::io::Error) -> MeshError {

@@ -19,7 +19,6 @@
 //! in memory: each primitive instance writes its transformed vertices and its triangles to the
 //! cache as it is read. Cost: one pass over every instanced primitive's accessors.
 
-use std::fs::File;
 use std::path::{Path, PathBuf};
 
 use base64::Engine as _;
@@ -33,7 +32,7 @@ use super::Bounds;
 use super::cache::CacheWriter;
 use super::error::{Fault, MeshErrorKind, snippet};
 use super::ply::BoundsBuilder;
-use crate::mapped::FileBytes;
+use crate::mapped::{FileBytes, open_regular};
 
 /// `glTF`, the first four bytes of a GLB file.
 const GLB_MAGIC: &[u8; 4] = b"glTF";
@@ -67,7 +66,24 @@ impl Parsed {
 }
 
 /// Parses a `.gltf` (JSON) or `.glb` (binary container, recognised by its magic) file.
-pub(crate) fn parse(bytes: &[u8]) -> Result<Parsed, Fault> {
+/// `glb_name`: the file is named `.glb`, so that bytes which are neither a GLB container nor
+/// JSON are refused as "not a GLB file" rather than reported as JSON that does not parse.
+pub(crate) fn parse(bytes: &[u8], glb_name: bool) -> Result<Parsed, Fault> {
+    let json_text = bytes
+        .iter()
+        .find(|b| !b.is_ascii_whitespace())
+        .is_some_and(|&b| b == b'{');
+    if glb_name && !bytes.starts_with(GLB_MAGIC) && !json_text {
+        let found: Vec<String> = bytes.iter().take(4).map(|b| format!("{b:02x}")).collect();
+        return Err(Fault::at_byte(
+            MeshErrorKind::BadHeader,
+            0,
+            format!(
+                "not a GLB file: expected the magic 'glTF' (67 6c 54 46), found {}",
+                found.join(" ")
+            ),
+        ));
+    }
     let (json, bin) = if bytes.starts_with(GLB_MAGIC) {
         let (json, bin) = split_glb(bytes)?;
         (&bytes[json], bin)
@@ -279,12 +295,8 @@ fn load_buffers<'a>(
                         format!("buffers[{i}].uri: cannot read '{}': {e}", path.display()),
                     )
                 };
-                let file = File::open(&path).map_err(io_error)?;
-                let metadata = file.metadata().map_err(io_error)?;
-                if !metadata.is_file() {
-                    let err = std::io::Error::other("not a regular file");
-                    return Err(io_error(err));
-                }
+                // Checked before it is opened: a FIFO would block the open.
+                let (file, metadata) = open_regular(&path).map_err(io_error)?;
                 if metadata.len() == 0 {
                     BufferBytes::Owned(Vec::new())
                 } else {

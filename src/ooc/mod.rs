@@ -5,9 +5,10 @@
 //! with fixed-size records is used in place, zero copy (`ply::in_place`). Every other input
 //! (other PLY flavours, OBJ, STL, glTF 2.0) is converted once, streaming, into a cache file in this
 //! crate's own layout (`cache.rs`: `f32 x, y, z` and `u32 a, b, c` records), which is then
-//! mapped; the next open of the same unchanged file maps the cache directly. Both cases share
-//! one code path: a byte slice, the offset of vertex 0's `x`, `y`, `z` and of triangle 0's
-//! indices, and two strides.
+//! mapped; the next open of the same unchanged file (same bytes) maps the cache directly.
+//! Both cases share one code path: a byte slice, the offset of vertex 0's `x`, `y`, `z` and of
+//! triangle 0's indices, and two strides. Every input must be a regular file: a FIFO or a
+//! device is refused before it is opened.
 //!
 //! **Invariant:** the heap holds nothing that grows with the mesh, on any path: the input is
 //! mapped, converters stream through fixed buffers, STL welding partitions its table to fit
@@ -19,10 +20,10 @@
 //! The map itself, read-only with a copying fallback where a file cannot be mapped, is
 //! `crate::mapped::FileBytes`: this module holds no `unsafe` code.
 //!
-//! Files: `error.rs` (errors with positions), `cache.rs` (conversion cache files), `ply/`
-//! (header, in-place and converting readers), `obj.rs`, `stl.rs`, `gltf_mesh.rs` (converters),
-//! `text.rs` (line scanning and number parsing for the text formats), `write_ply.rs`
-//! (`--mesh-out`).
+//! Files: `error.rs` (errors with positions), `cache.rs` (conversion cache files, keyed by
+//! an XXH64 hash of the content), `ply/` (header, in-place and converting readers), `obj.rs`,
+//! `stl.rs`, `gltf_mesh.rs` (converters), `text.rs` (line scanning and number parsing for the
+//! text formats), `write_ply.rs` (`--mesh-out`).
 
 mod cache;
 mod error;
@@ -37,11 +38,11 @@ use std::fs::File;
 use std::path::{Path, PathBuf};
 
 pub use cache::default_cache_dir;
-use cache::{CacheKey, CacheWriter};
+use cache::{CacheKey, CacheSource, CacheWriter};
 use error::Fault;
 pub use error::{ErrorPosition, MeshError, MeshErrorKind};
 
-use crate::mapped::FileBytes;
+use crate::mapped::{FileBytes, open_regular};
 
 /// Axis-aligned bounds of a mesh's vertices.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -158,6 +159,9 @@ pub struct Mesh {
     triangle_count: u32,
     bounds: Bounds,
     source: MeshSource,
+    /// What was read differently from what the file says (e.g. a binary STL count), each one
+    /// line naming the file.
+    warnings: Vec<String>,
 }
 
 impl Mesh {
@@ -169,12 +173,8 @@ impl Mesh {
     /// Opens and validates the mesh at `path` (`.ply`, `.obj`, `.stl`, `.gltf` or `.glb`).
     pub fn open_with(path: &Path, options: &OpenOptions) -> Result<Mesh, MeshError> {
         let format = InputFormat::of(path).map_err(|f| f.in_file(path))?;
-        let file = File::open(path).map_err(|e| MeshError::io(path, &e))?;
-        let metadata = file.metadata().map_err(|e| MeshError::io(path, &e))?;
-        if metadata.is_dir() {
-            let err = std::io::Error::from(std::io::ErrorKind::IsADirectory);
-            return Err(MeshError::io(path, &err));
-        }
+        // A FIFO would block the open, a device never end: regular files only.
+        let (file, metadata) = open_regular(path).map_err(|e| MeshError::io(path, &e))?;
         if metadata.len() == 0 {
             return Err(Fault::at_byte(
                 MeshErrorKind::Empty,
@@ -184,15 +184,15 @@ impl Mesh {
             .in_file(path));
         }
         let bytes = FileBytes::open(&file, metadata.len()).map_err(|e| MeshError::io(path, &e))?;
-        // Without a key (e.g. no modification time) the cache cannot be trusted: convert.
-        let key = CacheKey::of(path, &metadata).ok();
-        let cache_dir = options.cache_dir.as_deref().filter(|_| key.is_some());
+        // Without a canonical path the cache cannot be named: convert.
+        let source = CacheSource::of(path, metadata.len()).ok();
+        let cache_dir = options.cache_dir.as_deref().filter(|_| source.is_some());
         Mesh::from_bytes(
             path.to_path_buf(),
             bytes,
             format,
             cache_dir,
-            key,
+            source,
             options.memory_budget,
         )
     }
@@ -203,7 +203,7 @@ impl Mesh {
         bytes: FileBytes,
         format: InputFormat,
         cache_dir: Option<&Path>,
-        key: Option<CacheKey>,
+        source: Option<CacheSource>,
         memory_budget: u64,
     ) -> Result<Mesh, MeshError> {
         let parsed = match format {
@@ -223,19 +223,35 @@ impl Mesh {
                         triangle_count: body.triangle_count,
                         bounds: body.bounds,
                         source,
+                        warnings: Vec::new(),
                     });
                 }
                 Some(parsed)
             }
             InputFormat::Obj | InputFormat::Stl | InputFormat::Gltf => None,
         };
+        // Checked before the cache, so that a cache hit warns as the conversion did.
+        let warnings: Vec<String> = match format {
+            InputFormat::Stl => stl::count_warning(&bytes)
+                .map(|w| format!("{}: {w}", path.display()))
+                .into_iter()
+                .collect(),
+            _ => Vec::new(),
+        };
         let gltf = match format {
-            InputFormat::Gltf => Some(gltf_mesh::parse(&bytes).map_err(|f| f.in_file(&path))?),
+            InputFormat::Gltf => {
+                let glb = path
+                    .extension()
+                    .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+                Some(gltf_mesh::parse(&bytes, glb).map_err(|f| f.in_file(&path))?)
+            }
             _ => None,
         };
         // A cache keyed by this file alone would go stale when an external buffer changes.
         let cache_dir =
             cache_dir.filter(|_| !gltf.as_ref().is_some_and(|g| g.has_external_buffers()));
+        // The key hashes every byte, so it is computed only when a cache will be used.
+        let key = cache_dir.and(source).map(|s| s.key(&bytes));
         if let (Some(dir), Some(key)) = (cache_dir, &key) {
             let cached = dir.join(key.file_name());
             if let Ok(file) = File::open(&cached) {
@@ -244,7 +260,7 @@ impl Mesh {
                     .ok()
                     .and_then(|map| Mesh::from_cache(&path, map, Some(key), MeshSource::CacheHit));
                 if let Some(mesh) = hit {
-                    return Ok(mesh);
+                    return Ok(Mesh { warnings, ..mesh });
                 }
             }
         }
@@ -266,10 +282,11 @@ impl Mesh {
         let file = sink.finish(bounds).map_err(cache_error)?;
         let len = file.metadata().map_err(cache_error)?.len();
         let map = FileBytes::open(&file, len).map_err(cache_error)?;
-        Mesh::from_cache(&path, map, None, MeshSource::Converted).ok_or_else(|| {
+        let mesh = Mesh::from_cache(&path, map, None, MeshSource::Converted).ok_or_else(|| {
             let err = std::io::Error::other("the cache file just written does not read back");
             Fault::cache(err).in_file(&path)
-        })
+        })?;
+        Ok(Mesh { warnings, ..mesh })
     }
 
     /// Serves a cache file; `None` when it is stale, damaged or not for `key`.
@@ -304,6 +321,7 @@ impl Mesh {
             triangle_count: head.triangle_count,
             bounds: head.bounds,
             source,
+            warnings: Vec::new(),
         })
     }
     /// A mesh held in memory (tests, generated meshes). Validates like [`Mesh::open`]: every
@@ -414,6 +432,7 @@ impl Mesh {
             triangle_count: triangles.len() as u32,
             bounds,
             source: MeshSource::Memory,
+            warnings: Vec::new(),
         })
     }
 
@@ -479,6 +498,74 @@ impl Mesh {
     /// Bounds of all vertices.
     pub fn bounds(&self) -> Bounds {
         self.bounds
+    }
+
+    /// The first triangle whose area is not zero (its corners' cross product in `f64`, exact
+    /// enough for any finite `f32` corners), or `None` when every triangle is degenerate.
+    /// Stops at the first: on a usual mesh that is triangle 0.
+    pub fn first_with_area(&self) -> Option<u32> {
+        (0..self.triangle_count).find(|&t| {
+            let [a, b, c] = self.triangle(t).map(|v| self.position(v).map(f64::from));
+            let (u, v) = (
+                [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+                [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+            );
+            let n = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
+            n.iter().any(|&c| c != 0.0)
+        })
+    }
+
+    /// This mesh with every position `p` moved to `(p - origin) · scale` (in `f64`, rounded
+    /// once to `f32`), same triangles, in an unnamed temporary file: streaming, like a
+    /// conversion. The bake's working frame for coordinates `f32` cameras cannot handle
+    /// (`bake::frame`).
+    pub fn transformed(&self, origin: [f64; 3], scale: f64) -> Result<Mesh, MeshError> {
+        let failed = |e: std::io::Error| Fault::cache(e).in_file(&self.path);
+        let mut sink = CacheWriter::create(None, None).map_err(failed)?;
+        let mut bounds = ply::BoundsBuilder::new();
+        for v in 0..self.vertex_count {
+            let p = self.position(v);
+            let q: [f32; 3] =
+                std::array::from_fn(|k| ((f64::from(p[k]) - origin[k]) * scale) as f32);
+            if !q.iter().all(|c| c.is_finite()) {
+                return Err(MeshError::whole(
+                    &self.path,
+                    MeshErrorKind::OutOfRange,
+                    format!(
+                        "vertex {v} at {p:?} leaves the bake's frame (centre {origin:?}, scale {scale:e})"
+                    ),
+                ));
+            }
+            bounds.add(q);
+            sink.vertex(q).map_err(failed)?;
+        }
+        for t in 0..self.triangle_count {
+            sink.triangle(self.triangle(t)).map_err(failed)?;
+        }
+        let file = sink.finish(bounds.finish()).map_err(failed)?;
+        let len = file.metadata().map_err(failed)?.len();
+        let map = FileBytes::open(&file, len).map_err(failed)?;
+        let mesh =
+            Mesh::from_cache(&self.path, map, None, MeshSource::Converted).ok_or_else(|| {
+                failed(std::io::Error::other(
+                    "the transformed mesh just written does not read back",
+                ))
+            })?;
+        Ok(Mesh {
+            warnings: self.warnings.clone(),
+            ..mesh
+        })
+    }
+
+    /// What the reader did that the file did not say, one line each naming the file: a
+    /// binary STL whose header counts fewer triangles than it holds is read whole. The bake
+    /// reports them through [`Progress::warn`](crate::progress::Progress::warn).
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
     }
 }
 

@@ -18,8 +18,16 @@
 //!
 //! Heap: one table of at most half the budget and `P` small read buffers; the spill and id
 //! files live in the page cache. Cost: one parse, `P + 1` sequential passes over the corners.
-//! A binary STL is recognised by its size (`84 + 50 × count` bytes); anything starting with
-//! `solid` that is not that size is read as ASCII.
+//! A binary STL is recognised by its size (`84 + 50 × count` bytes), by not starting with
+//! `solid`, or by a NUL byte after its 80-byte header (never in ASCII STL; binary records
+//! hold them in nearly every zero coordinate or attribute); anything else is read as ASCII.
+//!
+//! **The count field.** Many exporters write a wrong triangle count in the binary header
+//! (often 0, or the count of one part of a multi-part export), so a file of exactly
+//! `84 + 50 × n` bytes with `n` above the header's count is read whole: all `n` triangles,
+//! with a warning naming both counts ([`count_warning`]). A file that is shorter than the
+//! count says, or whose length is not `84 + 50 × n` for any `n`, is an error with its
+//! position.
 
 use std::collections::HashMap;
 use std::fs::File;
@@ -65,7 +73,7 @@ pub(crate) fn convert(
         spill.write_all(&record).map_err(Fault::cache)
     };
     match binary_count(bytes) {
-        Some(count) => read_binary(bytes, count, &mut add)?,
+        Some(count) => read_binary(bytes, present(bytes, count), &mut add)?,
         None => read_ascii(bytes, &mut add)?,
     }
     if corners == 0 {
@@ -89,8 +97,13 @@ pub(crate) fn convert(
     Ok(bounds.finish())
 }
 
-/// The triangle count when `bytes` is a binary STL: exactly `84 + 50 × count` bytes, or not
-/// starting with `solid` (then a size mismatch is reported by [`read_binary`]).
+/// Bytes of the body scanned for a NUL byte when a file starting with `solid` is not of the
+/// size its count says: enough for 20 triangle records.
+const NUL_SCAN_BYTES: usize = 20 * BINARY_TRIANGLE_BYTES;
+
+/// The header's triangle count when `bytes` is a binary STL: exactly `84 + 50 × count`
+/// bytes, not starting with `solid`, or holding a NUL byte in the first records (then a
+/// size mismatch is reported by [`read_binary`] or recovered by [`present`]).
 fn binary_count(bytes: &[u8]) -> Option<u64> {
     let count = bytes
         .get(80..84)
@@ -99,11 +112,42 @@ fn binary_count(bytes: &[u8]) -> Option<u64> {
         bytes.len() as u64 == BINARY_HEADER_BYTES as u64 + n * BINARY_TRIANGLE_BYTES as u64
     });
     let ascii = bytes.trim_ascii_start().starts_with(b"solid");
-    if exact || !ascii {
+    let body = bytes.get(BINARY_HEADER_BYTES..).unwrap_or_default();
+    let nul = body[..body.len().min(NUL_SCAN_BYTES)].contains(&0);
+    if exact || !ascii || nul {
         Some(count.unwrap_or(0))
     } else {
         None
     }
+}
+
+/// The triangles a binary STL holds: the header's `count`, or more when the file is exactly
+/// `84 + 50 × n` bytes for a larger `n` (see the module documentation).
+fn present(bytes: &[u8], count: u64) -> u64 {
+    let body = bytes.len().saturating_sub(BINARY_HEADER_BYTES) as u64;
+    let whole = body / BINARY_TRIANGLE_BYTES as u64;
+    if bytes.len() >= BINARY_HEADER_BYTES
+        && body.is_multiple_of(BINARY_TRIANGLE_BYTES as u64)
+        && whole > count
+    {
+        whole
+    } else {
+        count
+    }
+}
+
+/// The warning for a binary STL whose header counts fewer triangles than the file holds
+/// (all of them are read), or `None`. Costs a few byte reads: a cache hit warns too.
+pub(crate) fn count_warning(bytes: &[u8]) -> Option<String> {
+    let count = binary_count(bytes)?;
+    let n = present(bytes, count);
+    (n > count).then(|| {
+        format!(
+            "the binary STL header declares {count} triangles but the file holds {n} \
+             ({} bytes = 84 + 50 × {n}); reading all {n}",
+            bytes.len()
+        )
+    })
 }
 
 fn read_binary(
@@ -130,6 +174,19 @@ fn read_binary(
             bytes.len(),
             format!(
                 "the header says {count} triangles ({needed} bytes), but the file ends after {} bytes",
+                bytes.len()
+            ),
+        ));
+    }
+    if needed < bytes.len() as u128 {
+        // Not a whole number of records (a whole number was taken by `present`).
+        let extra = bytes.len() as u128 - needed;
+        return Err(Fault::at_byte(
+            CountMismatch,
+            needed as usize,
+            format!(
+                "{extra} bytes after the header's {count} triangles, and the file ({} bytes) is \
+                 not 84 + 50 × n bytes for any n: a binary STL truncated or with data appended",
                 bytes.len()
             ),
         ));

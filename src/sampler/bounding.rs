@@ -13,7 +13,23 @@ use crate::ooc::Mesh;
 const POINT_MESH_RADIUS: f32 = 1.0;
 
 /// Centre and radius of the bounding sphere of `mesh`'s vertices, by the convention above.
+/// A radius past the largest `f32` (coordinates near ±3.4e38) also becomes
+/// `POINT_MESH_RADIUS`: the bake refuses such meshes first (`bake::frame`).
 pub fn bounding_sphere(mesh: &Mesh) -> ([f32; 3], f32) {
+    let (center, r) = bounding_sphere_f64(mesh);
+    let mut radius = r as f32;
+    if f64::from(radius) < r {
+        radius = radius.next_up();
+    }
+    if radius <= 0.0 || !radius.is_finite() {
+        radius = POINT_MESH_RADIUS;
+    }
+    (center, radius)
+}
+
+/// The centre of [`bounding_sphere`] and its radius before rounding to `f32` (finite for any
+/// finite vertices).
+pub(crate) fn bounding_sphere_f64(mesh: &Mesh) -> ([f32; 3], f64) {
     let b = mesh.bounds();
     let center: [f32; 3] =
         std::array::from_fn(|k| ((f64::from(b.min[k]) + f64::from(b.max[k])) * 0.5) as f32);
@@ -25,15 +41,7 @@ pub fn bounding_sphere(mesh: &Mesh) -> ([f32; 3], f32) {
             .sum();
         max_sq = max_sq.max(d2);
     }
-    let r = max_sq.sqrt();
-    let mut radius = r as f32;
-    if f64::from(radius) < r {
-        radius = radius.next_up();
-    }
-    if radius <= 0.0 || !radius.is_finite() {
-        radius = POINT_MESH_RADIUS;
-    }
-    (center, radius)
+    (center, max_sq.sqrt())
 }
 
 impl SamplingParams {

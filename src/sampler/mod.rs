@@ -26,6 +26,9 @@ mod tests;
 mod tiled;
 
 pub use camera::{Camera, MAX_RESOLUTION, NEAR_FRACTION};
+/// The checkpoint file's bytes without a mesh, for the `checkpoint` fuzz target.
+#[doc(hidden)]
+pub use checkpoint::{decode as decode_checkpoint, encode as encode_checkpoint};
 pub use id_buffer::{IdBuffer, NO_PATCH};
 pub use raster::{Rasterizer, SUBPIXEL_BITS, render_ids, render_ids_filtered};
 pub use supersample::{
@@ -38,6 +41,7 @@ mod bounding;
 
 pub use crate::visibility::{SamplingParams, VisibilityMatrix};
 pub use bounding::bounding_sphere;
+pub(crate) use bounding::bounding_sphere_f64;
 
 use crate::ooc::Mesh;
 use crate::progress::Progress;

@@ -150,7 +150,18 @@ pub fn sample_tiled(
     if first_level > 0 {
         progress.inc(u64::from(view_count(first_level - 1)));
     }
-    let storage = Storage::for_budget(u64::from(mesh.triangle_count()), options.memory_budget);
+    let other_needs = crate::memory::FixedNeeds {
+        triangles: mesh.triangle_count(),
+        resolution: params.resolution,
+        workers: rayon::current_num_threads(),
+        row_bytes: (matrix.words().len() * 8) as u64,
+    }
+    .sampling();
+    let storage = Storage::for_budget(
+        u64::from(mesh.triangle_count()),
+        options.memory_budget,
+        other_needs,
+    );
     let patch_mesh = PatchMesh::new(mesh, tiling, storage).map_err(SamplingError::TempFile)?;
     let context = ViewContext {
         boxes: patch_boxes(&patch_mesh, tiling),

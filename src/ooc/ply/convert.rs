@@ -29,6 +29,9 @@ trait Values {
     fn position(&mut self) -> ErrorPosition;
     /// Checks up front that a fixed-size element fits, for a clearer truncation message.
     fn check_fits(&self, element: &Element) -> Result<(), Fault>;
+    /// After the last element: where the data that remain start and what they are, or `None`
+    /// when nothing but blanks (ASCII) or nothing at all (binary) is left.
+    fn leftover(&mut self) -> Option<(ErrorPosition, String)>;
 }
 
 impl Values for BinaryCursor<'_> {
@@ -46,6 +49,10 @@ impl Values for BinaryCursor<'_> {
     }
     fn position(&mut self) -> ErrorPosition {
         ErrorPosition::Byte(self.offset as u64)
+    }
+    fn leftover(&mut self) -> Option<(ErrorPosition, String)> {
+        let extra = self.remaining();
+        (extra > 0).then(|| (self.position(), format!("{extra} bytes")))
     }
     fn check_fits(&self, element: &Element) -> Result<(), Fault> {
         match element.fixed_size() {
@@ -165,6 +172,16 @@ impl Values for AsciiTokens<'_> {
     fn check_fits(&self, _: &Element) -> Result<(), Fault> {
         Ok(())
     }
+    fn leftover(&mut self) -> Option<(ErrorPosition, String)> {
+        self.skip_blanks();
+        let rest = &self.bytes[self.offset..];
+        if rest.is_empty() {
+            return None;
+        }
+        let line = &rest[..memchr::memchr(b'\n', rest).unwrap_or(rest.len())];
+        let text = super::super::error::snippet(line.trim_ascii());
+        Some((ErrorPosition::Line(self.line), format!("'{text}'")))
+    }
 }
 
 /// Converts the whole body into `sink`; returns the bounds of the vertices.
@@ -207,9 +224,9 @@ fn run(
     sink: &mut CacheWriter,
 ) -> Result<Bounds, Fault> {
     let mut bounds = BoundsBuilder::new();
-    let last = schema.vertex.max(schema.face);
-    // Elements after both vertices and faces are never read.
-    for (i, element) in header.elements.iter().enumerate().take(last + 1) {
+    // Every element, also those after the vertices and faces, so that data after the last
+    // one (counts that are too small) is found rather than silently dropped.
+    for (i, element) in header.elements.iter().enumerate() {
         values.check_fits(element)?;
         if i == schema.vertex {
             read_vertices(values, element, schema, sink, &mut bounds)?;
@@ -218,6 +235,9 @@ fn run(
         } else {
             values.skip_element(element)?;
         }
+    }
+    if let Some((at, found)) = values.leftover() {
+        return Err(super::data_after_elements(header, schema, at, &found));
     }
     Ok(bounds.finish())
 }

@@ -9,9 +9,10 @@
 //! about 1 ms for the 1.9 MB bunny.
 //!
 //! Anything that does not fit returns `None` and the file goes to the converting reader, which
-//! also produces the precise error for truncated or malformed files.
+//! also produces the precise error for truncated or malformed files. Bytes after the last
+//! element are an error here already: the header's counts are too small for the data.
 
-use super::super::error::{Fault, MeshErrorKind};
+use super::super::error::{ErrorPosition, Fault, MeshErrorKind};
 use super::super::{Layout, four};
 use super::binary::BinaryCursor;
 use super::header::{Encoding, Header, PropertyType, ScalarType};
@@ -67,10 +68,8 @@ pub(crate) fn try_read(
     // Find the two elements' offsets, walking whatever precedes them.
     let mut cursor = BinaryCursor::new(bytes, header.body_offset, false);
     let (mut vertex_at, mut face_at) = (None, None);
+    // Every element, so that data after the last one (counts that are too small) is found.
     for (i, element) in header.elements.iter().enumerate() {
-        if vertex_at.is_some() && face_at.is_some() {
-            break;
-        }
         let stride = if i == schema.vertex {
             vertex_at = Some(cursor.offset);
             vertex_stride
@@ -102,6 +101,16 @@ pub(crate) fn try_read(
         .any(|&c| c != TRIANGLE_COUNT_BYTE)
     {
         return Ok(None);
+    }
+    // Every record has the size assumed: bytes left over are data the header does not count.
+    if cursor.remaining() > 0 {
+        let extra = cursor.remaining();
+        return Err(super::data_after_elements(
+            header,
+            schema,
+            ErrorPosition::Byte(cursor.offset as u64),
+            &format!("{extra} bytes"),
+        ));
     }
 
     let mut bounds = BoundsBuilder::new();

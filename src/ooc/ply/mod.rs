@@ -13,7 +13,7 @@ pub(crate) mod header;
 mod in_place;
 
 use super::Bounds;
-use super::error::{Fault, MeshErrorKind};
+use super::error::{ErrorPosition, Fault, MeshErrorKind};
 use header::{Header, PropertyType};
 
 /// Where the mesh lives in a PLY file's header: element and property indices.
@@ -156,6 +156,30 @@ fn schema(header: &Header) -> Result<Schema, Fault> {
         face,
         indices,
     })
+}
+
+/// The fault for data after the header's last element, found at `at` (`found` says what is
+/// there): the header declares fewer vertices or faces than the file holds, and baking only
+/// the declared ones would silently drop the rest.
+pub(crate) fn data_after_elements(
+    header: &Header,
+    schema: &Schema,
+    at: ErrorPosition,
+    found: &str,
+) -> Fault {
+    let last = header
+        .elements
+        .last()
+        .map_or("element", |e| e.name.as_str());
+    Fault::new(
+        MeshErrorKind::CountMismatch,
+        Some(at),
+        format!(
+            "{found} after the last declared {last} (the header declares {} vertices and {} \
+             faces); the header's counts do not match the data",
+            schema.vertex_count, header.elements[schema.face].count
+        ),
+    )
 }
 
 /// Grows bounds one point at a time; the first point sets them.

@@ -1,0 +1,323 @@
+//! A command's output paths, checked before any work, so that no output destroys an input,
+//! another output, or a device node, and an unwritable directory is found in a second rather
+//! than after hours of baking.
+//!
+//! Paths are compared by file identity, not by spelling: an existing file by device and inode
+//! on Unix (so `./b.ply`, a symlink to it and a hard link of it are all `b.ply`), a file that
+//! does not exist yet by its canonical directory and name. Every output is written through a
+//! temporary file ([`temp_path`]) that is renamed over it, so that path counts as written too,
+//! and an existing output must be a regular file: the rename would replace a device node, a
+//! FIFO or a directory. Writability is probed by creating and removing that very temporary
+//! file, which also clears one that a killed run left behind.
+
+use super::atomic::{create_fresh, parent_dir, temp_path};
+use std::path::{Path, PathBuf};
+
+/// A file a command reads or writes, and what the user calls it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct NamedPath {
+    /// What the file is, in the user's words: `-o`, `the input mesh`, `the checkpoint of -o`.
+    pub what: String,
+    /// The flag (or argument) that sets the path: what the user changes to resolve a clash.
+    pub flag: String,
+    /// The path as given.
+    pub path: PathBuf,
+}
+
+impl NamedPath {
+    /// The file `path`, called `what`, set by `flag`.
+    pub fn new(what: impl Into<String>, flag: impl Into<String>, path: impl Into<PathBuf>) -> Self {
+        NamedPath {
+            what: what.into(),
+            flag: flag.into(),
+            path: path.into(),
+        }
+    }
+
+    /// A file named by its flag alone (`-o`, `--stats`).
+    pub fn flag(flag: &str, path: impl Into<PathBuf>) -> Self {
+        NamedPath::new(flag, flag, path)
+    }
+}
+
+/// Why an output path was refused (before any work).
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// An output is an input, or is written through a temporary file that is one.
+    #[error(
+        "{}: {} {} the same file as {} {}; writing it would destroy {}: give {} another path",
+        output.path.display(),
+        output.what,
+        if *through_temporary { "is written through a temporary file that is" } else { "is" },
+        input.what,
+        input.path.display(),
+        input.what,
+        output.flag
+    )]
+    IsInput {
+        /// The output.
+        output: Box<NamedPath>,
+        /// The input it would overwrite.
+        input: Box<NamedPath>,
+        /// Whether the clash is with the output's temporary file rather than the output.
+        through_temporary: bool,
+    },
+    /// Two outputs (or their temporary files) are the same file.
+    #[error(
+        "{}: {} and {} ({}) are the same file, so one would overwrite the other: give {} another path",
+        first.path.display(),
+        first.what,
+        second.what,
+        second.path.display(),
+        second.flag
+    )]
+    SameOutput {
+        /// The output named first.
+        first: Box<NamedPath>,
+        /// The output named second.
+        second: Box<NamedPath>,
+    },
+    /// An output exists and is not a regular file.
+    #[error("{}", not_regular(output, kind))]
+    NotRegular {
+        /// The output.
+        output: Box<NamedPath>,
+        /// What it is: "a directory", "a character device"…
+        kind: &'static str,
+    },
+    /// An output's directory does not exist.
+    #[error(
+        "{}: directory {} does not exist: create it, or give {} a path in an existing directory",
+        output.path.display(),
+        dir.display(),
+        output.flag
+    )]
+    NoDirectory {
+        /// The output.
+        output: Box<NamedPath>,
+        /// Its directory.
+        dir: PathBuf,
+    },
+    /// An output's directory does not take a new file.
+    #[error(
+        "{}: cannot create files in {} ({source}): give {} a path in a writable directory",
+        output.path.display(),
+        dir.display(),
+        output.flag
+    )]
+    NotWritable {
+        /// The output.
+        output: Box<NamedPath>,
+        /// Its directory.
+        dir: PathBuf,
+        /// What creating the temporary file there gave.
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+/// The message of [`OutputError::NotRegular`].
+fn not_regular(output: &NamedPath, kind: &str) -> String {
+    let (path, what, flag) = (output.path.display(), &output.what, &output.flag);
+    if kind == DIRECTORY {
+        format!("{path}: {what} is a directory: give {flag} a file path")
+    } else {
+        format!(
+            "{path}: {what} is {kind}, not a regular file; patchvis writes outputs to a temporary \
+             file and renames it into place, which would replace it: give {flag} a regular file path"
+        )
+    }
+}
+
+/// [`file_kind`] of a directory.
+const DIRECTORY: &str = "a directory";
+
+/// Checks `outputs` before a command reads or writes anything: each is a regular file or
+/// does not exist yet, in an existing directory where its temporary file can be created; no
+/// output (nor its temporary file) is one of `inputs`, and no two outputs are the same file.
+/// Stale temporary files of the outputs are removed on the way.
+pub fn check_outputs(inputs: &[NamedPath], outputs: &[NamedPath]) -> Result<(), OutputError> {
+    for output in outputs {
+        check_kind(output)?;
+    }
+    let inputs: Vec<(&NamedPath, FileKey)> = inputs
+        .iter()
+        .filter_map(|input| Some((input, FileKey::of_existing(&input.path)?)))
+        .collect();
+    // Each output's path and its temporary file's, as keys.
+    let written: Vec<[Option<FileKey>; 2]> = outputs
+        .iter()
+        .map(|output| {
+            [
+                FileKey::of(&output.path),
+                temp_path(&output.path).ok().and_then(|t| FileKey::of(&t)),
+            ]
+        })
+        .collect();
+    for (output, keys) in outputs.iter().zip(&written) {
+        for (input, key) in &inputs {
+            if let Some(at) = keys.iter().position(|k| k.as_ref() == Some(key)) {
+                return Err(OutputError::IsInput {
+                    output: Box::new(output.clone()),
+                    input: Box::new((*input).clone()),
+                    through_temporary: at == 1,
+                });
+            }
+        }
+    }
+    for (i, first) in written.iter().enumerate() {
+        for (j, second) in written.iter().enumerate().skip(i + 1) {
+            let clash = first
+                .iter()
+                .flatten()
+                .any(|a| second.iter().flatten().any(|b| a == b));
+            if clash {
+                return Err(OutputError::SameOutput {
+                    first: Box::new(outputs[i].clone()),
+                    second: Box::new(outputs[j].clone()),
+                });
+            }
+        }
+    }
+    for output in outputs {
+        probe(output)?;
+    }
+    Ok(())
+}
+
+/// An existing output must be a regular file, in an existing directory.
+fn check_kind(output: &NamedPath) -> Result<(), OutputError> {
+    if let Ok(meta) = std::fs::metadata(&output.path) {
+        let kind = file_kind(&meta.file_type());
+        if let Some(kind) = kind {
+            return Err(OutputError::NotRegular {
+                output: Box::new(output.clone()),
+                kind,
+            });
+        }
+    }
+    let dir = parent_dir(&output.path);
+    if !dir.is_dir() {
+        return Err(OutputError::NoDirectory {
+            output: Box::new(output.clone()),
+            dir: dir.to_path_buf(),
+        });
+    }
+    Ok(())
+}
+
+/// What a file that is not regular is, in words; `None` for a regular file.
+fn file_kind(t: &std::fs::FileType) -> Option<&'static str> {
+    if t.is_file() {
+        return None;
+    }
+    if t.is_dir() {
+        return Some(DIRECTORY);
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_char_device() {
+            return Some("a character device");
+        }
+        if t.is_block_device() {
+            return Some("a block device");
+        }
+        if t.is_fifo() {
+            return Some("a FIFO (named pipe)");
+        }
+        if t.is_socket() {
+            return Some("a socket");
+        }
+    }
+    Some("not a plain file")
+}
+
+/// Creates and removes the output's temporary file, as the write will.
+fn probe(output: &NamedPath) -> Result<(), OutputError> {
+    let dir = parent_dir(&output.path).to_path_buf();
+    let failed = |source| OutputError::NotWritable {
+        output: Box::new(output.clone()),
+        dir: dir.clone(),
+        source,
+    };
+    let tmp = temp_path(&output.path).map_err(failed)?;
+    drop(create_fresh(&tmp).map_err(failed)?);
+    std::fs::remove_file(&tmp).map_err(failed)
+}
+
+/// Which file a path names: an existing file's identity, or else its canonical directory and
+/// name.
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum FileKey {
+    /// An existing file: device and inode on Unix, the canonical path elsewhere.
+    #[cfg(unix)]
+    Inode(u64, u64),
+    /// An existing file elsewhere, or one not created yet.
+    Path(PathBuf),
+}
+
+impl FileKey {
+    /// The identity of an existing file (symlinks followed); `None` if there is none.
+    fn of_existing(path: &Path) -> Option<FileKey> {
+        let meta = std::fs::metadata(path).ok()?;
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::MetadataExt;
+            Some(FileKey::Inode(meta.dev(), meta.ino()))
+        }
+        #[cfg(not(unix))]
+        {
+            let _ = meta;
+            path.canonicalize().ok().map(FileKey::Path)
+        }
+    }
+
+    /// The file `path` names, existing or not; `None` if its directory cannot be resolved.
+    fn of(path: &Path) -> Option<FileKey> {
+        FileKey::of_existing(path).or_else(|| {
+            let dir = parent_dir(path).canonicalize().ok()?;
+            Some(FileKey::Path(dir.join(path.file_name()?)))
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spellings_of_one_file_clash() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("b.ply");
+        std::fs::write(&input, b"ply").unwrap();
+        let link = dir.path().join("link.ply");
+        std::fs::hard_link(&input, &link).unwrap();
+        let dotted = dir.path().join(".").join("b.ply");
+        let inputs = [NamedPath::new("the input mesh", "INPUT", &input)];
+        for spelling in [&input, &link, &dotted] {
+            let err = check_outputs(&inputs, &[NamedPath::flag("-o", spelling)]).unwrap_err();
+            assert!(matches!(err, OutputError::IsInput { .. }), "{err}");
+        }
+        // Two outputs not created yet, spelled differently.
+        let a = dir.path().join("out.pvis");
+        let b = dir.path().join("sub/../out.pvis");
+        std::fs::create_dir(dir.path().join("sub")).unwrap();
+        let err = check_outputs(
+            &inputs,
+            &[NamedPath::flag("-o", &a), NamedPath::flag("--stats", &b)],
+        )
+        .unwrap_err();
+        assert!(matches!(err, OutputError::SameOutput { .. }), "{err}");
+        // Distinct files pass, and the probe leaves nothing behind.
+        check_outputs(
+            &inputs,
+            &[
+                NamedPath::flag("-o", &a),
+                NamedPath::flag("--stats", dir.path().join("s.json")),
+            ],
+        )
+        .unwrap();
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 3);
+    }
+}
