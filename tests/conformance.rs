@@ -24,10 +24,8 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use patchvis::format::{BakeContents, VisibilityEncoding, encode_with};
-use patchvis::runtime::consts::{
-    HEADER_LEN, MAGIC, SECTION_ALIGN, SECTION_ENTRY_LEN, TRAILER_LEN, VERSION,
-};
+use patchvis::format::{BakeContents, PatchTableLayout, VisibilityEncoding, encode_as};
+use patchvis::runtime::consts::{HEADER_LEN, MAGIC, SECTION_ALIGN, SECTION_ENTRY_LEN, TRAILER_LEN};
 use patchvis::runtime::crc32c::crc32c;
 use patchvis::runtime::{Error, Pvis};
 use patchvis::sampler::{SamplingParams, VisibilityMatrix};
@@ -241,6 +239,8 @@ struct ValidSpec {
     unknown_section: bool,
     /// The VISB encoding: the writer's default (2, context tree), or 0 / 1.
     encoding: VisibilityEncoding,
+    /// The patch table: full (version 3 and older, 40-byte records) or compact (version 4).
+    layout: PatchTableLayout,
     /// Give patches spread cone axes and let views see the patches facing them (plus a little
     /// noise), so the rows have the structure real bakes have and encoding 2 grows a real tree.
     facing: bool,
@@ -258,6 +258,7 @@ fn valid_specs() -> Vec<ValidSpec> {
         seed,
         unknown_section: false,
         encoding: VisibilityEncoding::Tree,
+        layout: PatchTableLayout::Full,
         facing: false,
     };
     vec![
@@ -323,6 +324,55 @@ fn valid_specs() -> Vec<ValidSpec> {
             facing: true,
             ..base(
                 "010-level3-300-patches-facing",
+                3,
+                (1..=300).map(|i| i % 4 + 1).collect(),
+                11,
+            )
+        },
+        // Version 4: the compact patch table.
+        ValidSpec {
+            center: [0.0; 3],
+            radius: 1.0,
+            fov_deg: 45.0,
+            resolution: 1,
+            layout: PatchTableLayout::Compact,
+            ..base("012-v4-level0-one-patch", 0, vec![1], 1)
+        },
+        ValidSpec {
+            layout: PatchTableLayout::Compact,
+            ..base(
+                "013-v4-level1-seven-patches",
+                1,
+                vec![3, 1, 4, 1, 5, 9, 2],
+                2,
+            )
+        },
+        ValidSpec {
+            layout: PatchTableLayout::Compact,
+            ..base(
+                "014-v4-level2-130-patches",
+                2,
+                (1..=130)
+                    .map(|i| if i == 70 { 1000 } else { i % 7 + 1 })
+                    .collect(),
+                4,
+            )
+        },
+        ValidSpec {
+            layout: PatchTableLayout::Compact,
+            encoding: VisibilityEncoding::Raw,
+            ..base(
+                "015-v4-level1-seven-patches-raw",
+                1,
+                vec![3, 1, 4, 1, 5, 9, 2],
+                2,
+            )
+        },
+        ValidSpec {
+            facing: true,
+            layout: PatchTableLayout::Compact,
+            ..base(
+                "016-v4-level3-300-patches-facing",
                 3,
                 (1..=300).map(|i| i % 4 + 1).collect(),
                 11,
@@ -407,7 +457,7 @@ fn build_valid(spec: &ValidSpec) -> Vec<u8> {
         patches: &patches,
         visibility: &matrix,
     };
-    let bytes = encode_with(&contents, spec.encoding);
+    let bytes = encode_as(&contents, spec.encoding, spec.layout);
     if !spec.unknown_section {
         return bytes;
     }
@@ -419,7 +469,7 @@ fn build_valid(spec: &ValidSpec) -> Vec<u8> {
             b"an unknown section; version 1 readers skip it".to_vec(),
         ),
     );
-    assemble(&sections)
+    assemble(u32_at(&bytes, 8), &sections)
 }
 
 /// The sections of a file, in table order: `(tag, body)`.
@@ -438,7 +488,7 @@ fn sections_of(bytes: &[u8]) -> Vec<([u8; 4], Vec<u8>)> {
 
 /// Lays out a file by hand (spec § File layout): header, table, each section 8-aligned in
 /// the given order with zero gaps, CRC-32C trailer.
-fn assemble(sections: &[([u8; 4], Vec<u8>)]) -> Vec<u8> {
+fn assemble(version: u32, sections: &[([u8; 4], Vec<u8>)]) -> Vec<u8> {
     let table_end = HEADER_LEN + SECTION_ENTRY_LEN * sections.len() as u64;
     let mut offsets = Vec::new();
     let mut end = table_end;
@@ -449,7 +499,7 @@ fn assemble(sections: &[([u8; 4], Vec<u8>)]) -> Vec<u8> {
     }
     let mut out = Vec::new();
     out.extend_from_slice(&MAGIC);
-    out.extend_from_slice(&VERSION.to_le_bytes());
+    out.extend_from_slice(&version.to_le_bytes());
     out.extend_from_slice(&0u32.to_le_bytes());
     out.extend_from_slice(&(end + TRAILER_LEN).to_le_bytes());
     out.extend_from_slice(&(sections.len() as u32).to_le_bytes());
@@ -771,6 +821,123 @@ fn invalid_specs() -> Vec<(&'static str, Corruption)> {
     ]
 }
 
+/// Sets `n` bits at bit offset `bit` of `bytes` to `value`, least significant first.
+fn put_bits(bytes: &mut [u8], bit: usize, n: usize, value: u64) {
+    for i in 0..n {
+        let (byte, shift) = ((bit + i) / 8, (bit + i) % 8);
+        bytes[byte] = bytes[byte] & !(1 << shift) | (((value >> i) & 1) as u8) << shift;
+    }
+}
+
+/// The compact PTCH of a version-4 vector: `(body offset, widths [count, center, radius,
+/// axis, cos], offset of the records)`.
+fn compact_ptch(bytes: &[u8]) -> (usize, [usize; 5], usize) {
+    let (_, ptch, _) = find(bytes, b"PTCH");
+    let w = &bytes[ptch + 32..ptch + 37];
+    let patches = u32_at(bytes, ptch) as usize;
+    let widths = [w[0], w[1], w[2], w[3], w[4]].map(usize::from);
+    (ptch, widths, ptch + 40 + 4 * patches.div_ceil(64))
+}
+
+/// The invalid vectors of the compact patch table (version 4): each corrupts valid 013 (or
+/// 014, where a rule needs more than 64 patches) in one targeted way.
+fn invalid_v4_specs() -> Vec<(&'static str, Corruption)> {
+    fn with_crc(mut bytes: Vec<u8>, mutate: impl FnOnce(&mut Vec<u8>)) -> Option<Vec<u8>> {
+        mutate(&mut bytes);
+        fix_crc(&mut bytes);
+        Some(bytes)
+    }
+    vec![
+        ("150-v4-axis-bits-1", |b| {
+            with_crc(b, |b| {
+                let (ptch, _, _) = compact_ptch(b);
+                b[ptch + 35] = 1;
+            })
+        }),
+        ("151-v4-cos-bits-0", |b| {
+            with_crc(b, |b| {
+                let (ptch, _, _) = compact_ptch(b);
+                b[ptch + 36] = 0;
+            })
+        }),
+        ("152-v4-count-bits-33", |b| {
+            with_crc(b, |b| {
+                let (ptch, _, _) = compact_ptch(b);
+                b[ptch + 32] = 33;
+            })
+        }),
+        ("153-v4-reserved-byte-set", |b| {
+            with_crc(b, |b| {
+                let (ptch, _, _) = compact_ptch(b);
+                b[ptch + 38] = 1;
+            })
+        }),
+        ("154-v4-origin-not-finite", |b| {
+            with_crc(b, |b| {
+                let (ptch, _, _) = compact_ptch(b);
+                put_u32(b, ptch + 20, f32::INFINITY.to_bits());
+            })
+        }),
+        ("155-v4-step-zero", |b| {
+            with_crc(b, |b| {
+                let (ptch, _, _) = compact_ptch(b);
+                put_u32(b, ptch + 28, 0);
+            })
+        }),
+        ("156-v4-largest-centre-not-finite", |b| {
+            with_crc(b, |b| {
+                let (ptch, _, _) = compact_ptch(b);
+                put_u32(b, ptch + 28, 3.0e38f32.to_bits());
+            })
+        }),
+        ("157-v4-widths-disagree-with-length", |b| {
+            with_crc(b, |b| {
+                let (ptch, _, _) = compact_ptch(b);
+                b[ptch + 33] += 1;
+            })
+        }),
+        ("158-v4-block-start-wrong", |b| {
+            let (ptch, _, _) = compact_ptch(&b);
+            if u32_at(&b, ptch) <= 64 {
+                return None;
+            }
+            with_crc(b, |b| {
+                let start = u32_at(b, ptch + 44);
+                put_u32(b, ptch + 44, start + 1);
+            })
+        }),
+        ("159-v4-axis-coordinate-out-of-range", |b| {
+            with_crc(b, |b| {
+                let (_, w, records) = compact_ptch(b);
+                // Patch 0's first octahedral coordinate: all ones, 2^axis_bits − 1 > 2M.
+                let at = records * 8 + w[0] + 3 * w[1] + w[2];
+                put_bits(b, at, w[3], (1 << w[3]) - 1);
+            })
+        }),
+        ("160-v4-padding-bits-set", |b| {
+            let (ptch, w, records) = compact_ptch(&b);
+            let used = u32_at(&b, ptch) as usize * (w[0] + 3 * w[1] + w[2] + 2 * w[3] + w[4]);
+            if used.is_multiple_of(8) {
+                return None;
+            }
+            with_crc(b, |b| {
+                let last = records + used.div_ceil(8) - 1;
+                b[last] |= 0x80;
+            })
+        }),
+        ("161-v4-triangle-count-mismatch", |b| {
+            with_crc(b, |b| {
+                let (ptch, _, _) = compact_ptch(b);
+                let triangles = u64_at(b, ptch + 8);
+                put_u64(b, ptch + 8, triangles + 1);
+            })
+        }),
+        ("162-v4-compact-table-in-version-3", |b| {
+            with_crc(b, |b| put_u32(b, 8, 3))
+        }),
+    ]
+}
+
 /// Every vector the generator makes: `(relative path, bytes)`.
 fn generate() -> Vec<(String, Vec<u8>)> {
     let specs = valid_specs();
@@ -794,6 +961,19 @@ fn generate() -> Vec<(String, Vec<u8>)> {
             out.push((format!("invalid/{name}.pvis"), bytes));
         }
     }
+    let compact = |prefix: &str| {
+        out.iter()
+            .find(|(name, _)| name.contains(prefix))
+            .map(|(_, bytes)| bytes.clone())
+            .expect("a version-4 base vector")
+    };
+    let (v4_base, v4_blocks) = (compact("013-v4"), compact("014-v4"));
+    for (name, corrupt) in invalid_v4_specs() {
+        let bytes = corrupt(v4_base.clone())
+            .or_else(|| corrupt(v4_blocks.clone()))
+            .unwrap_or_else(|| panic!("{name} applies to neither version-4 base"));
+        out.push((format!("invalid/{name}.pvis"), bytes));
+    }
     // The tree's depth limit, from both sides: 002's VISB replaced by a chain of internal
     // nodes exactly MAX_TREE_DEPTH deep (valid; every walk of a set feature goes deep) and
     // one deeper (refused).
@@ -812,7 +992,10 @@ fn generate() -> Vec<(String, Vec<u8>)> {
                 (tag, body)
             })
             .collect();
-        out.push((format!("{name}.pvis"), assemble(&sections)));
+        out.push((
+            format!("{name}.pvis"),
+            assemble(u32_at(&base, 8), &sections),
+        ));
     }
     out.sort_by(|a, b| a.0.cmp(&b.0));
     out
@@ -921,6 +1104,43 @@ fn conformance_vectors() {
         failures.len(),
         failures.join("\n")
     );
+}
+
+/// Version 4 changes the patch table only: each version-4 vector made from the same contents
+/// as an older one has the same ranges, rows and query answers (issue 23: "query answers'
+/// patch sets unchanged").
+#[test]
+fn version_4_answers_like_the_full_table() {
+    let vectors = generate();
+    let bytes = |prefix: &str| {
+        &vectors
+            .iter()
+            .find(|(name, _)| name.starts_with(&format!("valid/{prefix}")))
+            .expect("vector")
+            .1
+    };
+    let same = |line: &str| {
+        line.starts_with("patch ") || line.starts_with("view ") || line.starts_with("query ")
+    };
+    for (old, new) in [
+        ("001", "012"),
+        ("002", "013"),
+        ("007", "015"),
+        ("010", "016"),
+    ] {
+        let (a, b) = (
+            Pvis::parse(bytes(old)).unwrap(),
+            Pvis::parse(bytes(new)).unwrap(),
+        );
+        assert_eq!((a.version() < 4, b.version()), (true, 4), "{old} / {new}");
+        let (a, b) = (dump(&a), dump(&b));
+        let (a, b): (Vec<&str>, Vec<&str>) = (
+            a.lines().filter(|l| same(l)).collect(),
+            b.lines().filter(|l| same(l)).collect(),
+        );
+        assert!(a.iter().any(|l| l.starts_with("query ")));
+        assert_eq!(a, b, "vectors {old} and {new}");
+    }
 }
 
 /// The driver itself must catch a wrong dump, a wrong error and an accepted invalid file.

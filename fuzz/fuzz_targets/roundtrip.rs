@@ -1,12 +1,13 @@
 //! Fuzz target: arbitrary small bake contents → `format::encode` → `Pvis::parse` → every
-//! field, patch and row equal to what went in. Contents are first brought inside the writer's
+//! field, patch and row equal to what went in (patch bounds: exactly in a full table, as the
+//! writer quantised them and containing the true sphere in a compact one). Contents are first brought inside the writer's
 //! contract (finite values, `fov` in (0, 180), …), since `encode` panics on a broken contract
 //! by design; any other panic or mismatch is a writer or reader bug.
 #![no_main]
 
 use arbitrary::Arbitrary;
 use libfuzzer_sys::fuzz_target;
-use patchvis::format::{BakeContents, encode};
+use patchvis::format::{BakeContents, encode, quantise};
 use patchvis::runtime::Pvis;
 use patchvis::sampler::{SamplingParams, VisibilityMatrix};
 use patchvis::sphere::view_count;
@@ -118,18 +119,26 @@ fuzz_target!(|input: Contents| {
     for (p, patch) in patches.iter().enumerate() {
         let info = pvis.patch(p as u32);
         assert_eq!(
-            (
-                info.first_triangle,
-                info.triangle_count,
-                info.center,
-                info.radius
-            ),
-            (patch.first, patch.count, patch.center, patch.radius)
+            (info.first_triangle, info.triangle_count),
+            (patch.first, patch.count)
         );
-        assert_eq!(
-            (info.cone_axis, info.cone_cos),
-            (patch.cone_axis, patch.cone_cos)
-        );
+        let Some(q) = pvis.quantisation() else {
+            // The full table (version 3): every value as it went in.
+            assert_eq!((info.center, info.radius), (patch.center, patch.radius));
+            assert_eq!(
+                (info.cone_axis, info.cone_cos),
+                (patch.cone_axis, patch.cone_cos)
+            );
+            continue;
+        };
+        // The compact table: the writer's quantisation, and a sphere that contains the true
+        // one (spec § PTCH: conservative).
+        assert_eq!(info, q.decode(&quantise(&q, patch), patch.first));
+        let moved: f64 = (0..3)
+            .map(|i| (f64::from(info.center[i]) - f64::from(patch.center[i])).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(f64::from(info.radius) >= moved + f64::from(patch.radius));
     }
     let mut row = vec![0u64; pvis.row_words()];
     for view in 0..views {

@@ -38,7 +38,11 @@ pub fn info(args: &InfoArgs) -> Result<()> {
                 "fov_deg": s.fov_deg,
                 "resolution": s.resolution,
             },
-            "bytes": {"total": pvis.total_bytes(), "visibility": pvis.visibility_bytes()},
+            "bytes": {
+                "total": pvis.total_bytes(),
+                "visibility": pvis.visibility_bytes(),
+                "patch_table": pvis.patch_table_bytes(),
+            },
         });
         outln!("{}", serde_json::to_string_pretty(&report)?)?;
     } else {
@@ -69,10 +73,16 @@ pub fn info(args: &InfoArgs) -> Result<()> {
             s.distance
         )?;
         outln!(
-            "  {} bytes, of which visibility {} (encoding {})",
+            "  {} bytes, of which visibility {} (encoding {}) and patch table {} ({})",
             pvis.total_bytes(),
             pvis.visibility_bytes(),
-            pvis.encoding()
+            pvis.encoding(),
+            pvis.patch_table_bytes(),
+            if pvis.quantisation().is_some() {
+                "compact"
+            } else {
+                "full"
+            }
         )?;
     }
     if args.compare {

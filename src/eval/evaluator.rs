@@ -14,12 +14,13 @@
 use super::metrics;
 use super::shade::{RgbImage, Shader, face_normal};
 use crate::bake::BakeError;
+use crate::format::quantise;
 use crate::memory::MemoryBudget;
 use crate::ooc::Mesh;
 use crate::progress::Progress;
 use crate::runtime::{PatchInfo, Pvis};
 use crate::sampler::{Camera, IdBuffer, NO_PATCH, Rasterizer};
-use crate::tiling::{self, PatchId, Tiling, TilingMode, TilingOptions, TriangleMap};
+use crate::tiling::{self, Patch, PatchId, Tiling, TilingMode, TilingOptions, TriangleMap};
 use crate::visibility::SamplingParams;
 use rayon::prelude::*;
 use std::collections::{HashMap, VecDeque};
@@ -193,7 +194,7 @@ impl<'m> Evaluator<'m> {
                 return Err(EvalError::PatchMismatch {
                     patch: p,
                     file,
-                    mesh: bounds_in_file_order(mesh, file),
+                    mesh: bounds_in_file_order(mesh, pvis, file),
                     in_file_order: true,
                 });
             }
@@ -491,7 +492,8 @@ fn file_starts(pvis: &Pvis<'_>) -> Vec<u32> {
 }
 
 /// Whether patch `p`'s triangle range of `mesh` has exactly the file's bounding sphere and
-/// normal cone: true for every patch when `mesh` is the bake's `--mesh-out`.
+/// normal cone (as the file stores them: quantised in a compact table): true for every patch
+/// when `mesh` is the bake's `--mesh-out`.
 fn in_file_order(mesh: &Mesh, pvis: &Pvis<'_>, p: u32) -> bool {
     if p >= pvis.patch_count() {
         return true;
@@ -499,10 +501,37 @@ fn in_file_order(mesh: &Mesh, pvis: &Pvis<'_>, p: u32) -> bool {
     let f = pvis.patch(p);
     let triangles: Vec<u32> = (f.first_triangle..f.first_triangle + f.triangle_count).collect();
     let (m, _) = tiling::patch_bounds(mesh, &triangles, f.first_triangle);
-    (m.center.map(f32::to_bits), m.radius.to_bits())
-        == (f.center.map(f32::to_bits), f.radius.to_bits())
-        && (m.cone_axis.map(f32::to_bits), m.cone_cos.to_bits())
-            == (f.cone_axis.map(f32::to_bits), f.cone_cos.to_bits())
+    record_key(&as_stored(pvis, &m)) == record_key(&f)
+}
+
+/// The record `pvis` would hold for `patch`: the patch's own values in a full table, their
+/// quantised form in a compact one (spec § PTCH).
+fn as_stored(pvis: &Pvis<'_>, patch: &Patch) -> PatchInfo {
+    match pvis.quantisation() {
+        Some(q) => q.decode(&quantise(&q, patch), patch.first),
+        None => PatchInfo {
+            first_triangle: patch.first,
+            triangle_count: patch.count,
+            center: patch.center,
+            radius: patch.radius,
+            cone_axis: patch.cone_axis,
+            cone_cos: patch.cone_cos,
+        },
+    }
+}
+
+/// What identifies a patch record, bit for bit: count, sphere and cone.
+type RecordKey = (u32, [u32; 3], u32, [u32; 3], u32);
+
+/// The key of record `r`.
+fn record_key(r: &PatchInfo) -> RecordKey {
+    (
+        r.triangle_count,
+        r.center.map(f32::to_bits),
+        r.radius.to_bits(),
+        r.cone_axis.map(f32::to_bits),
+        r.cone_cos.to_bits(),
+    )
 }
 
 /// Per-worker buffers.
@@ -540,20 +569,10 @@ impl Scratch {
 /// covisibility`, the default) match as well as files in the tiling's own numbering; equal
 /// records are matched in id order. Fails on the first file patch nothing matches.
 fn match_tiling(tiling: &Tiling, pvis: &Pvis<'_>) -> Result<Vec<PatchId>, EvalError> {
-    type Key = (u32, [u32; 3], u32, [u32; 3], u32);
-    let key = |count: u32, center: [f32; 3], radius: f32, axis: [f32; 3], cos: f32| -> Key {
-        (
-            count,
-            center.map(f32::to_bits),
-            radius.to_bits(),
-            axis.map(f32::to_bits),
-            cos.to_bits(),
-        )
-    };
-    let mut unmatched: HashMap<Key, VecDeque<PatchId>> = HashMap::new();
+    let mut unmatched: HashMap<RecordKey, VecDeque<PatchId>> = HashMap::new();
     for (id, m) in tiling.patches.iter().enumerate() {
         unmatched
-            .entry(key(m.count, m.center, m.radius, m.cone_axis, m.cone_cos))
+            .entry(record_key(&as_stored(pvis, m)))
             .or_default()
             .push_back(id as PatchId);
     }
@@ -562,18 +581,12 @@ fn match_tiling(tiling: &Tiling, pvis: &Pvis<'_>) -> Result<Vec<PatchId>, EvalEr
     for p in 0..count {
         let f = pvis.patch(p);
         let found = unmatched
-            .get_mut(&key(
-                f.triangle_count,
-                f.center,
-                f.radius,
-                f.cone_axis,
-                f.cone_cos,
-            ))
+            .get_mut(&record_key(&f))
             .and_then(VecDeque::pop_front);
         match found {
             Some(id) => order.push(id),
             None => {
-                return Err(match nearest(tiling, f.center) {
+                return Err(match nearest(tiling, pvis, f.center) {
                     Some(mesh) => EvalError::PatchMismatch {
                         patch: p,
                         file: f,
@@ -597,24 +610,18 @@ fn match_tiling(tiling: &Tiling, pvis: &Pvis<'_>) -> Result<Vec<PatchId>, EvalEr
     Ok(order)
 }
 
-/// The bounds that triangles `file.first_triangle..+triangle_count` of `mesh` give, in the
-/// file's record form.
-fn bounds_in_file_order(mesh: &Mesh, file: PatchInfo) -> PatchInfo {
+/// The record that triangles `file.first_triangle..+triangle_count` of `mesh` give, as the
+/// file would store it.
+fn bounds_in_file_order(mesh: &Mesh, pvis: &Pvis<'_>, file: PatchInfo) -> PatchInfo {
     let triangles: Vec<u32> =
         (file.first_triangle..file.first_triangle + file.triangle_count).collect();
     let (m, _) = tiling::patch_bounds(mesh, &triangles, file.first_triangle);
-    PatchInfo {
-        center: m.center,
-        radius: m.radius,
-        cone_axis: m.cone_axis,
-        cone_cos: m.cone_cos,
-        ..file
-    }
+    as_stored(pvis, &m)
 }
 
 /// The tiling's patch whose bounding sphere's centre is nearest `center` (lowest id on a
-/// tie), as a record; `None` for an empty tiling.
-fn nearest(tiling: &Tiling, center: [f32; 3]) -> Option<PatchInfo> {
+/// tie), as the file would store it; `None` for an empty tiling.
+fn nearest(tiling: &Tiling, pvis: &Pvis<'_>, center: [f32; 3]) -> Option<PatchInfo> {
     let distance = |c: [f32; 3]| -> f64 {
         (0..3)
             .map(|i| (f64::from(c[i]) - f64::from(center[i])).powi(2))
@@ -624,14 +631,7 @@ fn nearest(tiling: &Tiling, center: [f32; 3]) -> Option<PatchInfo> {
         .patches
         .iter()
         .min_by(|a, b| distance(a.center).total_cmp(&distance(b.center)))
-        .map(|m| PatchInfo {
-            first_triangle: m.first,
-            triangle_count: m.count,
-            center: m.center,
-            radius: m.radius,
-            cone_axis: m.cone_axis,
-            cone_cos: m.cone_cos,
-        })
+        .map(|m| as_stored(pvis, m))
 }
 
 /// The message of [`EvalError::PatchMismatch`]: the file's patch, what the mesh gives in its

@@ -12,6 +12,7 @@
 
 mod file;
 mod patch_order;
+mod ptch;
 #[cfg(test)]
 mod tests;
 mod tree;
@@ -20,6 +21,7 @@ mod visb;
 pub use crate::output::write_atomic;
 pub use file::{PvisFile, PvisFileError};
 pub use patch_order::{MAX_TOUR_WORK, centre_order, covisibility_order};
+pub use ptch::{choose as choose_quantisation, choose_with as choose_quantisation_with, quantise};
 pub use tree::encode_tree;
 pub use visb::{encode_hierarchical, probabilities};
 
@@ -59,6 +61,16 @@ pub enum VisibilityEncoding {
     Tree,
 }
 
+/// How the PTCH section stores the patch records (spec: "PTCH — patch table").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PatchTableLayout {
+    /// 40-byte records of `f32` bounds and `u32` ranges: versions 1–3, read by every reader.
+    Full,
+    /// Version 4: ranges from counts, bounds and cones quantised conservatively relative to
+    /// the model's bounds, bit-packed (about 8 bytes a patch on the bunny). The default.
+    Compact,
+}
+
 /// Encodes `contents` as a `.pvis` file with the default, context-coded payload.
 ///
 /// # Panics
@@ -75,6 +87,26 @@ pub fn encode(contents: &BakeContents) -> Vec<u8> {
 /// `triangle_count`, a matrix whose size disagrees with the level or patch count, limits
 /// exceeded, non-finite values. The message is the reader's error.
 pub fn encode_with(contents: &BakeContents, encoding: VisibilityEncoding) -> Vec<u8> {
+    let layout = match encoding {
+        VisibilityEncoding::Tree => PatchTableLayout::Compact,
+        // Written for readers of version 2, which know neither the tree nor the compact table.
+        VisibilityEncoding::Raw | VisibilityEncoding::Hierarchical => PatchTableLayout::Full,
+    };
+    encode_as(contents, encoding, layout)
+}
+
+/// Encodes `contents` with `encoding` and the patch table `layout`. The file's version is the
+/// oldest that has both (§ Versioning): 2 for encodings 0 and 1 with the full table, 3 for
+/// encoding 2 with it, 4 with the compact table. Patches whose coordinates are too large for
+/// the compact table's grid (near `f32::MAX`) get the full table instead.
+///
+/// # Panics
+/// As [`encode_with`].
+pub fn encode_as(
+    contents: &BakeContents,
+    encoding: VisibilityEncoding,
+    layout: PatchTableLayout,
+) -> Vec<u8> {
     let params = contents.sampling;
     let patch_count = contents.patches.len() as u64;
     let views = sphere::view_count(params.level.min(MAX_LEVEL));
@@ -88,13 +120,28 @@ pub fn encode_with(contents: &BakeContents, encoding: VisibilityEncoding) -> Vec
     );
 
     let camr = camr(params, views);
-    let ptch = ptch(contents.triangle_count, contents.patches);
+    let compact = match layout {
+        PatchTableLayout::Compact => ptch::compact(contents.triangle_count, contents.patches),
+        PatchTableLayout::Full => None,
+    };
+    // Patches too far out for the compact grid fall back to the full table.
+    let layout = match compact {
+        Some(_) => PatchTableLayout::Compact,
+        None => PatchTableLayout::Full,
+    };
+    let (ptch, facing_axes) = match compact {
+        Some(table) => (table.bytes, table.facing_axes),
+        None => (
+            ptch::full(contents.triangle_count, contents.patches),
+            contents.patches.iter().map(|p| p.cone_axis).collect(),
+        ),
+    };
     let visb = match encoding {
         VisibilityEncoding::Raw => encode_raw(contents.visibility),
         VisibilityEncoding::Hierarchical => {
             encode_hierarchical(contents.visibility, params.level.min(MAX_LEVEL))
         }
-        VisibilityEncoding::Tree => encode_tree(contents.visibility, contents.patches),
+        VisibilityEncoding::Tree => encode_tree(contents.visibility, &facing_axes),
     };
 
     let table_end = HEADER_LEN + SECTION_ENTRY_LEN * SECTIONS.len() as u64;
@@ -108,10 +155,12 @@ pub fn encode_with(contents: &BakeContents, encoding: VisibilityEncoding) -> Vec
 
     let mut out = Vec::with_capacity(file_length as usize);
     out.extend_from_slice(&MAGIC);
-    // The oldest version that has the encoding, so older readers take what they can read.
-    let version = match encoding {
-        VisibilityEncoding::Raw | VisibilityEncoding::Hierarchical => 2,
-        VisibilityEncoding::Tree => VERSION,
+    // The oldest version that has the encoding and the table, so older readers take what
+    // they can read.
+    let version = match (layout, encoding) {
+        (PatchTableLayout::Compact, _) => COMPACT_PTCH_VERSION,
+        (PatchTableLayout::Full, VisibilityEncoding::Tree) => 3,
+        (PatchTableLayout::Full, _) => 2,
     };
     out.extend_from_slice(&version.to_le_bytes());
     out.extend_from_slice(&KNOWN_FLAGS.to_le_bytes());
@@ -153,30 +202,6 @@ fn camr(params: &SamplingParams, views: u32) -> Vec<u8> {
     out.extend_from_slice(&SPHERE_CONVENTION.to_le_bytes());
     out.extend_from_slice(&0u32.to_le_bytes());
     debug_assert_eq!(out.len() as u64, CAMR_LEN);
-    out
-}
-
-/// § PTCH.
-fn ptch(triangle_count: u64, patches: &[Patch]) -> Vec<u8> {
-    let len = PTCH_HEADER_LEN + PATCH_RECORD_LEN * patches.len() as u64;
-    let mut out = Vec::with_capacity(len as usize);
-    // A count past u32 is caught by the reader's MAX_PATCHES check on the saturated value.
-    let count = u32::try_from(patches.len()).unwrap_or(u32::MAX);
-    out.extend_from_slice(&count.to_le_bytes());
-    out.extend_from_slice(&0u32.to_le_bytes());
-    out.extend_from_slice(&triangle_count.to_le_bytes());
-    for patch in patches {
-        out.extend_from_slice(&patch.first.to_le_bytes());
-        out.extend_from_slice(&patch.count.to_le_bytes());
-        for v in patch.center {
-            out.extend_from_slice(&v.to_le_bytes());
-        }
-        out.extend_from_slice(&patch.radius.to_le_bytes());
-        for v in patch.cone_axis {
-            out.extend_from_slice(&v.to_le_bytes());
-        }
-        out.extend_from_slice(&patch.cone_cos.to_le_bytes());
-    }
     out
 }
 

@@ -48,12 +48,43 @@ fn round_trip(level: u32, counts: &[u32], matrix: &VisibilityMatrix) -> Vec<u8> 
     round_trip_with(level, counts, matrix, VisibilityEncoding::Tree)
 }
 
-/// Encodes with `encoding`, parses and checks every field and row against the inputs.
+/// Encodes with `encoding` (and its default patch table), parses and checks every field and
+/// row against the inputs.
 fn round_trip_with(
     level: u32,
     counts: &[u32],
     matrix: &VisibilityMatrix,
     encoding: VisibilityEncoding,
+) -> Vec<u8> {
+    let layout = match encoding {
+        VisibilityEncoding::Tree => PatchTableLayout::Compact,
+        _ => PatchTableLayout::Full,
+    };
+    let bytes = round_trip_as(level, counts, matrix, encoding, layout);
+    assert_eq!(
+        bytes,
+        encode_with(
+            &BakeContents {
+                sampling: &params(level),
+                triangle_count: counts.iter().map(|&c| c as u64).sum(),
+                patches: &patches(counts),
+                visibility: matrix,
+            },
+            encoding
+        ),
+        "the encoding's default table"
+    );
+    bytes
+}
+
+/// Encodes with `encoding` and `layout`, parses and checks every field and row against the
+/// inputs.
+fn round_trip_as(
+    level: u32,
+    counts: &[u32],
+    matrix: &VisibilityMatrix,
+    encoding: VisibilityEncoding,
+    layout: PatchTableLayout,
 ) -> Vec<u8> {
     let params = params(level);
     let patches = patches(counts);
@@ -64,10 +95,22 @@ fn round_trip_with(
         patches: &patches,
         visibility: matrix,
     };
-    let bytes = encode_with(&contents, encoding);
-    if encoding == VisibilityEncoding::Tree {
-        assert_eq!(bytes, encode(&contents), "encoding 2 is the default");
+    let bytes = encode_as(&contents, encoding, layout);
+    if (encoding, layout) == (VisibilityEncoding::Tree, PatchTableLayout::Compact) {
+        assert_eq!(
+            bytes,
+            encode(&contents),
+            "encoding 2, compact table is the default"
+        );
     }
+    assert_eq!(
+        pvis_version(&bytes),
+        match (layout, encoding) {
+            (PatchTableLayout::Compact, _) => 4,
+            (_, VisibilityEncoding::Tree) => 3,
+            _ => 2,
+        }
+    );
     let pvis = Pvis::parse(&bytes).expect("the writer's output parses");
     let expected_encoding = match encoding {
         VisibilityEncoding::Raw => ENCODING_RAW,
@@ -90,8 +133,24 @@ fn round_trip_with(
     assert_eq!(pvis.patch_count() as usize, counts.len());
     assert_eq!(pvis.triangle_count(), triangle_count);
     for (p, patch) in patches.iter().enumerate() {
+        check_record(&pvis, p as u32, patch);
+    }
+    let mut row = vec![0u64; pvis.row_words()];
+    for view in 0..matrix.views() {
+        pvis.view_row(view, &mut row);
+        assert_eq!(row, matrix.row(view), "view {view}");
+    }
+    check_queries(&pvis, matrix, level as u64 * 31 + counts.len() as u64);
+    bytes
+}
+
+/// Patch `p` of `pvis` stands for `patch`: exactly in a full table; in a compact one, with the
+/// same range, the record the writer's quantiser gives, and bounds that contain the true ones.
+fn check_record(pvis: &Pvis<'_>, p: u32, patch: &Patch) {
+    let info = pvis.patch(p);
+    let Some(q) = pvis.quantisation() else {
         assert_eq!(
-            pvis.patch(p as u32),
+            info,
             PatchInfo {
                 first_triangle: patch.first,
                 triangle_count: patch.count,
@@ -101,14 +160,136 @@ fn round_trip_with(
                 cone_cos: patch.cone_cos,
             }
         );
+        return;
+    };
+    assert_eq!(
+        (info.first_triangle, info.triangle_count),
+        (patch.first, patch.count)
+    );
+    assert_eq!(info, q.decode(&quantise(&q, patch), patch.first));
+    assert_contains(&info, patch);
+}
+
+/// The decoded sphere contains the true one and the decoded cone the true cone (where the true
+/// one bounds anything).
+fn assert_contains(info: &PatchInfo, patch: &Patch) {
+    let d = (0..3)
+        .map(|i| (f64::from(info.center[i]) - f64::from(patch.center[i])).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    assert!(
+        f64::from(info.radius) >= d + f64::from(patch.radius),
+        "sphere {info:?} does not contain {patch:?}"
+    );
+    if info.cone_cos > -1.0 {
+        assert!(
+            patch.cone_cos > 0.0,
+            "a cone where there was none: {info:?}"
+        );
+        let a = info.cone_axis.map(f64::from);
+        let n = patch.cone_axis.map(f64::from);
+        let (la, ln) = (
+            (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt(),
+            (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt(),
+        );
+        let cos = ((a[0] * n[0] + a[1] * n[1] + a[2] * n[2]) / (la * ln)).clamp(-1.0, 1.0);
+        let needed = cos.acos() + f64::from(patch.cone_cos).acos();
+        assert!(
+            f64::from(info.cone_cos).acos() >= needed,
+            "cone {info:?} does not contain {patch:?}"
+        );
     }
-    let mut row = vec![0u64; pvis.row_words()];
-    for view in 0..matrix.views() {
-        pvis.view_row(view, &mut row);
-        assert_eq!(row, matrix.row(view), "view {view}");
+}
+
+/// Encodes `patches` (one view level 0, nothing visible) with the default writer.
+fn encode_patches(patches: &[Patch]) -> Vec<u8> {
+    let matrix = VisibilityMatrix::new(sphere::view_count(0), patches.len() as u32);
+    encode(&BakeContents {
+        sampling: &params(0),
+        triangle_count: patches.iter().map(|p| u64::from(p.count)).sum(),
+        patches,
+        visibility: &matrix,
+    })
+}
+
+#[test]
+fn patches_beyond_the_compact_grid_get_the_full_table() {
+    let mut far = patches(&[1, 2, 3]);
+    far[0].center = [-3.0e38, 0.0, 0.0];
+    far[2].center = [3.0e38, 0.0, 0.0];
+    let bytes = encode_patches(&far);
+    let pvis = Pvis::parse(&bytes).unwrap();
+    assert_eq!((pvis.version(), pvis.quantisation()), (3, None));
+    for (p, patch) in far.iter().enumerate() {
+        check_record(&pvis, p as u32, patch);
     }
-    check_queries(&pvis, matrix, level as u64 * 31 + counts.len() as u64);
-    bytes
+}
+
+#[test]
+fn one_huge_patch_among_small_ones_keeps_radii_within_24_bits() {
+    let mut mixed = patches(&[1; 200]);
+    for (i, p) in mixed.iter_mut().enumerate() {
+        p.radius = 1e-3;
+        p.center = [i as f32 * 1e-3, 0.0, 0.0];
+    }
+    mixed[7].radius = 1e9;
+    let bytes = encode_patches(&mixed);
+    let pvis = Pvis::parse(&bytes).unwrap();
+    let q = pvis.quantisation().expect("compact");
+    assert!(q.radius_bits <= 24 && q.center_bits <= 24, "{q:?}");
+    for (p, patch) in mixed.iter().enumerate() {
+        check_record(&pvis, p as u32, patch);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Compact tables of random patches: every decoded sphere and cone contains the true one,
+    /// and the file reads back its ranges.
+    #[test]
+    fn compact_tables_are_conservative(
+        raw in proptest::collection::vec(
+            (1u32..5000, [-1e4f32..1e4, -1e4f32..1e4, -1e4f32..1e4], 0f32..500.0,
+             [-1f32..1.0, -1f32..1.0, -1f32..1.0], -1f32..1.0),
+            1..200,
+        ),
+        scale in prop_oneof![Just(1e-3f32), Just(1.0f32), Just(1e3f32)],
+    ) {
+        let mut first = 0;
+        let patches: Vec<Patch> = raw
+            .iter()
+            .map(|&(count, c, r, axis, cos)| {
+                let len = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
+                let patch = Patch {
+                    first,
+                    count,
+                    area: 1.0,
+                    center: c.map(|v| v * scale),
+                    radius: r * scale,
+                    cone_axis: if len > 1e-3 { axis.map(|v| v / len) } else { [0.0; 3] },
+                    cone_cos: if len > 1e-3 { cos } else { -1.0 },
+                };
+                first += count;
+                patch
+            })
+            .collect();
+        let triangle_count = u64::from(first);
+        let matrix = VisibilityMatrix::new(sphere::view_count(0), patches.len() as u32);
+        let params = params(0);
+        let contents = BakeContents {
+            sampling: &params,
+            triangle_count,
+            patches: &patches,
+            visibility: &matrix,
+        };
+        let bytes = encode(&contents);
+        let pvis = Pvis::parse(&bytes).expect("the writer's output parses");
+        prop_assert!(pvis.quantisation().is_some());
+        for (p, patch) in patches.iter().enumerate() {
+            check_record(&pvis, p as u32, patch);
+        }
+    }
 }
 
 /// The three query modes agree with each other and with the OR of the matrix rows of the
@@ -173,12 +354,23 @@ fn check_queries(pvis: &Pvis<'_>, matrix: &VisibilityMatrix, seed: u64) {
     }
 }
 
+/// The version field of a file.
+fn pvis_version(bytes: &[u8]) -> u32 {
+    u32::from_le_bytes(bytes[8..12].try_into().unwrap())
+}
+
 #[test]
 fn layout_of_a_small_file() {
     let mut matrix = VisibilityMatrix::new(6, 3);
     matrix.set(0, 2);
     matrix.set(5, 0);
-    let bytes = round_trip(0, &[2, 1, 4], &matrix);
+    let bytes = round_trip_as(
+        0,
+        &[2, 1, 4],
+        &matrix,
+        VisibilityEncoding::Tree,
+        PatchTableLayout::Full,
+    );
     // Header 32 + table 72 = 104; CAMR 104..148; PTCH 152..288; VISB 288..314; CRC 314..318.
     assert_eq!(bytes.len(), 318);
     assert_eq!(&bytes[..8], b"PVIS\r\n\x1a\n");
@@ -199,6 +391,35 @@ fn layout_of_a_small_file() {
     assert_eq!(records[0], 1);
     assert_eq!(records[2..6], [0, 0, 0, 0]);
     assert_eq!(records[6], 1);
+}
+
+#[test]
+fn layout_of_a_small_compact_table() {
+    let matrix = VisibilityMatrix::new(6, 3);
+    let bytes = round_trip(0, &[2, 1, 4], &matrix);
+    assert_eq!(pvis_version(&bytes), 4);
+    // PTCH at 152: count, reserved, triangles, origin, step, widths, reserved, one block start.
+    assert_eq!(&bytes[32 + 24..32 + 28], b"PTCH");
+    let ptch = &bytes[152..];
+    assert_eq!(ptch[..16], [3, 0, 0, 0, 0, 0, 0, 0, 7, 0, 0, 0, 0, 0, 0, 0]);
+    // Centres (0, 0, 0.5), (1, −1, 0.5), (2, −2, 0.5): the grid starts at their minimum.
+    assert_eq!(f32::from_le_bytes(ptch[16..20].try_into().unwrap()), 0.0);
+    assert_eq!(f32::from_le_bytes(ptch[20..24].try_into().unwrap()), -2.0);
+    assert_eq!(f32::from_le_bytes(ptch[24..28].try_into().unwrap()), 0.5);
+    let (count_bits, axis_bits, cos_bits) = (ptch[32], ptch[35], ptch[36]);
+    assert_eq!(
+        (count_bits, axis_bits, cos_bits),
+        (2, 7, 6),
+        "counts up to 4: 2 bits"
+    );
+    assert_eq!(ptch[37..40], [0; 3]);
+    assert_eq!(ptch[40..44], [0; 4], "patch 0 starts at triangle 0");
+    let record_bits: usize = [ptch[32], 3 * ptch[33], ptch[34], 2 * ptch[35], ptch[36]]
+        .iter()
+        .map(|&b| b as usize)
+        .sum();
+    let ptch_len = u64::from_le_bytes(bytes[32 + 24 + 16..32 + 24 + 24].try_into().unwrap());
+    assert_eq!(ptch_len as usize, 44 + (3 * record_bits).div_ceil(8));
 }
 
 #[test]
@@ -349,7 +570,13 @@ fn coded_visb_structure_errors() {
 fn version_1_files_with_raw_rows_still_parse() {
     let mut matrix = VisibilityMatrix::new(6, 3);
     matrix.set(0, 2);
-    let v2 = round_trip(0, &[2, 1, 4], &matrix);
+    let v2 = round_trip_as(
+        0,
+        &[2, 1, 4],
+        &matrix,
+        VisibilityEncoding::Tree,
+        PatchTableLayout::Full,
+    );
     // Swap VISB for encoding 0 by hand: same layout, raw rows, version 1.
     let raw = encode_raw(&matrix);
     let visb = u64::from_le_bytes(v2[32 + 48 + 8..32 + 48 + 16].try_into().unwrap()) as usize;

@@ -17,7 +17,6 @@ use crate::runtime::model::{
     FEATURES, LEAF, MAX_TREE_DEPTH, MAX_TREE_NODES, ViewState, facing, key, tree_p0, window,
 };
 use crate::sphere::{lattice_point, level_of, parents};
-use crate::tiling::Patch;
 use crate::visibility::VisibilityMatrix;
 use rayon::prelude::*;
 use std::collections::{HashMap, VecDeque};
@@ -25,12 +24,11 @@ use std::collections::{HashMap, VecDeque};
 /// Bits a tree node costs in the file.
 const NODE_BITS: f64 = 16.0;
 
-/// Encodes `matrix` (rows of `view_count(level)` views over `patches`) as a VISB body with
-/// encoding 2.
-pub fn encode_tree(matrix: &VisibilityMatrix, patches: &[Patch]) -> Vec<u8> {
+/// Encodes `matrix` (rows of `view_count(level)` views over the patches whose facing axes are
+/// `axes`, spec § Features `front`) as a VISB body with encoding 2.
+pub fn encode_tree(matrix: &VisibilityMatrix, axes: &[[f32; 3]]) -> Vec<u8> {
     let views = matrix.views();
-    let axes: Vec<[f32; 3]> = patches.iter().map(|p| p.cone_axis).collect();
-    let nodes = build_tree(matrix, &axes);
+    let nodes = build_tree(matrix, axes);
     let mut out = Vec::new();
     out.extend_from_slice(&ENCODING_TREE.to_le_bytes());
     out.extend_from_slice(&0u32.to_le_bytes());
@@ -39,9 +37,7 @@ pub fn encode_tree(matrix: &VisibilityMatrix, patches: &[Patch]) -> Vec<u8> {
     out.extend_from_slice(&tree);
     append_records(&mut out, views, |v, code| {
         let mut enc = RangeEncoder::new(code);
-        for_each_key(matrix, v, &axes, |k, x| {
-            enc.bit(x as u64, tree_p0(&tree, k))
-        });
+        for_each_key(matrix, v, axes, |k, x| enc.bit(x as u64, tree_p0(&tree, k)));
         enc.finish();
     });
     out

@@ -280,11 +280,10 @@ impl fmt::Display for Error {
             Error::UnsupportedEncoding { found } => write!(
                 f,
                 "section VISB: unsupported encoding {found} (encoding {} is read from version 1, \
-                 {} from version 2, {} from version {})",
+                 {} from version 2, {} from version 3)",
                 consts::ENCODING_RAW,
                 consts::ENCODING_HIERARCHICAL,
                 consts::ENCODING_TREE,
-                consts::VERSION
             ),
             Error::PaddingBits { view, offset } => write!(
                 f,

@@ -26,6 +26,7 @@ mod error;
 mod expanded;
 pub(crate) mod model;
 mod parse;
+mod ptch;
 mod query;
 mod stream;
 mod streaming;
@@ -38,6 +39,7 @@ mod tests;
 pub(crate) use coder::context;
 pub use error::Error;
 pub use expanded::Expanded;
+pub use ptch::{Quantisation, Record, unit_axis};
 pub use query::{Patches, TriangleRanges, Visible, ranges};
 pub use streaming::Streaming;
 
@@ -87,11 +89,12 @@ pub struct Pvis<'a> {
     sampling: Sampling,
     patch_count: u32,
     triangle_count: u64,
-    /// The PTCH records, `patch_count × PATCH_RECORD_LEN` bytes.
-    records: &'a [u8],
+    /// The PTCH records.
+    patches: ptch::PatchTable<'a>,
     /// The VISB payload.
     visb: Visb<'a>,
     visibility_bytes: u64,
+    patch_table_bytes: u64,
 }
 
 impl<'a> Pvis<'a> {
@@ -133,22 +136,26 @@ impl<'a> Pvis<'a> {
             "patch {p} out of range (patch_count {})",
             self.patch_count
         );
-        let mut s = Stream::new_at(self.records, p as usize * consts::PATCH_RECORD_LEN as usize);
-        // The records were read once at parse, so these reads cannot fail.
-        PatchInfo {
-            first_triangle: s.read().unwrap_or(0),
-            triangle_count: s.read().unwrap_or(0),
-            center: s.read().unwrap_or([0.0; 3]),
-            radius: s.read().unwrap_or(0.0),
-            cone_axis: s.read().unwrap_or([0.0; 3]),
-            cone_cos: s.read().unwrap_or(-1.0),
+        self.patches.info(p)
+    }
+
+    /// How the file's patch records are quantised: `Some` for version 4's compact table,
+    /// `None` for the `f32` records of versions 1–3 (spec § PTCH).
+    pub fn quantisation(&self) -> Option<Quantisation> {
+        match self.patches {
+            ptch::PatchTable::Full(_) => None,
+            ptch::PatchTable::Compact { quantisation, .. } => Some(quantisation),
         }
+    }
+
+    /// Length of the PTCH section (the patch table) in bytes.
+    pub fn patch_table_bytes(&self) -> u64 {
+        self.patch_table_bytes
     }
 
     /// Triangle range `(first, count)` of patch `p`, which must be in range.
     fn range(&self, p: u32) -> (u32, u32) {
-        let mut s = Stream::new_at(self.records, p as usize * consts::PATCH_RECORD_LEN as usize);
-        (s.read().unwrap_or(0), s.read().unwrap_or(0))
+        self.patches.range(p)
     }
 
     /// Length of the whole file in bytes.

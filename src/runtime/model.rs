@@ -10,7 +10,8 @@
 //! writer spends table bytes only on the distinctions that pay. Cost per bit: a handful of
 //! shifts for the key, then one node read per tree level (≤ [`MAX_TREE_DEPTH`]).
 
-use super::consts::{CONTEXTS, PATCH_RECORD_LEN, PROB_BITS};
+use super::consts::{CONTEXTS, PROB_BITS};
+use super::ptch::PatchTable;
 
 /// Binary features in an encoding-2 key (§ Context tree, Features).
 pub const FEATURES: u32 = 23;
@@ -127,19 +128,6 @@ pub fn facing(q: [f32; 3], v: [f64; 3]) -> u32 {
     u32::from((f64::from(q[0]) * v[0] + f64::from(q[1]) * v[1]) + f64::from(q[2]) * v[2] > 0.0)
 }
 
-/// The cone axis of patch `p` read from the PTCH records (zero if out of range, which
-/// validated files never are).
-#[inline(always)]
-pub fn patch_axis(records: &[u8], p: u32) -> [f32; 3] {
-    let at = p as usize * PATCH_RECORD_LEN as usize + 24;
-    match records.get(at..at + 12) {
-        Some(b) => core::array::from_fn(|i| {
-            f32::from_le_bytes([b[4 * i], b[4 * i + 1], b[4 * i + 2], b[4 * i + 3]])
-        }),
-        None => [0.0; 3],
-    }
-}
-
 /// Node `i` of a tree (little-endian `u16`s), or a leaf of probability ½ past the end.
 #[inline(always)]
 fn node(nodes: &[u8], i: usize) -> u16 {
@@ -220,8 +208,8 @@ pub(crate) enum ViewModel<'a> {
     Tree {
         /// The tree's nodes.
         nodes: &'a [u8],
-        /// PTCH records, for the cone axes.
-        patches: &'a [u8],
+        /// The patch table, for the cone axes.
+        patches: PatchTable<'a>,
         /// The features the tree tests (a mask of key bits).
         used: u32,
         /// The view's lattice point.
@@ -240,7 +228,7 @@ impl ViewModel<'_> {
             ViewModel::Table(_) => 0,
             ViewModel::Tree {
                 patches, lattice, ..
-            } => facing(patch_axis(patches, p), lattice),
+            } => facing(patches.facing_axis(p), lattice),
         };
         self.p0_facing(wa, wb, state, front, cache)
     }
@@ -272,7 +260,7 @@ impl ViewModel<'_> {
             ViewModel::Tree {
                 patches, lattice, ..
             } => (0..n).fold(0, |bits, i| {
-                bits | u64::from(facing(patch_axis(patches, first + i), lattice)) << i
+                bits | u64::from(facing(patches.facing_axis(first + i), lattice)) << i
             }),
         }
     }

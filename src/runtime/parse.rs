@@ -10,19 +10,13 @@
 use super::consts::*;
 use super::crc32c::crc32c;
 use super::model::{FEATURES, LEAF, MAX_TREE_DEPTH, MAX_TREE_NODES};
+use super::ptch::{self, PatchTable, Section};
 use super::stream::{FromData, Stream};
 use super::visb::{Model, Visb, read_varint};
 use super::{Error, Pvis, Sampling};
 
-/// Where a section lies, as checked against the table rules.
-#[derive(Clone, Copy)]
-struct Section {
-    offset: u64,
-    length: u64,
-}
-
 /// Reads a `T` or reports how many bytes were missing.
-fn read<T: FromData>(s: &mut Stream<'_>, have: usize) -> Result<T, Error> {
+pub(super) fn read<T: FromData>(s: &mut Stream<'_>, have: usize) -> Result<T, Error> {
     let needed = s.offset() as u64 + T::SIZE as u64;
     s.read::<T>().ok_or(Error::Truncated {
         needed,
@@ -31,7 +25,7 @@ fn read<T: FromData>(s: &mut Stream<'_>, have: usize) -> Result<T, Error> {
 }
 
 /// Reads a `u32` that must be zero (reserved fields).
-fn reserved(s: &mut Stream<'_>, have: usize, what: &'static str) -> Result<(), Error> {
+pub(super) fn reserved(s: &mut Stream<'_>, have: usize, what: &'static str) -> Result<(), Error> {
     let offset = s.offset() as u64;
     match read::<u32>(s, have)? {
         0 => Ok(()),
@@ -44,7 +38,7 @@ fn reserved(s: &mut Stream<'_>, have: usize, what: &'static str) -> Result<(), E
 }
 
 /// Reads an `f32` and checks it with `ok`.
-fn float(
+pub(super) fn float(
     s: &mut Stream<'_>,
     have: usize,
     what: &'static str,
@@ -64,7 +58,11 @@ fn float(
 }
 
 /// Reads three finite `f32`s.
-fn finite3(s: &mut Stream<'_>, have: usize, what: &'static str) -> Result<[f32; 3], Error> {
+pub(super) fn finite3(
+    s: &mut Stream<'_>,
+    have: usize,
+    what: &'static str,
+) -> Result<[f32; 3], Error> {
     Ok([
         float(s, have, what, |_| true)?,
         float(s, have, what, |_| true)?,
@@ -186,18 +184,18 @@ pub(super) fn parse(data: &[u8]) -> Result<Pvis<'_>, Error> {
     let visb = visb.ok_or(Error::MissingSection { tag: TAG_VISB })?;
 
     let sampling = parse_camr(data, camr)?;
-    let (patch_count, triangle_count) = parse_ptch(data, ptch)?;
-    let records = &data[at(ptch.offset + PTCH_HEADER_LEN)..at(ptch.offset + ptch.length)];
-    let payload = parse_visb(data, visb, version, sampling, patch_count, records)?;
+    let (patches, patch_count, triangle_count) = ptch::parse(data, ptch, version)?;
+    let payload = parse_visb(data, visb, version, sampling, patch_count, patches)?;
 
     Ok(Pvis {
         bytes: data,
         sampling,
         patch_count,
         triangle_count,
-        records,
+        patches,
         visb: payload,
         visibility_bytes: visb.length,
+        patch_table_bytes: ptch.length,
     })
 }
 
@@ -285,84 +283,6 @@ fn parse_camr(data: &[u8], section: Section) -> Result<Sampling, Error> {
     })
 }
 
-/// § PTCH. Returns `(patch_count, triangle_count)`.
-fn parse_ptch(data: &[u8], section: Section) -> Result<(u32, u64), Error> {
-    if section.length < PTCH_HEADER_LEN {
-        return Err(Error::BadSection { tag: TAG_PTCH });
-    }
-    let have = data.len();
-    let mut s = Stream::new_at(data, at(section.offset));
-    let count_offset = s.offset() as u64;
-    let patch_count = read::<u32>(&mut s, have)?;
-    if patch_count == 0 {
-        return Err(Error::Invalid {
-            what: "PTCH patch_count must be at least 1",
-            offset: count_offset,
-            value: 0,
-        });
-    }
-    if patch_count > MAX_PATCHES {
-        return Err(Error::LimitExceeded {
-            what: "patch_count",
-            value: patch_count as u64,
-            limit: MAX_PATCHES as u64,
-        });
-    }
-    reserved(&mut s, have, "PTCH reserved field must be 0")?;
-    let triangle_count = read::<u64>(&mut s, have)?;
-    if triangle_count > u32::MAX as u64 {
-        return Err(Error::LimitExceeded {
-            what: "triangle_count",
-            value: triangle_count,
-            limit: u32::MAX as u64,
-        });
-    }
-    // Cannot overflow: patch_count ≤ 2^20.
-    let expected = PTCH_HEADER_LEN + PATCH_RECORD_LEN * patch_count as u64;
-    if section.length != expected {
-        return Err(Error::SectionLength {
-            tag: TAG_PTCH,
-            length: section.length,
-            expected,
-        });
-    }
-    let mut next_first = 0u64;
-    for patch in 0..patch_count {
-        let first = read::<u32>(&mut s, have)?;
-        let count = read::<u32>(&mut s, have)?;
-        if first as u64 != next_first || count == 0 {
-            return Err(Error::PatchRange {
-                patch,
-                first,
-                count,
-                expected_first: next_first,
-            });
-        }
-        next_first += count as u64;
-        finite3(&mut s, have, "PTCH patch center must be finite")?;
-        float(
-            &mut s,
-            have,
-            "PTCH patch radius must be finite and >= 0",
-            |r| r >= 0.0,
-        )?;
-        finite3(&mut s, have, "PTCH patch cone_axis must be finite")?;
-        float(
-            &mut s,
-            have,
-            "PTCH patch cone_cos must be in [-1, 1]",
-            |c| (-1.0..=1.0).contains(&c),
-        )?;
-    }
-    if next_first != triangle_count {
-        return Err(Error::TriangleCountMismatch {
-            header: triangle_count,
-            sum: next_first,
-        });
-    }
-    Ok((patch_count, triangle_count))
-}
-
 /// § VISB: the fixed part, then encoding 0, 1 or 2.
 fn parse_visb<'a>(
     data: &'a [u8],
@@ -370,7 +290,7 @@ fn parse_visb<'a>(
     version: u32,
     sampling: Sampling,
     patch_count: u32,
-    patches: &'a [u8],
+    patches: PatchTable<'a>,
 ) -> Result<Visb<'a>, Error> {
     if section.length < VISB_HEADER_LEN {
         return Err(Error::BadSection { tag: TAG_VISB });
@@ -468,7 +388,7 @@ fn parse_table(
 fn parse_tree<'a>(
     data: &'a [u8],
     section: Section,
-    patches: &'a [u8],
+    patches: PatchTable<'a>,
 ) -> Result<(Model<'a>, u64), Error> {
     let end = section.offset + section.length;
     let count_at = section.offset + VISB_HEADER_LEN;

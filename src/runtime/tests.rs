@@ -224,8 +224,8 @@ fn header_errors() {
     assert_eq!(error_after(|f| f[0] = b'X'), Error::BadMagic);
     assert_eq!(Pvis::parse(b"PVIX").unwrap_err(), Error::BadMagic);
     assert_eq!(
-        error_after(|f| f[8] = 4),
-        Error::UnsupportedVersion { found: 4 }
+        error_after(|f| f[8] = 5),
+        Error::UnsupportedVersion { found: 5 }
     );
     assert_eq!(
         error_after(|f| f[8] = 0),

@@ -16,6 +16,7 @@
 use super::coder::RangeDecoder;
 use super::consts::{CHECKPOINT_INTERVAL, CONTEXTS, MAX_LANES, MAX_VARINT_LEN};
 use super::model::{TreeCache, ViewModel, ViewState};
+use super::ptch::PatchTable;
 use crate::sphere::{lattice_point, level_of, parents};
 
 /// The VISB payload of a validated file.
@@ -49,8 +50,8 @@ pub(crate) enum Model<'a> {
     Tree {
         /// The nodes.
         nodes: &'a [u8],
-        /// The PTCH records.
-        patches: &'a [u8],
+        /// The patch table.
+        patches: PatchTable<'a>,
         /// The features the tree tests: other key bits cannot change a walk, so lookups mask
         /// them off (which lets more keys share a cache entry).
         used: u32,
