@@ -35,6 +35,20 @@ use core::ptr::{addr_of, addr_of_mut};
 
 use crate::runtime::{Error, Pvis, Streaming};
 
+/// The panic handler of the `no_std` WebAssembly build (feature `wasm`, a `cdylib` for
+/// `wasm32-unknown-unknown`). Nothing through this ABI panics (see above), so it only
+/// traps, which the JavaScript host sees as a `WebAssembly.RuntimeError`.
+#[cfg(all(
+    feature = "wasm",
+    target_arch = "wasm32",
+    not(feature = "std"),
+    not(test)
+))]
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo<'_>) -> ! {
+    core::arch::wasm32::unreachable()
+}
+
 /// Size in bytes of [`PatchvisFile`]; the header's `PATCHVIS_FILE_SIZE`.
 pub const PATCHVIS_FILE_SIZE: usize = 512;
 

@@ -325,7 +325,15 @@ pub(crate) fn ancestor_closure(targets: &[u32], out: &mut [u32]) -> usize {
         }
         i += 1;
     }
-    out[..n].sort_unstable();
+    // Insertion sort: at most `MAX_LANES` views, and a few hundred bytes less code than
+    // `sort_unstable` where code size counts (the WebAssembly and microcontroller builds).
+    for i in 1..n {
+        let mut j = i;
+        while j > 0 && out[j - 1] > out[j] {
+            out.swap(j - 1, j);
+            j -= 1;
+        }
+    }
     n
 }
 

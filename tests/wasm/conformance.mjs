@@ -1,0 +1,89 @@
+// The WebAssembly reader (wasm/patchvis.wasm through wasm/patchvis.mjs) against every
+// conformance vector (tests/conformance): each valid file opens with the dump's counts and
+// answers every `query` line of its dump (inside flag, the leaf's views, the visible patches)
+// with the triangle ranges its `patch` lines give, merged; each invalid file is refused with
+// the reference reader's exact message. Run by tests/wasm/run.sh (CI); needs Node 18+.
+import { readFileSync, readdirSync } from "node:fs";
+import { join, dirname } from "node:path";
+import { fileURLToPath } from "node:url";
+import { Reader, PatchvisError } from "../../wasm/patchvis.mjs";
+
+const root = join(dirname(fileURLToPath(import.meta.url)), "..", "..");
+const vectors = join(root, "tests", "conformance");
+const reader = await Reader.load(readFileSync(join(root, "wasm", "patchvis.wasm")));
+
+const number = (s) => (s === "inf" ? Infinity : s === "-inf" ? -Infinity : Number(s));
+const list = (s) => (s === "" ? [] : s.split(",").map(Number));
+const failures = [];
+let queries = 0;
+
+function check(name, ok, what) {
+  if (!ok) failures.push(`${name}: ${what}`);
+}
+
+for (const entry of readdirSync(join(vectors, "valid")).filter((f) => f.endsWith(".pvis")).sort()) {
+  const name = `valid/${entry}`;
+  const dump = readFileSync(join(vectors, "valid", entry.replace(/\.pvis$/, ".dump")), "utf8");
+  const lines = dump.split("\n");
+  const field = (key) => Number(lines.find((l) => l.startsWith(`${key}: `)).split(": ")[1]);
+  let file;
+  try {
+    file = reader.open(readFileSync(join(vectors, "valid", entry)));
+  } catch (e) {
+    check(name, false, `refused: ${e.message}`);
+    continue;
+  }
+  check(name, file.version === field("version"), `version ${file.version}`);
+  check(name, file.patchCount === field("patches"), `patches ${file.patchCount}`);
+  check(name, file.triangleCount === field("triangles"), `triangles ${file.triangleCount}`);
+  check(name, file.level === field("level") && file.views === field("views"), "level/views");
+  const range = new Map();
+  for (const l of lines) {
+    const m = /^patch (\d+): first (\d+) count (\d+)$/.exec(l);
+    if (m) range.set(Number(m[1]), [Number(m[2]), Number(m[3])]);
+  }
+  for (const l of lines) {
+    const m = /^query ([^ ]+) -> inside (true|false) views \[([^\]]*)\] patches \[([^\]]*)\]$/.exec(l);
+    if (!m) continue;
+    queries++;
+    const [x, y, z] = m[1].split(",").map(number);
+    const got = file.query(x, y, z);
+    const patches = list(m[4]);
+    const merged = [];
+    for (const p of patches) {
+      const [first, count] = range.get(p);
+      const last = merged[merged.length - 1];
+      if (last && last[0] + last[1] === first) last[1] += count;
+      else merged.push([first, count]);
+    }
+    check(name, got.insideSphere === (m[2] === "true"), `${l}: inside ${got.insideSphere}`);
+    check(name, got.views.join(",") === m[3], `${l}: views ${got.views}`);
+    check(name, Array.from(got.patches).join(",") === patches.join(","), `${l}: patches ${Array.from(got.patches)}`);
+    check(name, JSON.stringify(got.ranges) === JSON.stringify(merged), `${l}: ranges ${JSON.stringify(got.ranges)}`);
+  }
+  file.close();
+}
+
+let refused = 0;
+for (const entry of readdirSync(join(vectors, "invalid")).filter((f) => f.endsWith(".pvis")).sort()) {
+  const name = `invalid/${entry}`;
+  const expected = readFileSync(join(vectors, "invalid", entry.replace(/\.pvis$/, ".err")), "utf8").trimEnd();
+  try {
+    reader.open(readFileSync(join(vectors, "invalid", entry))).close();
+    check(name, false, "accepted");
+  } catch (e) {
+    check(name, e instanceof PatchvisError, `threw ${e}`);
+    check(name, e.message === expected, `message '${e.message}', expected '${expected}'`);
+    refused++;
+  }
+}
+
+// Every region was given back: a new file lands where the first one did.
+check("memory", reader.top === reader.base, `top ${reader.top}, base ${reader.base}`);
+
+if (failures.length > 0) {
+  console.error(failures.slice(0, 30).join("\n"));
+  console.error(`${failures.length} failures`);
+  process.exit(1);
+}
+console.log(`wasm reader: ${queries} queries and ${refused} refusals match the conformance vectors`);
