@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# The reader on a Cortex-M4F under QEMU (firmware/cortex-m4f, issue 23): for a version-3 and a
+# version-4 conformance vector, builds the `queries` firmware with the vector in flash and the
+# eyes of its dump's `query` lines, runs it on QEMU's netduinoplus2 (STM32F405) with
+# semihosting, and compares every answer with the dump. Then reports the reader's flash (the
+# `size_probe` firmware less `size_base`) and the RAM the queries used (stack high-water,
+# scratch row included). Used by .ci/run; needs qemu-system-arm and the
+# thumbv7em-none-eabihf Rust target.
+#
+#   tests/firmware/run.sh [FILE.pvis]   # also report flash and RAM for FILE (no dump check)
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+root=$(pwd)
+fw=firmware/cortex-m4f
+bin=$fw/target/thumbv7em-none-eabihf/release
+work=$root/target/firmware
+mkdir -p "$work"
+
+qemu() {
+    timeout 120 qemu-system-arm -machine netduinoplus2 -nographic \
+        -semihosting-config enable=on,target=native -kernel "$1"
+}
+
+# Builds the firmware for $1 (.pvis) with the eyes in $2.
+build() {
+    (cd "$fw" && PATCHVIS_FIRMWARE_FILE="$1" PATCHVIS_FIRMWARE_EYES="$2" \
+        cargo build --quiet --release)
+}
+
+flash() {
+    size -A "$1" | awk '/^\.text|^\.rodata/ { s += $2 } END { print s }'
+}
+
+# Flash of the reader and RAM of the queries for $1, eyes $2.
+report() {
+    local probe base
+    probe=$(flash "$bin/size_probe")
+    base=$(flash "$bin/size_base")
+    echo "$(basename "$1"): reader flash $((probe - base)) bytes (.text + .rodata, size_probe $probe - size_base $base); $(grep '^ram:' "$work/out.txt")"
+}
+
+fail=0
+for vector in tests/conformance/valid/010-level3-300-patches-facing.pvis \
+              tests/conformance/valid/016-v4-level3-300-patches-facing.pvis; do
+    dump="${vector%.pvis}.dump"
+    sed -n 's/^query \([^ ]*\) .*/\1/p' "$dump" > "$work/eyes.txt"
+    build "$root/$vector" "$work/eyes.txt"
+    if ! qemu "$bin/queries" > "$work/out.txt" 2>&1; then
+        echo "FAIL $vector: the firmware failed"; cat "$work/out.txt"; fail=1; continue
+    fi
+    if ! diff <(grep '^query ' "$dump") <(grep '^query ' "$work/out.txt") > "$work/diff.txt"; then
+        echo "FAIL $vector:"; head -20 "$work/diff.txt"; fail=1; continue
+    fi
+    echo "ok $vector: $(grep -c '^query ' "$work/out.txt") queries as in the dump"
+    report "$vector"
+done
+
+if [[ $# -ge 1 ]]; then
+    printf '%s\n' 1000,0,0 0,-1000,0 0,0,1000 -700,700,0 300,-400,500 > "$work/eyes.txt"
+    build "$(realpath "$1")" "$work/eyes.txt"
+    qemu "$bin/queries" > "$work/out.txt" 2>&1 || { cat "$work/out.txt"; exit 1; }
+    report "$1"
+fi
+exit $fail
