@@ -253,7 +253,11 @@ impl fmt::Display for Error {
                 value,
             } => write!(f, "{what}: found {value} at byte {offset}"),
             Error::InvalidFloat { what, offset, bits } => {
-                write!(f, "{what}: found {} at byte {offset}", f32::from_bits(bits))
+                write!(
+                    f,
+                    "{what}: found {} at byte {offset}",
+                    super::float_text::FloatText(f32::from_bits(bits))
+                )
             }
             Error::ViewCountMismatch {
                 level,
