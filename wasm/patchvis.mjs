@@ -10,11 +10,12 @@
 // The module is src/capi.rs's C ABI built for wasm32-unknown-unknown (wasm/build.sh): the
 // reader validates a file once in `open` and answers queries without allocating. It has no
 // allocator of its own, so this wrapper manages the linear memory past `__heap_base`: each
-// open file takes one region (its bytes, the 512-byte parsed reader, the query scratch, the
-// answer), handed out like a stack and given back by `close` (a region closed out of order is
+// open file takes one region (its bytes, the 512-byte parsed reader, a streaming state and its
+// scratch, the answer), handed out like a stack and given back by `close` (a region closed out of order is
 // reused once the regions above it are closed too). Everything is synchronous after `load`.
 
 const FILE_SIZE = 512; // PATCHVIS_FILE_SIZE
+const STREAM_SIZE = 8192; // PATCHVIS_STREAM_SIZE
 const VISIBLE_SIZE = 32; // sizeof(PatchvisVisible) on wasm32, rounded up
 const DETAIL_SIZE = 512; // room for the reader's error message
 const PAGE = 65536;
@@ -77,18 +78,23 @@ export class Reader {
       const text = new TextDecoder().decode(new Uint8Array(this.memory.buffer, detailAt, n));
       throw new PatchvisError(text, rc);
     }
-    const words = e.patchvis_scratch_words(fileAt);
+    // Queries go through a streaming state: it keeps the decoded rows of the last answer's
+    // path, so a camera that stays in its leaf face costs a few plane tests.
+    const words = e.patchvis_stream_scratch_words(fileAt);
     const infoAt = detailAt; // the detail buffer is free again after a parse
-    const scratchAt = parseEnd;
+    const streamAt = parseEnd;
+    const scratchAt = streamAt + STREAM_SIZE;
     const eyeAt = scratchAt + 8 * words;
     const outAt = align(eyeAt + 12, 8);
     const rangeAt = outAt + VISIBLE_SIZE;
     const end = rangeAt + 8;
     this.reserve(end);
+    const init = e.patchvis_stream_init(fileAt, scratchAt, words, streamAt);
+    if (init !== 0) throw new PatchvisError(`patchvis_stream_init failed (${init})`, init);
     const region = { start, end, open: true };
     this.regions.push(region);
     this.top = end;
-    return new PvisFile(this, region, { fileAt, infoAt, words, scratchAt, eyeAt, outAt, rangeAt });
+    return new PvisFile(this, region, { fileAt, infoAt, streamAt, eyeAt, outAt, rangeAt });
   }
 
   /** Grows the linear memory to hold `end` bytes. */
@@ -138,7 +144,9 @@ export class PvisFile {
    * `{ insideSphere, views, patches, ranges }`, where `patches` are the visible patch ids
    * ascending, `ranges` the triangle ranges to draw as `[first, count]` pairs with adjacent
    * ranges merged, `views` the three sphere views whose rows were joined, and `insideSphere`
-   * true when the eye is nearer than the sampling cameras (draw everything then).
+   * true when the eye is nearer than the sampling cameras (draw everything then). Answered
+   * by the streaming reader: while the camera stays in one leaf face of the sampling sphere a
+   * query decodes nothing; a move to another leaf decodes only the rows it needs.
    */
   query(x, y, z) {
     if (!this.region.open) throw new PatchvisError("query on a closed file", -1);
@@ -147,8 +155,8 @@ export class PvisFile {
     view.setFloat32(this.eyeAt, x, true);
     view.setFloat32(this.eyeAt + 4, y, true);
     view.setFloat32(this.eyeAt + 8, z, true);
-    const rc = e.patchvis_query(this.fileAt, this.eyeAt, this.scratchAt, this.words, this.outAt);
-    if (rc !== 0) throw new PatchvisError(`patchvis_query failed (${rc})`, rc);
+    const rc = e.patchvis_stream_query(this.streamAt, this.eyeAt, this.outAt);
+    if (rc !== 0) throw new PatchvisError(`patchvis_stream_query failed (${rc})`, rc);
     view = this.view();
     // PatchvisVisible on wasm32: bits (ptr), words, leaf[3], visible_count, inside_sphere.
     const bitsAt = view.getUint32(this.outAt, true);
