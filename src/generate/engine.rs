@@ -9,6 +9,7 @@
 //!
 //! Memory: the part list (a few kilobytes per thousand parts); cost: one pass per section.
 
+use super::noise::cell_hash;
 use super::parts::{Assembled, Assembly};
 use super::shapes::{Part, Shape, gear_steps, superellipsoid_steps};
 
@@ -43,15 +44,6 @@ const ORIENTATIONS: [[[f32; 3]; 3]; 3] = [
     [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]],
     [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
 ];
-
-/// A small integer hash for choosing part kinds; any well-mixed function would do. The other
-/// generated models use it too, for their per-part choices.
-pub(super) fn cell_hash(i: u32) -> u32 {
-    let mut h = i.wrapping_mul(0x9e37_79b9) ^ 0x5bd1_e995;
-    h ^= h >> 15;
-    h = h.wrapping_mul(0x2c1b_3c6d);
-    h ^ (h >> 13)
-}
 
 impl Engine {
     /// An engine of about `triangles` triangles (at least a few thousand).

@@ -17,7 +17,7 @@
 //!
 //! Memory: the part list; cost: one pass per section.
 
-use super::engine::cell_hash;
+use super::noise::cell_hash;
 use super::parts::{self, Assembled, Assembler, Assembly};
 
 /// Top of the base plate; everything stands on it.

@@ -1,4 +1,5 @@
-//! Smooth deterministic noise for the generator's "scanned" surface relief.
+//! Smooth deterministic noise for the generator's "scanned" surface relief, and the small
+//! integer hash the generators use for their per-part choices.
 //!
 //! Value noise (Perlin 1985's lattice idea with hashed values instead of gradients): a hash of
 //! the integer lattice corner gives a value in [-1, 1], blended with the quintic fade
@@ -56,6 +57,15 @@ pub(crate) fn fractal(p: [f32; 3]) -> f32 {
         frequency *= 2.0;
     }
     sum / total
+}
+
+/// A small integer hash for the generators' per-part choices (part kinds, dithers, turns);
+/// any well-mixed function would do.
+pub(super) fn cell_hash(i: u32) -> u32 {
+    let mut h = i.wrapping_mul(0x9e37_79b9) ^ 0x5bd1_e995;
+    h ^= h >> 15;
+    h = h.wrapping_mul(0x2c1b_3c6d);
+    h ^ (h >> 13)
 }
 
 #[cfg(test)]

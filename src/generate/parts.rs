@@ -13,7 +13,7 @@ use std::f32::consts::{PI, TAU};
 use std::io;
 
 use super::Model;
-use super::engine::cell_hash;
+use super::noise::cell_hash;
 use super::shapes::{Part, Shape, UNROTATED, axes_along, gear_steps};
 
 /// Bisection steps on the logarithm of the edge length: the range below is 14 e-folds, so

@@ -18,7 +18,7 @@
 
 use std::f32::consts::TAU;
 
-use super::engine::cell_hash;
+use super::noise::cell_hash;
 use super::parts::{self, Assembled, Assembler, Assembly};
 use super::shapes::{UNROTATED, axes_along};
 

@@ -24,6 +24,7 @@ pub mod consts;
 pub mod crc32c;
 mod error;
 mod expanded;
+mod fields;
 mod float_text;
 pub(crate) mod model;
 mod parse;

@@ -9,71 +9,12 @@
 
 use super::consts::*;
 use super::crc32c::crc32c;
+use super::fields::{Section, at, finite3, float, read, reserved};
 use super::model::{FEATURES, LEAF, MAX_TREE_DEPTH, MAX_TREE_NODES};
-use super::ptch::{self, PatchTable, Section};
-use super::stream::{FromData, Stream};
+use super::ptch::{self, PatchTable};
+use super::stream::Stream;
 use super::visb::{Model, Visb, read_varint};
 use super::{Error, Pvis, Sampling};
-
-/// Reads a `T` or reports how many bytes were missing.
-pub(super) fn read<T: FromData>(s: &mut Stream<'_>, have: usize) -> Result<T, Error> {
-    let needed = s.offset() as u64 + T::SIZE as u64;
-    s.read::<T>().ok_or(Error::Truncated {
-        needed,
-        have: have as u64,
-    })
-}
-
-/// Reads a `u32` that must be zero (reserved fields).
-pub(super) fn reserved(s: &mut Stream<'_>, have: usize, what: &'static str) -> Result<(), Error> {
-    let offset = s.offset() as u64;
-    match read::<u32>(s, have)? {
-        0 => Ok(()),
-        value => Err(Error::Invalid {
-            what,
-            offset,
-            value: value as u64,
-        }),
-    }
-}
-
-/// Reads an `f32` and checks it with `ok`.
-pub(super) fn float(
-    s: &mut Stream<'_>,
-    have: usize,
-    what: &'static str,
-    ok: impl Fn(f32) -> bool,
-) -> Result<f32, Error> {
-    let offset = s.offset() as u64;
-    let value = read::<f32>(s, have)?;
-    if value.is_finite() && ok(value) {
-        Ok(value)
-    } else {
-        Err(Error::InvalidFloat {
-            what,
-            offset,
-            bits: value.to_bits(),
-        })
-    }
-}
-
-/// Reads three finite `f32`s.
-pub(super) fn finite3(
-    s: &mut Stream<'_>,
-    have: usize,
-    what: &'static str,
-) -> Result<[f32; 3], Error> {
-    Ok([
-        float(s, have, what, |_| true)?,
-        float(s, have, what, |_| true)?,
-        float(s, have, what, |_| true)?,
-    ])
-}
-
-/// Converts an in-file offset to `usize`. Every offset checked against `data.len()` fits.
-fn at(offset: u64) -> usize {
-    usize::try_from(offset).unwrap_or(usize::MAX)
-}
 
 pub(super) fn parse(data: &[u8]) -> Result<Pvis<'_>, Error> {
     let have = data.len();

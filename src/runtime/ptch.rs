@@ -12,6 +12,7 @@
 //! one pass over the records; a record is a few shifts and masks.
 
 use super::consts::*;
+use super::fields::{Section, at, finite3, float, read, reserved};
 use super::stream::Stream;
 use super::{Error, PatchInfo};
 
@@ -279,20 +280,6 @@ fn count_at(q: &Quantisation, records: &[u8], p: u32) -> u32 {
     bits(records, bit, q.count_bits).wrapping_add(1)
 }
 
-/// Where a section lies.
-#[derive(Clone, Copy)]
-pub(crate) struct Section {
-    /// Offset of its body.
-    pub offset: u64,
-    /// Length of its body.
-    pub length: u64,
-}
-
-/// Converts an in-file offset to `usize`. Every offset checked against `data.len()` fits.
-fn at(offset: u64) -> usize {
-    usize::try_from(offset).unwrap_or(usize::MAX)
-}
-
 /// § PTCH: validates the section of a file of `version` and returns the table with
 /// `(patch_count, triangle_count)`.
 pub(crate) fn parse(
@@ -306,7 +293,7 @@ pub(crate) fn parse(
     let have = data.len();
     let mut s = Stream::new_at(data, at(section.offset));
     let count_offset = s.offset() as u64;
-    let patch_count = super::parse::read::<u32>(&mut s, have)?;
+    let patch_count = read::<u32>(&mut s, have)?;
     if patch_count == 0 {
         return Err(Error::Invalid {
             what: "PTCH patch_count must be at least 1",
@@ -321,8 +308,8 @@ pub(crate) fn parse(
             limit: MAX_PATCHES as u64,
         });
     }
-    super::parse::reserved(&mut s, have, "PTCH reserved field must be 0")?;
-    let triangle_count = super::parse::read::<u64>(&mut s, have)?;
+    reserved(&mut s, have, "PTCH reserved field must be 0")?;
+    let triangle_count = read::<u64>(&mut s, have)?;
     if triangle_count > u32::MAX as u64 {
         return Err(Error::LimitExceeded {
             what: "triangle_count",
@@ -346,7 +333,6 @@ fn parse_full<'a>(
     patch_count: u32,
     triangle_count: u64,
 ) -> Result<PatchTable<'a>, Error> {
-    use super::parse::{finite3, float, read};
     let have = data.len();
     // Cannot overflow: patch_count ≤ 2^20.
     let expected = PTCH_HEADER_LEN + PATCH_RECORD_LEN * patch_count as u64;
@@ -405,7 +391,6 @@ fn parse_compact<'a>(
     patch_count: u32,
     triangle_count: u64,
 ) -> Result<PatchTable<'a>, Error> {
-    use super::parse::{finite3, float, read};
     let have = data.len();
     if section.length < PTCH_COMPACT_HEADER_LEN {
         return Err(Error::SectionLength {

@@ -1,0 +1,75 @@
+//! Reading a field and checking its rule, for the validation in `parse.rs` and `ptch.rs`:
+//! each read reports where the file ended or which rule the value broke (spec § Header …
+//! § VISB), so every error names a field and its byte offset. Also where a section lies.
+
+use super::Error;
+use super::stream::{FromData, Stream};
+
+/// Where a section lies.
+#[derive(Clone, Copy)]
+pub(crate) struct Section {
+    /// Offset of its body.
+    pub offset: u64,
+    /// Length of its body.
+    pub length: u64,
+}
+
+/// Converts an in-file offset to `usize`. Every offset checked against `data.len()` fits.
+pub(crate) fn at(offset: u64) -> usize {
+    usize::try_from(offset).unwrap_or(usize::MAX)
+}
+
+/// Reads a `T` or reports how many bytes were missing.
+pub(crate) fn read<T: FromData>(s: &mut Stream<'_>, have: usize) -> Result<T, Error> {
+    let needed = s.offset() as u64 + T::SIZE as u64;
+    s.read::<T>().ok_or(Error::Truncated {
+        needed,
+        have: have as u64,
+    })
+}
+
+/// Reads a `u32` that must be zero (reserved fields).
+pub(crate) fn reserved(s: &mut Stream<'_>, have: usize, what: &'static str) -> Result<(), Error> {
+    let offset = s.offset() as u64;
+    match read::<u32>(s, have)? {
+        0 => Ok(()),
+        value => Err(Error::Invalid {
+            what,
+            offset,
+            value: value as u64,
+        }),
+    }
+}
+
+/// Reads an `f32` and checks it with `ok`.
+pub(crate) fn float(
+    s: &mut Stream<'_>,
+    have: usize,
+    what: &'static str,
+    ok: impl Fn(f32) -> bool,
+) -> Result<f32, Error> {
+    let offset = s.offset() as u64;
+    let value = read::<f32>(s, have)?;
+    if value.is_finite() && ok(value) {
+        Ok(value)
+    } else {
+        Err(Error::InvalidFloat {
+            what,
+            offset,
+            bits: value.to_bits(),
+        })
+    }
+}
+
+/// Reads three finite `f32`s.
+pub(crate) fn finite3(
+    s: &mut Stream<'_>,
+    have: usize,
+    what: &'static str,
+) -> Result<[f32; 3], Error> {
+    Ok([
+        float(s, have, what, |_| true)?,
+        float(s, have, what, |_| true)?,
+        float(s, have, what, |_| true)?,
+    ])
+}
