@@ -220,20 +220,19 @@ pub(crate) enum ViewModel<'a> {
 }
 
 impl ViewModel<'_> {
-    /// The probability of a 0 for bit `p` with parents' windows `wa`, `wb` and `state`; tree
-    /// walks go through `cache`, which must only ever see this file's tree.
+    /// The facing bit of a patch with cone axis `axis` (as [`PatchTable::facing_axis`] reads
+    /// it) for this view; 0 for encoding 1, which does not use it.
     #[inline(always)]
-    pub fn p0(&self, p: u32, wa: u32, wb: u32, state: ViewState, cache: &mut TreeCache<'_>) -> u32 {
-        let front = match *self {
+    pub fn front(&self, axis: [f32; 3]) -> u32 {
+        match *self {
             ViewModel::Table(_) => 0,
-            ViewModel::Tree {
-                patches, lattice, ..
-            } => facing(patches.facing_axis(p), lattice),
-        };
-        self.p0_facing(wa, wb, state, front, cache)
+            ViewModel::Tree { lattice, .. } => facing(axis, lattice),
+        }
     }
 
-    /// As [`ViewModel::p0`], with the patch's facing bit already computed ([`Self::front_bits`]).
+    /// The probability of a 0 for a bit with parents' windows `wa`, `wb`, `state` and the
+    /// patch's facing bit `front` ([`Self::front`], [`Self::front_bits`]); tree walks go
+    /// through `cache`, which must only ever see this file's tree.
     #[inline(always)]
     pub fn p0_facing(
         &self,

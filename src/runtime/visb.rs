@@ -76,6 +76,16 @@ impl<'a> Model<'a> {
             },
         }
     }
+
+    /// The cone axis the facing feature of patch `p` reads (zero for encoding 1, which does
+    /// not use it).
+    #[inline(always)]
+    fn facing_axis(&self, p: u32) -> [f32; 3] {
+        match *self {
+            Model::Table(_) => [0.0; 3],
+            Model::Tree { patches, .. } => patches.facing_axis(p),
+        }
+    }
 }
 
 /// Reads an unsigned LEB128 of at most `MAX_VARINT_LEN` bytes at `pos`; returns the value and
@@ -211,6 +221,9 @@ impl<'a> Visb<'a> {
         let lanes = &mut lanes[..n];
         let mut slots = [0u64; 256];
         let mut cache = TreeCache::new(&mut slots);
+        // Lanes are in level order and the lanes of one level decode the same patch, so the
+        // patch's axis (unpacked from a compact table) is read once per level and step.
+        let mut axis: (u32, [f32; 3]) = (u32::MAX, [0.0; 3]);
         for t in 0..patch_count + max_lag {
             for i in 0..lanes.len() {
                 let Some(p) = t.checked_sub(lanes[i].lag).filter(|&p| p < patch_count) else {
@@ -220,10 +233,14 @@ impl<'a> Visb<'a> {
                     Some((pa, pb)) => (lanes[pa as usize].window(p), lanes[pb as usize].window(p)),
                     None => (0, 0),
                 };
+                if axis.0 != p {
+                    axis = (p, model.facing_axis(p));
+                }
                 let lane = &mut lanes[i];
+                let front = lane.model.front(axis.1);
                 let bit = lane
                     .decoder
-                    .bit(lane.model.p0(p, wa, wb, lane.state, &mut cache))
+                    .bit(lane.model.p0_facing(wa, wb, lane.state, front, &mut cache))
                     as u32;
                 lane.state.push(bit, wa >> 2 & 1, wb >> 2 & 1);
                 lane.history = lane.history << 1 | u64::from(bit);
