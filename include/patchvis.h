@@ -148,6 +148,16 @@ int32_t patchvis_query(const PatchvisFile *file, const float eye[3], uint64_t *s
 int32_t patchvis_patch_range(const PatchvisFile *file, uint32_t patch, uint32_t *first,
                              uint32_t *count);
 
+/* The merged triangle ranges of visible (an answer of patchvis_query or patchvis_stream_query
+ * on this file): out[2*i] and out[2*i + 1] are the first triangle and the count of range i,
+ * ascending, adjacent ranges merged; *ranges of them. Returns PATCHVIS_OK,
+ * PATCHVIS_ERR_ARGUMENT, PATCHVIS_ERR_NOT_PARSED or PATCHVIS_ERR_RANGE (more ranges than
+ * capacity: *ranges is then the number needed and out holds the first capacity).
+ * capacity = (patch_count + 1) / 2 always suffices. One call instead of one
+ * patchvis_patch_range per visible patch. */
+int32_t patchvis_ranges(const PatchvisFile *file, const PatchvisVisible *visible, uint32_t *out,
+                        size_t capacity, size_t *ranges);
+
 /* Decodes the stored row of view into out[0 .. patchvis_scratch_words(file)), same bit
  * layout as a query's answer. Returns PATCHVIS_OK, PATCHVIS_ERR_ARGUMENT,
  * PATCHVIS_ERR_NOT_PARSED or PATCHVIS_ERR_RANGE (view >= views, or words too small). */

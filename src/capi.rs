@@ -496,6 +496,61 @@ pub unsafe extern "C" fn patchvis_patch_range(
     PATCHVIS_OK
 }
 
+/// The merged triangle ranges of the visible set `visible` (an answer of `patchvis_query` or
+/// `patchvis_stream_query` on this file): `out[2·i]` and `out[2·i + 1]` are the first triangle
+/// and the count of range `i`, ascending, adjacent ranges merged, `*ranges` of them. Returns
+/// 0, `PATCHVIS_ERR_ARGUMENT`, `PATCHVIS_ERR_NOT_PARSED` or `PATCHVIS_ERR_RANGE` (more ranges
+/// than `capacity`: `*ranges` is then the number needed, and `out` holds the first
+/// `capacity`). `capacity = ceil(patch_count / 2)` always suffices. One call instead of one
+/// `patchvis_patch_range` a patch: ranges of a compact table are found walking the patches.
+///
+/// # Safety
+/// `file` as for every call; `visible` null or valid for a read, its `bits` valid for
+/// `words` words of reads (as an answer leaves them); `out` null or valid for `2·capacity`
+/// writes; `ranges` null or valid for a write.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn patchvis_ranges(
+    file: *const PatchvisFile,
+    visible: *const PatchvisVisible,
+    out: *mut u32,
+    capacity: usize,
+    ranges: *mut usize,
+) -> i32 {
+    // SAFETY: caller contract on `file`.
+    let pvis = match unsafe { handle(file) } {
+        Ok(pvis) => pvis,
+        Err(code) => return code,
+    };
+    if visible.is_null() || ranges.is_null() || (out.is_null() && capacity > 0) {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    // SAFETY: non-null and valid for a read (caller contract).
+    let visible = unsafe { visible.read() };
+    if visible.bits.is_null() || visible.words != pvis.row_words() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    // SAFETY: an answer's bits, valid for `words` reads (caller contract).
+    let bits = unsafe { core::slice::from_raw_parts(visible.bits, visible.words) };
+    let mut n = 0usize;
+    for (first, count) in crate::runtime::ranges_of_bits(pvis, bits) {
+        if n < capacity {
+            // SAFETY: `out` is valid for `2·capacity` writes and `n < capacity`.
+            unsafe {
+                out.add(2 * n).write(first);
+                out.add(2 * n + 1).write(count);
+            }
+        }
+        n += 1;
+    }
+    // SAFETY: non-null and valid for a write (caller contract).
+    unsafe { ranges.write(n) };
+    if n > capacity {
+        PATCHVIS_ERR_RANGE
+    } else {
+        PATCHVIS_OK
+    }
+}
+
 /// Decodes the row of `view` into `out[0 .. ceil(patch_count / 64)]` (same bit layout as a
 /// query's answer). Returns 0, `PATCHVIS_ERR_ARGUMENT`, `PATCHVIS_ERR_NOT_PARSED` or
 /// `PATCHVIS_ERR_RANGE` (view ≥ views, or `words` < `patchvis_scratch_words`).

@@ -82,19 +82,23 @@ export class Reader {
     // path, so a camera that stays in its leaf face costs a few plane tests.
     const words = e.patchvis_stream_scratch_words(fileAt);
     const infoAt = detailAt; // the detail buffer is free again after a parse
+    e.patchvis_info(fileAt, infoAt);
+    const patchCount = new DataView(this.memory.buffer).getUint32(infoAt + 4, true);
+    const capacity = Math.ceil(patchCount / 2); // merged ranges never exceed this
     const streamAt = parseEnd;
     const scratchAt = streamAt + STREAM_SIZE;
     const eyeAt = scratchAt + 8 * words;
     const outAt = align(eyeAt + 12, 8);
-    const rangeAt = outAt + VISIBLE_SIZE;
-    const end = rangeAt + 8;
+    const countAt = outAt + VISIBLE_SIZE;
+    const rangesAt = countAt + 8;
+    const end = rangesAt + 8 * capacity;
     this.reserve(end);
     const init = e.patchvis_stream_init(fileAt, scratchAt, words, streamAt);
     if (init !== 0) throw new PatchvisError(`patchvis_stream_init failed (${init})`, init);
     const region = { start, end, open: true };
     this.regions.push(region);
     this.top = end;
-    return new PvisFile(this, region, { fileAt, infoAt, streamAt, eyeAt, outAt, rangeAt });
+    return new PvisFile(this, region, { fileAt, infoAt, streamAt, eyeAt, outAt, countAt, rangesAt, capacity });
   }
 
   /** Grows the linear memory to hold `end` bytes. */
@@ -165,28 +169,23 @@ export class PvisFile {
     const count = view.getUint32(this.outAt + 20, true);
     const insideSphere = view.getUint32(this.outAt + 24, true) !== 0;
     const patches = new Uint32Array(count);
-    const ranges = [];
     let n = 0;
     for (let w = 0; w < words; w++) {
       for (let half = 0; half < 2; half++) {
         let bits = view.getUint32(bitsAt + 8 * w + 4 * half, true);
         while (bits !== 0) {
           const low = bits & -bits;
-          const p = 64 * w + 32 * half + (31 - Math.clz32(low));
+          patches[n++] = 64 * w + 32 * half + (31 - Math.clz32(low));
           bits ^= low;
-          patches[n++] = p;
-          e.patchvis_patch_range(this.fileAt, p, this.rangeAt, this.rangeAt + 4);
-          const first = view.getUint32(this.rangeAt, true);
-          const triangles = view.getUint32(this.rangeAt + 4, true);
-          const last = ranges[ranges.length - 1];
-          if (last && last[0] + last[1] === first) {
-            last[1] += triangles;
-          } else {
-            ranges.push([first, triangles]);
-          }
         }
       }
     }
+    // The merged ranges in one call (patchvis_ranges).
+    e.patchvis_ranges(this.fileAt, this.outAt, this.rangesAt, this.capacity, this.countAt);
+    const pairs = view.getUint32(this.countAt, true);
+    const flat = new Uint32Array(this.reader.memory.buffer, this.rangesAt, 2 * pairs);
+    const ranges = [];
+    for (let i = 0; i < pairs; i++) ranges.push([flat[2 * i], flat[2 * i + 1]]);
     return { insideSphere, views, patches, ranges };
   }
 

@@ -367,3 +367,55 @@ fn streaming_answers_equal_the_stateless_query() {
         }
     }
 }
+
+/// `patchvis_ranges` gives the ranges of `Pvis::ranges`, in one call, on a version-3 and a
+/// version-4 file; a short buffer is `PATCHVIS_ERR_RANGE` with the count needed.
+#[test]
+fn ranges_come_merged_in_one_call() {
+    let compact: &[u8] =
+        include_bytes!("../../tests/conformance/valid/016-v4-level3-300-patches-facing.pvis");
+    for bytes in [TREE, compact] {
+        let (code, file) = parsed(bytes);
+        assert_eq!(code, PATCHVIS_OK);
+        let pvis = Pvis::parse(bytes).unwrap();
+        let mut scratch = vec![0u64; pvis.scratch_words()];
+        let mut rust_scratch = vec![0u64; pvis.scratch_words()];
+        for eye in [[3.0f32, 1.0, -2.0], [-10.0, 0.5, 4.0], [0.0, 0.0, 50.0]] {
+            let mut visible = MaybeUninit::<PatchvisVisible>::uninit();
+            // SAFETY: `file` was parsed from static bytes; `eye` has 3 floats, `scratch`
+            // enough words.
+            let code = unsafe {
+                patchvis_query(
+                    &file,
+                    eye.as_ptr(),
+                    scratch.as_mut_ptr(),
+                    scratch.len(),
+                    visible.as_mut_ptr(),
+                )
+            };
+            assert_eq!(code, PATCHVIS_OK);
+            // SAFETY: written by the successful query.
+            let visible = unsafe { visible.assume_init() };
+            let expected: Vec<u32> = pvis
+                .ranges(&pvis.query(eye, &mut rust_scratch))
+                .flat_map(|(first, count)| [first, count])
+                .collect();
+            let capacity = pvis.patch_count().div_ceil(2) as usize;
+            let (mut out, mut n) = (vec![0u32; 2 * capacity], 0usize);
+            // SAFETY: `visible` is this file's answer; `out` holds `2·capacity` words.
+            let code =
+                unsafe { patchvis_ranges(&file, &visible, out.as_mut_ptr(), capacity, &mut n) };
+            assert_eq!(code, PATCHVIS_OK);
+            assert_eq!(&out[..2 * n], &expected[..], "eye {eye:?}");
+            if n > 1 {
+                let mut short = vec![0u32; 2];
+                let mut needed = 0usize;
+                // SAFETY: as above, with room for one range.
+                let code =
+                    unsafe { patchvis_ranges(&file, &visible, short.as_mut_ptr(), 1, &mut needed) };
+                assert_eq!((code, needed), (PATCHVIS_ERR_RANGE, n));
+                assert_eq!(short, expected[..2]);
+            }
+        }
+    }
+}

@@ -42,7 +42,7 @@ pub(crate) use coder::context;
 pub use error::Error;
 pub use expanded::Expanded;
 pub use ptch::{Quantisation, Record, unit_axis};
-pub use query::{Patches, TriangleRanges, Visible, ranges};
+pub use query::{Patches, TriangleRanges, Visible, ranges, ranges_of_bits};
 pub use streaming::Streaming;
 
 use stream::Stream;
@@ -155,9 +155,10 @@ impl<'a> Pvis<'a> {
         self.patch_table_bytes
     }
 
-    /// Triangle range `(first, count)` of patch `p`, which must be in range.
-    fn range(&self, p: u32) -> (u32, u32) {
-        self.patches.range(p)
+    /// Triangle range `(first, count)` of patch `p`, which must be in range, given the range
+    /// `(q, first, count)` of an earlier patch when the caller walks in order.
+    fn range_after(&self, known: Option<(u32, u32, u32)>, p: u32) -> (u32, u32) {
+        self.patches.range_after(known, p)
     }
 
     /// Length of the whole file in bytes.

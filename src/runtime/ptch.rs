@@ -221,6 +221,30 @@ impl PatchTable<'_> {
         }
     }
 
+    /// The triangle range of patch `p`, given the range `(q, first, count)` of an earlier
+    /// patch `q < p` when there is one: a compact table then adds the counts from `q` on when
+    /// that is shorter than from `p`'s block start, so walking the patches in order costs one
+    /// addition a patch.
+    pub fn range_after(&self, known: Option<(u32, u32, u32)>, p: u32) -> (u32, u32) {
+        match (*self, known) {
+            (
+                PatchTable::Compact {
+                    quantisation: q,
+                    records,
+                    ..
+                },
+                Some((k, first, count)),
+            ) if k < p && p - k <= p % PTCH_START_INTERVAL => {
+                let mut at = first.wrapping_add(count);
+                for i in k + 1..p {
+                    at = at.wrapping_add(count_at(&q, records, i));
+                }
+                (at, count_at(&q, records, p))
+            }
+            _ => self.range(p),
+        }
+    }
+
     /// The record of patch `p`, decoded.
     pub fn info(&self, p: u32) -> PatchInfo {
         match *self {

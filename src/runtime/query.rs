@@ -87,6 +87,19 @@ pub struct TriangleRanges<'v> {
     pvis: &'v Pvis<'v>,
     patches: Patches<'v>,
     pending: Option<(u32, u32)>,
+    /// The last patch read and its range, `(patch, first, count)`: a compact table finds the
+    /// next range from it.
+    last: Option<(u32, u32, u32)>,
+}
+
+impl TriangleRanges<'_> {
+    /// The range of the next visible patch.
+    fn next_patch(&mut self) -> Option<(u32, u32)> {
+        let p = self.patches.next()?;
+        let (first, count) = self.pvis.range_after(self.last, p);
+        self.last = Some((p, first, count));
+        Some((first, count))
+    }
 }
 
 impl Iterator for TriangleRanges<'_> {
@@ -95,10 +108,9 @@ impl Iterator for TriangleRanges<'_> {
     fn next(&mut self) -> Option<(u32, u32)> {
         let (first, mut count) = match self.pending.take() {
             Some(range) => range,
-            None => self.pvis.range(self.patches.next()?),
+            None => self.next_patch()?,
         };
-        for p in self.patches.by_ref() {
-            let (next_first, next_count) = self.pvis.range(p);
+        while let Some((next_first, next_count)) = self.next_patch() {
             // Validated ranges sum to at most u32::MAX, so this cannot overflow.
             if next_first == first + count {
                 count += next_count;
@@ -114,16 +126,23 @@ impl Iterator for TriangleRanges<'_> {
 /// The triangle ranges `(first, count)` of the patches in `visible`, ascending, adjacent
 /// ranges merged: what a renderer draws.
 pub fn ranges<'v>(pvis: &'v Pvis<'_>, visible: &'v Visible<'_>) -> TriangleRanges<'v> {
+    ranges_of_bits(pvis, visible.bits)
+}
+
+/// As [`ranges`], for a visible set given as its bits (patch `p` is bit `p % 64` of word
+/// `p / 64`; bits past the last patch must be zero), e.g. an answer that crossed the C ABI.
+pub fn ranges_of_bits<'v>(pvis: &'v Pvis<'_>, bits: &'v [u64]) -> TriangleRanges<'v> {
     // Shorten the borrows to one lifetime; both outlive the iterator.
     let pvis: &'v Pvis<'v> = pvis;
     TriangleRanges {
         pvis,
         patches: Patches {
-            bits: visible.bits,
+            bits,
             word: 0,
-            current: visible.bits.first().copied().unwrap_or(0),
+            current: bits.first().copied().unwrap_or(0),
         },
         pending: None,
+        last: None,
     }
 }
 
