@@ -496,6 +496,22 @@ fn a_memory_budget_below_the_minimum_is_refused_and_the_minimum_is_kept() {
         let peak = run.stats()["peak_heap_bytes"].as_u64().unwrap();
         assert!(peak <= mib << 20, "{memory}: peak heap {peak}");
     }
+    // The second case: `--memory 1MiB` on a 400K-triangle mesh is refused too, with
+    // a larger minimum than the bunny's (the mesh batch grows with the mesh).
+    let big = dir.path().join("big.ply");
+    let out = bounded(&[
+        "gen",
+        "--kind",
+        "subdivided-bunny",
+        "--triangles",
+        "400000",
+        "-o",
+        path_str(&big),
+        "-q",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "gen: {}", stderr(&out));
+    let run = bake_in(dir.path(), &big, "big-1mib", &["--memory", "1MiB"]);
+    assert_refused(&run, 2, None, &["--memory 1 MiB", "use at least"]);
     // A size past 64 bits says so.
     let run = bake_in(
         dir.path(),
