@@ -5,7 +5,7 @@
  *
  * For a valid file prints, in the conformance dump's format (tests/conformance/README.md),
  * the header counts, every patch's triangle range, every view's row and one `query` line per
- * position given; the positions are echoed as given, so the lines compare byte for byte with
+ * position given (checking on the way that patchvis_ranges merges the visible ranges); the positions are echoed as given, so the lines compare byte for byte with
  * the expected dump. For a refused file prints `error: <the reader's one-line verdict>` and
  * exits 1. tests/c/run.sh compares both against the conformance vectors.
  */
@@ -132,6 +132,29 @@ int main(int argc, char **argv) {
         }
         printf("]\n");
         if (listed != vis.visible_count) return 3;
+        /* patchvis_ranges gives the visible patches' ranges merged, in one call: the same as
+         * merging patchvis_patch_range by hand. */
+        size_t capacity = (info.patch_count + 1) / 2, n = 0, m = 0;
+        uint32_t *ranges = malloc(2 * capacity * sizeof *ranges);
+        uint32_t *merged = malloc(2 * capacity * sizeof *merged);
+        if (!ranges || !merged || patchvis_ranges(&file, &vis, ranges, capacity, &n) != PATCHVIS_OK)
+            return 5;
+        for (uint32_t p = 0; p < info.patch_count; p++) {
+            uint32_t first, count;
+            if (!((vis.bits[p / 64] >> (p % 64)) & 1)) continue;
+            if (patchvis_patch_range(&file, p, &first, &count) != PATCHVIS_OK) return 5;
+            if (m > 0 && merged[2 * (m - 1)] + merged[2 * (m - 1) + 1] == first) {
+                merged[2 * (m - 1) + 1] += count;
+            } else {
+                if (m == capacity) return 5;
+                merged[2 * m] = first;
+                merged[2 * m + 1] = count;
+                m++;
+            }
+        }
+        if (m != n || memcmp(merged, ranges, 2 * n * sizeof *ranges) != 0) return 5;
+        free(merged);
+        free(ranges);
     }
     /* Misuse is reported, not crashed on. */
     if (patchvis_query(&file, NULL, scratch, words, NULL) != PATCHVIS_ERR_ARGUMENT) return 3;
