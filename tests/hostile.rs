@@ -7,6 +7,9 @@
 
 mod common;
 
+#[path = "hostile/support.rs"]
+mod support;
+
 #[path = "hostile/outputs.rs"]
 mod outputs;
 

@@ -3,48 +3,11 @@
 //! each is baked correctly or refused with one line and the documented exit code, and the
 //! input is never changed.
 
+use super::support::{self, SMALL};
 use crate::common::{BUNNY, path_str, stderr};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Output;
 use tempfile::TempDir;
-
-/// The quick bake flags of the suite.
-const SMALL: [&str; 7] = [
-    "--level",
-    "2",
-    "--resolution",
-    "128",
-    "--view-supersample",
-    "0",
-    "-q",
-];
-
-/// Longest a bake of these small inputs may take (debug build, loaded machine).
-const DEADLINE: Duration = Duration::from_secs(300);
-
-/// Runs `patchvis args`, failing the test if it runs past [`DEADLINE`] (it is killed).
-fn bounded(args: &[&str]) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_patchvis"))
-        .args(args)
-        .env("RUST_BACKTRACE", "0")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run patchvis");
-    let start = Instant::now();
-    loop {
-        if child.try_wait().expect("wait for patchvis").is_some() {
-            return child.wait_with_output().expect("patchvis output");
-        }
-        if start.elapsed() > DEADLINE {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("patchvis {args:?} ran past {DEADLINE:?}");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
 
 /// What a bake of `input` into `dir/out.pvis` with [`SMALL`] and `extra` gave.
 struct Run {
@@ -96,7 +59,7 @@ fn bake_in(dir: &Path, input: &Path, name: &str, extra: &[&str]) -> Run {
     }
     args.push(SMALL[6]);
     args.extend(extra);
-    let output = bounded(&args);
+    let output = support::run(&args);
     let err = stderr(&output);
     assert_ne!(output.status.code(), Some(101), "panic: {err}");
     assert!(!err.contains("panicked"), "panic: {err}");
@@ -104,22 +67,17 @@ fn bake_in(dir: &Path, input: &Path, name: &str, extra: &[&str]) -> Run {
     Run { output, pvis }
 }
 
-/// Checks a refusal: exit `code`, one line on stderr naming `file` and holding every word of
-/// `words`, and no `.pvis` written.
-fn assert_refused(run: &Run, code: i32, file: Option<&Path>, words: &[&str]) {
-    let err = run.err();
-    assert_eq!(run.code(), Some(code), "{err}");
-    assert_eq!(err.lines().count(), 1, "one line: {err}");
-    assert!(err.starts_with("error: "), "{err}");
+/// Checks a refusal ([`support::assert_refused`]) that also names `file` and wrote no
+/// `.pvis`.
+fn assert_bake_refused(run: &Run, code: i32, file: Option<&Path>, words: &[&str]) {
+    support::assert_refused(&run.output, code, words);
     if let Some(file) = file {
+        let err = run.err();
         assert!(
             err.contains(path_str(file)),
             "names {}: {err}",
             file.display()
         );
-    }
-    for w in words {
-        assert!(err.contains(w), "'{w}' missing: {err}");
     }
     assert!(!run.pvis.exists(), "no output on refusal");
 }
@@ -214,7 +172,7 @@ fn a_binary_ply_declaring_fewer_faces_or_vertices_is_refused_with_its_position()
     let path = write(dir.path(), "fewer-faces.ply", &fewer_faces);
     let run = bake_in(dir.path(), &path, "fewer-faces", &[]);
     // 13 bytes: the last face record (a count byte and three indices).
-    assert_refused(
+    assert_bake_refused(
         &run,
         1,
         Some(&path),
@@ -229,7 +187,7 @@ fn a_binary_ply_declaring_fewer_faces_or_vertices_is_refused_with_its_position()
     let fewer_vertices = bunny_with(&bunny, "element vertex 50000", "element vertex 49999");
     let path = write(dir.path(), "fewer-vertices.ply", &fewer_vertices);
     let run = bake_in(dir.path(), &path, "fewer-vertices", &[]);
-    assert_refused(&run, 1, Some(&path), &["byte "]);
+    assert_bake_refused(&run, 1, Some(&path), &["byte "]);
 
     // A small mesh: 11 faces declared, 12 present.
     let (v, f) = cube(1.0, 0.0);
@@ -242,7 +200,7 @@ fn a_binary_ply_declaring_fewer_faces_or_vertices_is_refused_with_its_position()
     let path = write(dir.path(), "cube-fewer.ply", &bytes);
     let run = bake_in(dir.path(), &path, "cube-fewer", &[]);
     let at = header_end + 8 * 12 + 11 * 13;
-    assert_refused(
+    assert_bake_refused(
         &run,
         1,
         Some(&path),
@@ -252,7 +210,7 @@ fn a_binary_ply_declaring_fewer_faces_or_vertices_is_refused_with_its_position()
     bytes.truncate(header_end + 8 * 12 + 10 * 13);
     let path = write(dir.path(), "cube-short.ply", &bytes);
     let run = bake_in(dir.path(), &path, "cube-short", &[]);
-    assert_refused(&run, 1, Some(&path), &["the file ends"]);
+    assert_bake_refused(&run, 1, Some(&path), &["the file ends"]);
 }
 
 /// `bytes` with the first `from` replaced by `to` (of the same length).
@@ -274,7 +232,7 @@ fn an_ascii_ply_with_lines_past_its_counts_is_refused_with_the_line() {
     let path = write(dir.path(), "fewer-faces.ply", &ascii_ply(&v, &f, (8, 10)));
     let run = bake_in(dir.path(), &path, "fewer-faces", &[]);
     // 9 header lines, 8 vertex lines, 10 faces read: the 11th face is line 28.
-    assert_refused(
+    assert_bake_refused(
         &run,
         1,
         Some(&path),
@@ -290,7 +248,7 @@ fn an_ascii_ply_with_lines_past_its_counts_is_refused_with_the_line() {
         &ascii_ply(&v, &f, (7, 12)),
     );
     let run = bake_in(dir.path(), &path, "fewer-vertices", &[]);
-    assert_refused(&run, 1, Some(&path), &["line "]);
+    assert_bake_refused(&run, 1, Some(&path), &["line "]);
     // Trailing blank lines are not data.
     let mut blank = ascii_ply(&v, &f, (8, 12));
     blank.extend(b"\n  \n\n");
@@ -332,7 +290,7 @@ fn a_binary_stl_counting_fewer_triangles_bakes_them_all_with_a_warning() {
     ragged.extend([0u8; 7]);
     let path = write(dir.path(), "ragged.stl", &ragged);
     let run = bake_in(dir.path(), &path, "ragged", &[]);
-    assert_refused(
+    assert_bake_refused(
         &run,
         1,
         Some(&path),
@@ -341,7 +299,7 @@ fn a_binary_stl_counting_fewer_triangles_bakes_them_all_with_a_warning() {
     // Fewer records than the count says: still an error.
     let path = write(dir.path(), "over.stl", &binary_stl(&v, &f, 13));
     let run = bake_in(dir.path(), &path, "over", &[]);
-    assert_refused(&run, 1, Some(&path), &["the header says 13 triangles"]);
+    assert_bake_refused(&run, 1, Some(&path), &["the header says 13 triangles"]);
 }
 
 #[test]
@@ -375,7 +333,7 @@ fn extreme_finite_coordinates_bake_like_a_unit_model_or_are_refused() {
             (got - expected).abs() < 1e-9,
             "{name}: {got} against {expected}"
         );
-        let verify = bounded(&["verify", path_str(&run.pvis)]);
+        let verify = support::run(&["verify", path_str(&run.pvis)]);
         assert!(verify.status.success(), "{name}: {}", stderr(&verify));
     }
     // One triangle at x = 1e30 put the eye on the target (a panic before).
@@ -410,7 +368,7 @@ fn extreme_finite_coordinates_bake_like_a_unit_model_or_are_refused() {
             &binary_ply(&v, &f, (v.len(), f.len())),
         );
         let run = bake_in(dir.path(), &path, name, &[]);
-        assert_refused(&run, 1, Some(&path), &["binary32", "scale the model"]);
+        assert_bake_refused(&run, 1, Some(&path), &["binary32", "scale the model"]);
     }
 }
 
@@ -426,7 +384,7 @@ fn a_mesh_of_degenerate_triangles_is_refused() {
     let f = [[0, 1, 2], [1, 2, 3], [0, 0, 1]];
     let path = write(dir.path(), "flat.ply", &binary_ply(&v, &f, (4, 3)));
     let run = bake_in(dir.path(), &path, "flat", &[]);
-    assert_refused(
+    assert_bake_refused(
         &run,
         1,
         Some(&path),
@@ -440,7 +398,7 @@ fn a_resolution_below_the_minimum_is_a_usage_error_and_a_coarse_one_warns() {
     // --resolution 1 baked to 0.1 % of the patches visible per view.
     for r in ["1", "15"] {
         let run = bake_in(dir.path(), Path::new(BUNNY), r, &["--resolution", r]);
-        assert_refused(
+        assert_bake_refused(
             &run,
             2,
             None,
@@ -474,7 +432,7 @@ fn a_resolution_below_the_minimum_is_a_usage_error_and_a_coarse_one_warns() {
 fn a_memory_budget_below_the_minimum_is_refused_and_the_minimum_is_kept() {
     let dir = TempDir::new().unwrap();
     let run = bake_in(dir.path(), Path::new(BUNNY), "tiny", &["--memory", "1KiB"]);
-    assert_refused(&run, 2, None, &["--memory 1 KiB", "use at least"]);
+    assert_bake_refused(&run, 2, None, &["--memory 1 KiB", "use at least"]);
     let err = run.err();
     let minimum: u64 = err
         .split("use at least ")
@@ -499,7 +457,7 @@ fn a_memory_budget_below_the_minimum_is_refused_and_the_minimum_is_kept() {
     // The second case: `--memory 1MiB` on a 400K-triangle mesh is refused too, with
     // a larger minimum than the bunny's (the mesh batch grows with the mesh).
     let big = dir.path().join("big.ply");
-    let out = bounded(&[
+    let out = support::run(&[
         "gen",
         "--kind",
         "subdivided-bunny",
@@ -511,7 +469,7 @@ fn a_memory_budget_below_the_minimum_is_refused_and_the_minimum_is_kept() {
     ]);
     assert_eq!(out.status.code(), Some(0), "gen: {}", stderr(&out));
     let run = bake_in(dir.path(), &big, "big-1mib", &["--memory", "1MiB"]);
-    assert_refused(&run, 2, None, &["--memory 1 MiB", "use at least"]);
+    assert_bake_refused(&run, 2, None, &["--memory 1 MiB", "use at least"]);
     // A size past 64 bits says so.
     let run = bake_in(
         dir.path(),
@@ -519,5 +477,5 @@ fn a_memory_budget_below_the_minimum_is_refused_and_the_minimum_is_kept() {
         "huge",
         &["--memory", "99999999999TiB"],
     );
-    assert_refused(&run, 2, None, &["99999999999TiB", "too large", "16 EiB"]);
+    assert_bake_refused(&run, 2, None, &["99999999999TiB", "too large", "16 EiB"]);
 }

@@ -2,100 +2,36 @@
 //! fails or closes, inputs that are not regular files or not what their name says, a mesh
 //! edited behind the conversion cache's back, and the messages a user gets for them.
 //!
-//! Every child runs under a deadline ([`run`]): a hang fails the test instead of stalling it.
+//! Every child runs under a deadline (`support::DEADLINE`): a hang fails the test instead of
+//! stalling it.
 
 use std::fs::{self, File};
 use std::path::{Path, PathBuf};
-use std::process::{Command, ExitStatus, Output, Stdio};
+use std::process::{Child, Command, ExitStatus, Output, Stdio};
 use std::time::{Duration, Instant, SystemTime};
 
 use patchvis::ooc::{Mesh, MeshSource, OpenOptions};
 use tempfile::TempDir;
 
+use super::support::{DEADLINE, SMALL, assert_refused, command, run, run_env, wait};
 use crate::common::{BUNNY, path_str, stderr, stdout};
 
-/// The small, fast bake settings of the suite.
-const SMALL: [&str; 7] = [
-    "--level",
-    "2",
-    "--resolution",
-    "128",
-    "--view-supersample",
-    "0",
-    "-q",
-];
-
-/// Longest any single run here may take: every one is expected to end in well under a second
-/// or two (debug build); a hang ends at this deadline and fails the test.
-const DEADLINE: Duration = Duration::from_secs(60);
-
-/// `patchvis` with `args`, environment `env`, and stdout going to `out`.
-fn command(args: &[&str], env: &[(&str, &str)], out: Stdio) -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_patchvis"));
-    c.args(args)
-        .envs(env.iter().copied())
-        .stdin(Stdio::null())
-        .stdout(out)
-        .stderr(Stdio::piped());
-    c
+/// Starts `patchvis args` with stdout going to `out` and stderr to a pipe.
+fn spawn(args: &[&str], out: Stdio) -> Child {
+    let mut c = command(args, &[]);
+    c.stdout(out).stderr(Stdio::piped());
+    c.spawn().expect("spawn patchvis")
 }
 
-/// Waits for `child` until `limit`, killing it and failing the test past it; returns its
-/// stderr and status. Stderr is read after exit: the runs here write at most a few lines.
-fn wait(mut child: std::process::Child, limit: Duration, what: &str) -> (ExitStatus, String) {
-    let start = Instant::now();
-    loop {
-        if let Some(status) = child.try_wait().expect("poll the child") {
-            let mut err = String::new();
-            if let Some(mut e) = child.stderr.take() {
-                std::io::Read::read_to_string(&mut e, &mut err).expect("read stderr");
-            }
-            return (status, err);
-        }
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("{what}: still running after {limit:?} (a hang)");
-        }
-        std::thread::sleep(Duration::from_millis(5));
+/// Waits for `child` under [`DEADLINE`]; its status and stderr, read after exit (the runs here
+/// write at most a few lines).
+fn finish(mut child: Child, what: &str) -> (ExitStatus, String) {
+    let status = wait(&mut child, DEADLINE, what);
+    let mut err = String::new();
+    if let Some(mut e) = child.stderr.take() {
+        std::io::Read::read_to_string(&mut e, &mut err).expect("read stderr");
     }
-}
-
-/// Runs `patchvis args` with stdout captured, under [`DEADLINE`].
-fn run(args: &[&str]) -> Output {
-    run_env(args, &[])
-}
-
-/// [`run`] with environment variables.
-fn run_env(args: &[&str], env: &[(&str, &str)]) -> Output {
-    let mut child = command(args, env, Stdio::piped())
-        .spawn()
-        .expect("spawn patchvis");
-    // Drain stdout on a thread so that a chatty child cannot block on a full pipe.
-    let mut out = child.stdout.take().expect("stdout");
-    let reader = std::thread::spawn(move || {
-        let mut bytes = Vec::new();
-        std::io::Read::read_to_end(&mut out, &mut bytes).expect("read stdout");
-        bytes
-    });
-    let (status, err) = wait(child, DEADLINE, &format!("{args:?}"));
-    Output {
-        status,
-        stdout: reader.join().expect("stdout reader"),
-        stderr: err.into_bytes(),
-    }
-}
-
-/// Asserts an exit with `code`, no panic, and exactly one stderr line holding every word of
-/// `words`.
-fn assert_one_error_line(out: &Output, code: i32, words: &[&str], what: &str) {
-    let err = stderr(out);
-    assert_eq!(out.status.code(), Some(code), "{what}: {err}");
-    assert!(!err.contains("panicked"), "{what}: {err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "{what}: {err}");
-    for w in words {
-        assert!(err.contains(w), "{what}: '{err}' lacks '{w}'");
-    }
+    (status, err)
 }
 
 /// Bakes the bunny with [`SMALL`] into `dir/b.pvis`.
@@ -159,18 +95,17 @@ fn a_full_stdout_is_one_error_line_and_exit_1() {
     for args in printing_commands(dir.path(), &pvis) {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let full = File::create("/dev/full").expect("open /dev/full");
-        let child = command(&args, &[], Stdio::from(full)).spawn().unwrap();
-        let (status, err) = wait(child, DEADLINE, &format!("{args:?}"));
+        let child = spawn(&args, Stdio::from(full));
+        let (status, err) = finish(child, &format!("{args:?}"));
         let out = Output {
             status,
             stdout: Vec::new(),
             stderr: err.into_bytes(),
         };
-        assert_one_error_line(
+        assert_refused(
             &out,
             1,
             &["error: cannot write to stdout", "No space left on device"],
-            &format!("{args:?} > /dev/full"),
         );
     }
 }
@@ -183,31 +118,27 @@ fn a_closed_pipe_ends_quietly() {
     let pvis = bake_bunny(dir.path());
     for args in printing_commands(dir.path(), &pvis) {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        let mut child = command(&args, &[], Stdio::piped()).spawn().unwrap();
+        let mut child = spawn(&args, Stdio::piped());
         // The read end closes before the child has written anything.
         drop(child.stdout.take());
-        let (status, err) = wait(child, DEADLINE, &format!("{args:?}"));
+        let (status, err) = finish(child, &format!("{args:?}"));
         assert_eq!(status.code(), Some(0), "{args:?} | closed: {err}");
         assert_eq!(err, "", "{args:?} | closed");
     }
     // One line read, then closed: `query --bench` prints several lines.
     let p = path_str(&pvis);
-    let mut child = command(&["query", p, "--bench", "100"], &[], Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = spawn(&["query", p, "--bench", "100"], Stdio::piped());
     let mut first = [0u8; 5];
     std::io::Read::read_exact(child.stdout.as_mut().unwrap(), &mut first).unwrap();
     drop(child.stdout.take());
-    let (status, err) = wait(child, DEADLINE, "query --bench | head -c 5");
+    let (status, err) = finish(child, "query --bench | head -c 5");
     assert_eq!((status.code(), err.as_str()), (Some(0), ""));
     // `verify` keeps its verdict: an invalid file still exits 1, quietly.
     let bad = dir.path().join("bad.pvis");
     fs::write(&bad, b"PVIS\r\n\x1a\n and then nothing valid").unwrap();
-    let mut child = command(&["verify", path_str(&bad)], &[], Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = spawn(&["verify", path_str(&bad)], Stdio::piped());
     drop(child.stdout.take());
-    let (status, err) = wait(child, DEADLINE, "verify bad | closed");
+    let (status, err) = finish(child, "verify bad | closed");
     assert_eq!((status.code(), err.as_str()), (Some(1), ""));
 }
 
@@ -254,12 +185,7 @@ fn a_fifo_input_is_refused_at_once() {
     for args in cases {
         let start = Instant::now();
         let got = run(&args);
-        assert_one_error_line(
-            &got,
-            1,
-            &["FIFO", "not a regular file"],
-            &format!("{args:?}"),
-        );
+        assert_refused(&got, 1, &["FIFO", "not a regular file"]);
         assert!(start.elapsed() < Duration::from_secs(10), "{args:?}");
     }
     // `verify` reports its verdict on stdout.
@@ -309,7 +235,7 @@ fn devices_and_huge_files_are_refused_without_reading_them() {
         assert!(stdout(&got).contains(expected), "{p}: {}", stdout(&got));
         for args in [vec!["info", p], vec!["query", p, "--from", "1,2,3"]] {
             let got = run(&args);
-            assert_one_error_line(&got, 1, &[expected], &format!("{args:?}"));
+            assert_refused(&got, 1, &[expected]);
         }
         assert!(start.elapsed() < Duration::from_secs(10), "{p}");
     }
@@ -545,7 +471,7 @@ fn eval_against_another_export_says_what_differs() {
         ],
         &env,
     );
-    assert_one_error_line(
+    assert_refused(
         &got,
         1,
         &[
@@ -556,7 +482,6 @@ fn eval_against_another_export_says_what_differs() {
             "evaluate the exact mesh file that was baked",
             "--mesh-out",
         ],
-        "eval bunny.ply glb.pvis",
     );
     // The values shown for the file and for the mesh differ.
     let err = stderr(&got);
@@ -615,7 +540,7 @@ fn obj_errors_name_the_first_violation() {
         let mut args = vec!["bake", path_str(&path), "-o", path_str(&out)];
         args.extend(SMALL);
         let got = run_env(&args, &[("XDG_CACHE_HOME", path_str(dir.path()))]);
-        assert_one_error_line(&got, 1, &[at, what], &format!("case {n}"));
+        assert_refused(&got, 1, &[at, what]);
         assert!(!out.exists());
     }
 }
@@ -640,7 +565,7 @@ fn random_bytes_named_glb_are_not_a_glb_file() {
     let mut args = vec!["bake", path_str(&path), "-o", path_str(&out)];
     args.extend(SMALL);
     let got = run(&args);
-    assert_one_error_line(
+    assert_refused(
         &got,
         1,
         &[
@@ -649,7 +574,6 @@ fn random_bytes_named_glb_are_not_a_glb_file() {
             "expected the magic 'glTF'",
             "found 89 50 4e 47",
         ],
-        "bake random.glb",
     );
     assert!(!stderr(&got).contains("JSON"), "{}", stderr(&got));
     assert!(!out.exists());

@@ -9,85 +9,12 @@
 //! Unix only: file identity, modes, FIFOs and device nodes are Unix notions here.
 #![cfg(unix)]
 
+use super::support::{DEADLINE, SMALL, assert_refused, run, run_in};
 use crate::common::{BUNNY, path_str, stderr};
 use std::path::{Path, PathBuf};
-use std::process::{Command, ExitStatus, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use tempfile::TempDir;
-
-/// Small, fast bake settings.
-const SMALL: [&str; 7] = [
-    "--level",
-    "2",
-    "--resolution",
-    "128",
-    "--view-supersample",
-    "0",
-    "-q",
-];
-
-/// How long any refused run may take: refusals come before any work.
-const REFUSAL_LIMIT: Duration = Duration::from_secs(60);
-
-/// Runs `patchvis args` in `cwd` (the test's directory by default), killing it and failing
-/// the test if it runs past `limit`. Output goes through files, so a chatty child cannot
-/// block on a full pipe while it is polled.
-fn run_bounded(args: &[&str], cwd: Option<&Path>, limit: Duration) -> Output {
-    let logs = TempDir::new().unwrap();
-    let (out_path, err_path) = (logs.path().join("stdout"), logs.path().join("stderr"));
-    let mut command = Command::new(env!("CARGO_BIN_EXE_patchvis"));
-    command
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(std::fs::File::create(&out_path).unwrap())
-        .stderr(std::fs::File::create(&err_path).unwrap());
-    if let Some(dir) = cwd {
-        command.current_dir(dir);
-    }
-    let mut child = command.spawn().expect("run patchvis");
-    let status = wait_bounded(&mut child, limit)
-        .unwrap_or_else(|| panic!("patchvis {args:?} ran past {limit:?}: killed"));
-    Output {
-        status,
-        stdout: std::fs::read(out_path).unwrap(),
-        stderr: std::fs::read(err_path).unwrap(),
-    }
-}
-
-/// Waits for `child` up to `limit`; kills it and returns `None` past that.
-fn wait_bounded(child: &mut std::process::Child, limit: Duration) -> Option<ExitStatus> {
-    let deadline = Instant::now() + limit;
-    loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            return Some(status);
-        }
-        if Instant::now() > deadline {
-            let _ = child.kill();
-            let _ = child.wait();
-            return None;
-        }
-        std::thread::sleep(Duration::from_millis(5));
-    }
-}
-
-/// `patchvis args` in the test's directory, bounded by [`REFUSAL_LIMIT`].
-fn run(args: &[&str]) -> Output {
-    run_bounded(args, None, REFUSAL_LIMIT)
-}
-
-/// Asserts that `out` is a clean refusal: exit `code` (never a panic), one line on stderr
-/// starting `error: ` and containing each of `words`.
-fn assert_refused(out: &Output, code: i32, words: &[&str]) {
-    let err = stderr(out);
-    assert_ne!(out.status.code(), Some(101), "panicked: {err}");
-    assert!(!err.contains("panicked"), "panicked: {err}");
-    assert_eq!(out.status.code(), Some(code), "exit status; stderr: {err}");
-    assert_eq!(err.lines().count(), 1, "one line expected: {err}");
-    assert!(err.starts_with("error: "), "{err}");
-    for word in words {
-        assert!(err.contains(word), "expected '{word}' in: {err}");
-    }
-}
 
 /// `bake INPUT -o OUT` with the small settings and `more` flags.
 fn bake_args<'a>(input: &'a str, out: &'a str, more: &[&'a str]) -> Vec<&'a str> {
@@ -168,7 +95,7 @@ fn bake_onto_its_input_is_refused_under_any_spelling() {
     for (input, out) in cases {
         let out = out.replace("$DIR", dir_name);
         let args = bake_args(input, &out, &[]);
-        let result = run_bounded(&args, Some(dir.path()), REFUSAL_LIMIT);
+        let result = run_in(&args, dir.path());
         assert_refused(&result, 2, &[&out, input, "-o", "input mesh", "same file"]);
     }
     assert_eq!(std::fs::read(&ply).unwrap(), before.0, "the PLY changed");
@@ -283,7 +210,7 @@ fn gen_onto_its_source_is_refused() {
             "b.ply",
             "-q",
         ];
-        let result = run_bounded(&args, Some(dir.path()), REFUSAL_LIMIT);
+        let result = run_in(&args, dir.path());
         assert_refused(&result, 2, &[out, "source mesh", "same file", "-o"]);
     }
     assert_eq!(std::fs::read(&source).unwrap(), before);
@@ -502,7 +429,7 @@ fn interrupted_bake(dir: &Path, resolution: &str) -> Option<PathBuf> {
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
-    let deadline = Instant::now() + Duration::from_secs(300);
+    let deadline = Instant::now() + DEADLINE;
     loop {
         let seen = ckpt.exists();
         if seen || child.try_wait().unwrap().is_some() || Instant::now() > deadline {
@@ -542,7 +469,7 @@ fn damaged_and_foreign_checkpoints_are_refused() {
     };
     let run_owned = |a: Vec<String>| {
         let a: Vec<&str> = a.iter().map(String::as_str).collect();
-        run_bounded(&a, None, Duration::from_secs(300))
+        run(&a)
     };
     // One flipped bit anywhere (header, rows, checksum): refused, nothing written.
     for at in [13, good.len() / 2, good.len() - 9, good.len() - 1] {
