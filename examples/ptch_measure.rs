@@ -7,6 +7,7 @@
 //! quantised spheres grow, and how many (patch, eye) pairs the back-facing test culls with the
 //! exact and with the quantised records (eyes at the sampling distance and at 1.2× the radius).
 
+use patchvis::eval::views::random_directions;
 use patchvis::format::{
     BakeContents, PatchTableLayout, VisibilityEncoding, choose_quantisation_with, encode_as,
     quantise,
@@ -16,30 +17,13 @@ use patchvis::sampler::VisibilityMatrix;
 use patchvis::tiling::Patch;
 use patchvis::visibility::SamplingParams;
 
-/// A seeded xorshift stream of floats in `[-1, 1)`.
-fn seeded(seed: u64) -> impl FnMut() -> f32 {
-    let mut state = seed | 1;
-    move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-    }
-}
-
-/// `n` eyes at `distance` from `center`, directions uniform on the sphere.
+/// `n` eyes at `distance` from `center`, directions uniform on the sphere (eval's seeded
+/// directions).
 fn eyes(center: [f32; 3], distance: f32, n: usize) -> Vec<[f32; 3]> {
-    let mut rng = seeded(7);
-    let mut out = Vec::with_capacity(n);
-    while out.len() < n {
-        let d = [rng(), rng(), rng()];
-        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        if !(1e-3..=1.0).contains(&len) {
-            continue;
-        }
-        out.push([0, 1, 2].map(|i| center[i] + d[i] / len * distance));
-    }
-    out
+    random_directions(n as u32, 7)
+        .into_iter()
+        .map(|d| [0, 1, 2].map(|i| center[i] + d[i] * distance))
+        .collect()
 }
 
 /// Fraction of (patch, eye) pairs `pvis` reports back-facing.

@@ -82,7 +82,8 @@ export class Reader {
     // path, so a camera that stays in its leaf face costs a few plane tests.
     const words = e.patchvis_stream_scratch_words(fileAt);
     const infoAt = detailAt; // the detail buffer is free again after a parse
-    e.patchvis_info(fileAt, infoAt);
+    const got = e.patchvis_info(fileAt, infoAt);
+    if (got !== 0) throw new PatchvisError(`patchvis_info failed (${got})`, got);
     const patchCount = new DataView(this.memory.buffer).getUint32(infoAt + 4, true);
     const capacity = Math.ceil(patchCount / 2); // merged ranges never exceed this
     const streamAt = parseEnd;
@@ -124,9 +125,8 @@ export class PvisFile {
     this.reader = reader;
     this.region = region;
     Object.assign(this, layout);
-    // PatchvisInfo on wasm32: version, patch_count, triangle_count (u64), level, views, ...
-    const rc = reader.exports.patchvis_info(this.fileAt, this.infoAt);
-    if (rc !== 0) throw new PatchvisError(`patchvis_info failed (${rc})`, rc);
+    // The PatchvisInfo that `open` had patchvis_info write (wasm32 layout): version,
+    // patch_count, triangle_count (u64), level, views, ...
     const view = this.view();
     /** Format version of the file. */
     this.version = view.getUint32(this.infoAt, true);

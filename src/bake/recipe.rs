@@ -143,7 +143,7 @@ impl Recipe {
                 self.memory().total() >> 20
             )));
         }
-        if mesh.first_with_area().is_none() {
+        if crate::tiling::first_with_area(mesh).is_none() {
             return Err(BakeError::Mesh(MeshError::whole(
                 mesh.path(),
                 MeshErrorKind::Degenerate,

@@ -38,6 +38,26 @@ fn parsed(bytes: &[u8]) -> (i32, PatchvisFile) {
     (code, unsafe { file.assume_init() })
 }
 
+/// `patchvis_query` on a parsed `file` into `scratch`, which must succeed.
+fn query_ok(file: &PatchvisFile, eye: &[f32], scratch: &mut [u64]) -> PatchvisVisible {
+    assert_eq!(eye.len(), 3);
+    let mut visible = MaybeUninit::<PatchvisVisible>::uninit();
+    // SAFETY: `file` was parsed from static bytes in every test; `eye` has 3 floats; `scratch`
+    // is valid for its length; `visible` is writable.
+    let code = unsafe {
+        patchvis_query(
+            file,
+            eye.as_ptr(),
+            scratch.as_mut_ptr(),
+            scratch.len(),
+            visible.as_mut_ptr(),
+        )
+    };
+    assert_eq!(code, PATCHVIS_OK);
+    // SAFETY: written by the successful call.
+    unsafe { visible.assume_init() }
+}
+
 #[test]
 fn the_block_is_the_size_the_header_says() {
     assert_eq!(patchvis_file_size(), PATCHVIS_FILE_SIZE);
@@ -86,20 +106,7 @@ fn info_rows_ranges_and_queries_match_the_dump() {
     for line in DUMP.lines().filter(|l| l.starts_with("query ")) {
         let position = line["query ".len()..].split(' ').next().unwrap();
         let eye: Vec<f32> = position.split(',').map(|t| t.parse().unwrap()).collect();
-        let mut visible = MaybeUninit::<PatchvisVisible>::uninit();
-        // SAFETY: as above; `eye` has 3 floats, `scratch` `words` words.
-        let code = unsafe {
-            patchvis_query(
-                &file,
-                eye.as_ptr(),
-                scratch.as_mut_ptr(),
-                scratch.len(),
-                visible.as_mut_ptr(),
-            )
-        };
-        assert_eq!(code, PATCHVIS_OK);
-        // SAFETY: written by the successful call.
-        let visible = unsafe { visible.assume_init() };
+        let visible = query_ok(&file, &eye, &mut scratch);
         assert_eq!((visible.bits, visible.words), (scratch.as_ptr(), 1));
         let patches: Vec<String> = (0..info.patch_count)
             .filter(|&p| scratch[0] >> p & 1 == 1)
@@ -381,21 +388,7 @@ fn ranges_come_merged_in_one_call() {
         let mut scratch = vec![0u64; pvis.scratch_words()];
         let mut rust_scratch = vec![0u64; pvis.scratch_words()];
         for eye in [[3.0f32, 1.0, -2.0], [-10.0, 0.5, 4.0], [0.0, 0.0, 50.0]] {
-            let mut visible = MaybeUninit::<PatchvisVisible>::uninit();
-            // SAFETY: `file` was parsed from static bytes; `eye` has 3 floats, `scratch`
-            // enough words.
-            let code = unsafe {
-                patchvis_query(
-                    &file,
-                    eye.as_ptr(),
-                    scratch.as_mut_ptr(),
-                    scratch.len(),
-                    visible.as_mut_ptr(),
-                )
-            };
-            assert_eq!(code, PATCHVIS_OK);
-            // SAFETY: written by the successful query.
-            let visible = unsafe { visible.assume_init() };
+            let visible = query_ok(&file, &eye, &mut scratch);
             let expected: Vec<u32> = pvis
                 .ranges(&pvis.query(eye, &mut rust_scratch))
                 .flat_map(|(first, count)| [first, count])

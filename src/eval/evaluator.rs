@@ -14,7 +14,7 @@
 use super::metrics;
 use super::shade::{RgbImage, Shader, face_normal};
 use crate::bake::BakeError;
-use crate::format::quantise;
+use crate::format::stored_record;
 use crate::memory::MemoryBudget;
 use crate::ooc::Mesh;
 use crate::progress::Progress;
@@ -504,20 +504,9 @@ fn in_file_order(mesh: &Mesh, pvis: &Pvis<'_>, p: u32) -> bool {
     record_key(&as_stored(pvis, &m)) == record_key(&f)
 }
 
-/// The record `pvis` would hold for `patch`: the patch's own values in a full table, their
-/// quantised form in a compact one (spec § PTCH).
+/// The record `pvis` would hold for `patch` (spec § PTCH).
 fn as_stored(pvis: &Pvis<'_>, patch: &Patch) -> PatchInfo {
-    match pvis.quantisation() {
-        Some(q) => q.decode(&quantise(&q, patch), patch.first),
-        None => PatchInfo {
-            first_triangle: patch.first,
-            triangle_count: patch.count,
-            center: patch.center,
-            radius: patch.radius,
-            cone_axis: patch.cone_axis,
-            cone_cos: patch.cone_cos,
-        },
-    }
+    stored_record(pvis.quantisation(), patch)
 }
 
 /// What identifies a patch record, bit for bit: count, sphere and cone.

@@ -21,7 +21,7 @@ mod visb;
 pub use crate::output::write_atomic;
 pub use file::{PvisFile, PvisFileError};
 pub use patch_order::{MAX_TOUR_WORK, centre_order, covisibility_order};
-pub use ptch::{choose as choose_quantisation, choose_with as choose_quantisation_with, quantise};
+pub use ptch::{choose_with as choose_quantisation_with, quantise, stored_record};
 pub use tree::encode_tree;
 pub use visb::{encode_hierarchical, probabilities};
 

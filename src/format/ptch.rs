@@ -11,7 +11,7 @@
 //! over the patches, a few trial axes each.
 
 use crate::runtime::consts::*;
-use crate::runtime::{Quantisation, Record, unit_axis};
+use crate::runtime::{PatchInfo, Quantisation, Record, unit_axis};
 use crate::tiling::Patch;
 
 /// Bits per octahedral coordinate of the cone axis: ±63 steps, at most about 1.3° off.
@@ -86,14 +86,16 @@ pub(super) fn compact(triangle_count: u64, patches: &[Patch]) -> Option<Compact>
         );
         next += u64::from(p.count);
     }
-    let q = choose(patches);
+    let (q, records) = quantise_all(
+        grid(patches, STEP_PER_MEDIAN_RADIUS, AXIS_BITS, COS_BITS),
+        patches,
+    );
     let top = |bits: u32| ((1u64 << bits) - 1) as u32;
     let representable = (0..3).all(|i| q.center(i, top(q.center_bits)).is_finite())
         && q.radius(top(q.radius_bits)).is_finite();
     if !representable {
         return None;
     }
-    let records: Vec<Record> = patches.iter().map(|p| quantise(&q, p)).collect();
     let mut out = Vec::new();
     header(&mut out, triangle_count, patches.len());
     for v in q.origin {
@@ -173,16 +175,25 @@ fn bits_for(max: u64) -> u32 {
     64 - max.leading_zeros()
 }
 
-/// The frame and widths for `patches` (see the module documentation).
-pub fn choose(patches: &[Patch]) -> Quantisation {
-    choose_with(patches, STEP_PER_MEDIAN_RADIUS, AXIS_BITS, COS_BITS)
-}
-
 /// The frame and widths for `patches` with a centre grid step of at most
 /// `step_per_median_radius` times the median patch radius and the given cone widths
-/// (`axis_bits` in `2..=16`, `cos_bits` in `1..=16`). For measurements; [`choose`] is the
-/// writer's choice.
+/// (`axis_bits` in `2..=16`, `cos_bits` in `1..=16`). For measurements: the writer uses a
+/// quarter of the median radius, 7 and 6 bits.
 pub fn choose_with(
+    patches: &[Patch],
+    step_per_median_radius: f64,
+    axis_bits: u32,
+    cos_bits: u32,
+) -> Quantisation {
+    quantise_all(
+        grid(patches, step_per_median_radius, axis_bits, cos_bits),
+        patches,
+    )
+    .0
+}
+
+/// The frame and widths of [`choose_with`] but `radius_bits`, which [`quantise_all`] sets.
+fn grid(
     patches: &[Patch],
     step_per_median_radius: f64,
     axis_bits: u32,
@@ -227,22 +238,42 @@ pub fn choose_with(
         step = step.next_up();
     }
     let max_count = patches.iter().map(|p| p.count).max().unwrap_or(1);
-    let mut q = Quantisation {
+    Quantisation {
         origin: lo.map(|v| if v.is_finite() { v } else { 0.0 }),
         step,
         count_bits: bits_for(u64::from(max_count.saturating_sub(1))),
         center_bits,
+        // Set by `quantise_all` from the records; the widest allowed until then.
         radius_bits: 24,
         axis_bits,
         cos_bits,
-    };
-    let max_q_radius = patches
-        .iter()
-        .map(|p| quantise(&q, p).radius)
-        .max()
-        .unwrap_or(0);
-    q.radius_bits = bits_for(u64::from(max_q_radius));
-    q
+    }
+}
+
+/// Every patch's record under `q` (whose `radius_bits` does not change them), and `q` with
+/// `radius_bits` just wide enough for the largest radius.
+fn quantise_all(mut q: Quantisation, patches: &[Patch]) -> (Quantisation, Vec<Record>) {
+    let records: Vec<Record> = patches.iter().map(|p| quantise(&q, p)).collect();
+    let max_radius = records.iter().map(|r| r.radius).max().unwrap_or(0);
+    q.radius_bits = bits_for(u64::from(max_radius));
+    (q, records)
+}
+
+/// The record a reader decodes for `patch` from a file whose patch table is quantised by
+/// `quantisation` (`Pvis::quantisation`): the patch's own values in a full table, their
+/// conservative quantised form in a compact one.
+pub fn stored_record(quantisation: Option<Quantisation>, patch: &Patch) -> PatchInfo {
+    match quantisation {
+        Some(q) => q.decode(&quantise(&q, patch), patch.first),
+        None => PatchInfo {
+            first_triangle: patch.first,
+            triangle_count: patch.count,
+            center: patch.center,
+            radius: patch.radius,
+            cone_axis: patch.cone_axis,
+            cone_cos: patch.cone_cos,
+        },
+    }
 }
 
 /// The record that stores `patch` conservatively under `q`.

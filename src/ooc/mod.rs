@@ -500,25 +500,6 @@ impl Mesh {
         self.bounds
     }
 
-    /// The first triangle whose area is not zero (its corners' cross product in `f64`, exact
-    /// enough for any finite `f32` corners), or `None` when every triangle is degenerate.
-    /// Stops at the first: on a usual mesh that is triangle 0.
-    pub fn first_with_area(&self) -> Option<u32> {
-        (0..self.triangle_count).find(|&t| {
-            let [a, b, c] = self.triangle(t).map(|v| self.position(v).map(f64::from));
-            let (u, v) = (
-                [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
-                [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
-            );
-            let n = [
-                u[1] * v[2] - u[2] * v[1],
-                u[2] * v[0] - u[0] * v[2],
-                u[0] * v[1] - u[1] * v[0],
-            ];
-            n.iter().any(|&c| c != 0.0)
-        })
-    }
-
     /// This mesh with every position `p` moved to `(p - origin) · scale` (in `f64`, rounded
     /// once to `f32`), same triangles, in an unnamed temporary file: streaming, like a
     /// conversion. The bake's working frame for coordinates `f32` cameras cannot handle

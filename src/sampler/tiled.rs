@@ -332,16 +332,8 @@ fn back_winding(mesh: &Mesh) -> i64 {
     let volume: f64 = (0..mesh.triangle_count())
         .into_par_iter()
         .map(|t| {
-            let [a, b, c] = mesh.triangle(t).map(|v| mesh.position(v).map(f64::from));
-            let (u, v) = (
-                [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
-                [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
-            );
-            let n = [
-                u[1] * v[2] - u[2] * v[1],
-                u[2] * v[0] - u[0] * v[2],
-                u[0] * v[1] - u[1] * v[0],
-            ];
+            let p = crate::tiling::corners(mesh, t);
+            let (n, a) = (crate::tiling::cross_normal(p), p[0].map(f64::from));
             n[0] * a[0] + n[1] * a[1] + n[2] * a[2]
         })
         .sum();

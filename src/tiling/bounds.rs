@@ -44,6 +44,13 @@ pub(crate) fn cross_normal(p: [[f32; 3]; 3]) -> [f64; 3] {
     ]
 }
 
+/// The first triangle of `mesh` whose area is not zero ([`cross_normal`], exact enough for
+/// any finite `f32` corners), or `None` when every triangle is degenerate. Stops at the
+/// first: on a usual mesh that is triangle 0.
+pub(crate) fn first_with_area(mesh: &Mesh) -> Option<u32> {
+    (0..mesh.triangle_count()).find(|&t| cross_normal(corners(mesh, t)).iter().any(|&c| c != 0.0))
+}
+
 fn length(v: [f64; 3]) -> f64 {
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
 }

@@ -44,7 +44,7 @@ use rayon::prelude::*;
 
 use crate::ooc::Mesh;
 pub(crate) use aabb::Aabb;
-pub(crate) use bounds::{bounding_sphere, patch_bounds};
+pub(crate) use bounds::{bounding_sphere, corners, cross_normal, first_with_area, patch_bounds};
 use greedy::Fusion;
 pub(crate) use morton::morton_code;
 pub use quality::TilingQuality;
