@@ -29,7 +29,6 @@
 //! `tests/c/run.sh`).
 
 use core::ffi::c_char;
-use core::fmt::{self, Write as _};
 use core::mem::{MaybeUninit, align_of, size_of};
 use core::ptr::{addr_of, addr_of_mut};
 
@@ -248,7 +247,7 @@ unsafe fn handle<'a>(file: *const PatchvisFile) -> Result<&'a Pvis<'a>, i32> {
 
 /// Size of `PatchvisFile` as this library was built: compare with `sizeof(PatchvisFile)` to
 /// catch a header that does not match the library.
-#[unsafe(no_mangle)]
+#[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
 pub extern "C" fn patchvis_file_size() -> usize {
     size_of::<PatchvisFile>()
 }
@@ -293,7 +292,7 @@ pub unsafe extern "C" fn patchvis_parse(
 
 /// A static, NUL-terminated description of a return code (never null; unknown codes get
 /// "unknown error code").
-#[unsafe(no_mangle)]
+#[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
 pub extern "C" fn patchvis_error_message(code: i32) -> *const c_char {
     let message = match code {
         PATCHVIS_OK => c"ok",
@@ -307,30 +306,6 @@ pub extern "C" fn patchvis_error_message(code: i32) -> *const c_char {
             .map_or(c"unknown error code", |(_, m)| *m),
     };
     message.as_ptr()
-}
-
-/// Writes into a byte buffer, keeping room for a NUL, and counts what did not fit.
-struct Truncating<'b> {
-    buf: &'b mut [u8],
-    written: usize,
-    full_len: usize,
-}
-
-impl fmt::Write for Truncating<'_> {
-    fn write_str(&mut self, s: &str) -> fmt::Result {
-        let room = self
-            .buf
-            .len()
-            .saturating_sub(1)
-            .saturating_sub(self.written);
-        let take = s.len().min(room);
-        if let Some(dst) = self.buf.get_mut(self.written..self.written + take) {
-            dst.copy_from_slice(&s.as_bytes()[..take]);
-            self.written += take;
-        }
-        self.full_len += s.len();
-        Ok(())
-    }
 }
 
 /// Writes the reader's precise one-line message for `len` bytes at `data` — the first rule
@@ -355,24 +330,22 @@ pub unsafe extern "C" fn patchvis_error_detail(
         // SAFETY: non-null and valid for `buf_len` bytes of writes (caller contract).
         unsafe { core::slice::from_raw_parts_mut(buf.cast::<u8>(), buf_len) }
     };
-    let mut w = Truncating {
-        buf: out,
-        written: 0,
-        full_len: 0,
-    };
     // SAFETY: caller contract on `data`/`len` for this call.
-    let _ = match unsafe { bytes(data, len) } {
-        None => w.write_str("invalid argument (null pointer or length too large)"),
-        Some(bytes) => match Pvis::parse(bytes) {
-            Ok(_) => w.write_str("ok"),
-            Err(error) => write!(w, "{error}"),
-        },
+    let message =
+        unsafe { bytes(data, len) }.map(|bytes| Pvis::parse(bytes).err().map(|e| e.message()));
+    // The reader's own formatter (`runtime::Message`), not `core::fmt`: the WebAssembly
+    // reader stays free of `core`'s formatting machinery.
+    let text: &[u8] = match &message {
+        None => b"invalid argument (null pointer or length too large)",
+        Some(None) => b"ok",
+        Some(Some(message)) => message.as_bytes(),
     };
-    let (written, full_len) = (w.written, w.full_len);
-    if let Some(nul) = w.buf.get_mut(written) {
-        *nul = 0;
+    if let Some(room) = out.len().checked_sub(1) {
+        let n = text.len().min(room);
+        out[..n].copy_from_slice(&text[..n]);
+        out[n] = 0;
     }
-    full_len
+    text.len()
 }
 
 /// Fills `*out` with what the file holds. Returns 0, `PATCHVIS_ERR_ARGUMENT` or
@@ -416,7 +389,7 @@ pub unsafe extern "C" fn patchvis_info(file: *const PatchvisFile, out: *mut Patc
 ///
 /// # Safety
 /// `file` as for every call.
-#[unsafe(no_mangle)]
+#[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
 pub unsafe extern "C" fn patchvis_scratch_words(file: *const PatchvisFile) -> usize {
     // SAFETY: caller contract on `file`.
     unsafe { handle(file) }.map_or(0, |pvis| pvis.scratch_words())
@@ -431,7 +404,7 @@ pub unsafe extern "C" fn patchvis_scratch_words(file: *const PatchvisFile) -> us
 /// be null or valid for reads and writes of `scratch_words` `uint64_t`s, and must not overlap
 /// the file's bytes; the answer stays valid until `scratch` is reused. `out` must be null or
 /// valid for a write of a `PatchvisVisible`.
-#[unsafe(no_mangle)]
+#[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
 pub unsafe extern "C" fn patchvis_query(
     file: *const PatchvisFile,
     eye: *const f32,
@@ -469,7 +442,7 @@ pub unsafe extern "C" fn patchvis_query(
 ///
 /// # Safety
 /// `file` as for every call; `first` and `count` must be null or valid for a write.
-#[unsafe(no_mangle)]
+#[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
 pub unsafe extern "C" fn patchvis_patch_range(
     file: *const PatchvisFile,
     patch: u32,
@@ -557,7 +530,7 @@ pub unsafe extern "C" fn patchvis_ranges(
 ///
 /// # Safety
 /// `file` as for every call; `out` must be null or valid for writes of `words` `uint64_t`s.
-#[unsafe(no_mangle)]
+#[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
 pub unsafe extern "C" fn patchvis_view_row(
     file: *const PatchvisFile,
     view: u32,
@@ -591,7 +564,7 @@ pub struct PatchvisStream {
 }
 
 /// Size of `PatchvisStream` as this library was built.
-#[unsafe(no_mangle)]
+#[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
 pub extern "C" fn patchvis_stream_size() -> usize {
     size_of::<PatchvisStream>()
 }

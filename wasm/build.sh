@@ -4,7 +4,7 @@
 # Rust target (`rustup target add wasm32-unknown-unknown`). Prints the size raw and gzipped.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-target=target/wasm
+target=${CARGO_TARGET_DIR:-target}/wasm
 cargo rustc --quiet --profile wasm --lib --no-default-features --features wasm \
     --target wasm32-unknown-unknown --crate-type cdylib --target-dir "$target"
 cp "$target/wasm32-unknown-unknown/wasm/patchvis.wasm" wasm/patchvis.wasm

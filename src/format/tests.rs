@@ -535,7 +535,7 @@ fn coded_visb_structure_errors() {
     zero_prob[visb + 8..visb + 10].copy_from_slice(&0u16.to_le_bytes());
     assert!(matches!(
         Pvis::parse(&with_crc(zero_prob)),
-        Err(crate::runtime::Error::Invalid { what, .. }) if what.contains("probability")
+        Err(crate::runtime::Error::Invalid { what, .. }) if what.text().contains("probability")
     ));
     // A wrong checkpoint.
     let checkpoint = visb + 8 + 2 * 64;
@@ -543,7 +543,7 @@ fn coded_visb_structure_errors() {
     bad_checkpoint[checkpoint] = 1;
     assert!(matches!(
         Pvis::parse(&with_crc(bad_checkpoint)),
-        Err(crate::runtime::Error::Invalid { what, .. }) if what.contains("checkpoint")
+        Err(crate::runtime::Error::Invalid { what, .. }) if what.text().contains("checkpoint")
     ));
     // Encoding 1 in a version-1 file.
     let mut v1 = bytes.clone();
@@ -624,7 +624,7 @@ fn tree_depth_is_limited_and_deep_trees_decode() {
     let deep = with_visb(&file, &chain_tree_visb(MAX_TREE_DEPTH as u16 + 1));
     assert!(matches!(
         Pvis::parse(&deep),
-        Err(crate::runtime::Error::LimitExceeded { what, .. }) if what.contains("depth")
+        Err(crate::runtime::Error::LimitExceeded { what, .. }) if what.text().contains("depth")
     ));
 }
 

@@ -1,11 +1,17 @@
 //! Why the reader refused a file: one small `Copy` enum carrying the values that caused it.
 //!
-//! Every variant's `Display` is one precise line saying what was found, where, and what the
-//! spec (`spec/FORMAT.md`) expects. `std::error::Error` comes with the `std` feature.
+//! Every variant's message ([`Error::message`], also its `Display`) is one precise line saying
+//! what was found, where, and what the spec (`spec/FORMAT.md`) expects. The message is built
+//! with the reader's own small formatter (`message.rs`) rather than `core::fmt`, and what a
+//! refused field is and which rule it breaks is a [`Rule`], a one-byte id whose text is only
+//! looked up when a message is made: a build that never prints an error (a microcontroller)
+//! carries neither the texts nor a formatter, and one that does (WebAssembly) carries no
+//! `core::fmt`. `std::error::Error` comes with the `std` feature.
 
 use core::fmt;
 
 use super::consts;
+use super::message::Message;
 
 /// Why a file was refused. Carries the values that caused it; offsets are absolute byte
 /// offsets into the file.
@@ -93,7 +99,7 @@ pub enum Error {
     /// A count exceeds a resource limit of the spec.
     LimitExceeded {
         /// The quantity.
-        what: &'static str,
+        what: Rule,
         /// Its value in the file.
         value: u64,
         /// The largest value allowed.
@@ -102,7 +108,7 @@ pub enum Error {
     /// An integer field has a value the spec forbids; `what` names it and the rule.
     Invalid {
         /// The field and the rule it breaks.
-        what: &'static str,
+        what: Rule,
         /// Where the field is.
         offset: u64,
         /// Its value.
@@ -111,7 +117,7 @@ pub enum Error {
     /// A float field has a value the spec forbids (non-finite or out of range).
     InvalidFloat {
         /// The field and the rule it breaks.
-        what: &'static str,
+        what: Rule,
         /// Where the field is.
         offset: u64,
         /// Its bits (`f32::from_bits` gives the value; bits keep the enum `Eq`).
@@ -158,19 +164,167 @@ pub enum Error {
     },
 }
 
-/// A section tag, printed as text when it is printable ASCII and as hex otherwise.
-struct Tag([u8; 4]);
+/// What a refused value is: the field and the rule it breaks ([`Error::Invalid`],
+/// [`Error::InvalidFloat`]) or the quantity over a limit ([`Error::LimitExceeded`]). Its
+/// [`Rule::text`] is what the message prints.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Rule {
+    /// `header section_count must be at least 1`
+    HeaderSectionCount,
+    /// `section_count`
+    SectionCount,
+    /// `header reserved field must be 0`
+    HeaderReserved,
+    /// `section table reserved field must be 0`
+    TableReserved,
+    /// `bytes between sections must be 0`
+    Gap,
+    /// `sphere level`
+    SphereLevel,
+    /// `CAMR center must be finite`
+    CamrCenter,
+    /// `CAMR radius must be finite and > 0`
+    CamrRadius,
+    /// `CAMR distance must be finite and >= radius`
+    CamrDistance,
+    /// `CAMR fov_deg must be in (0, 180)`
+    CamrFov,
+    /// `CAMR resolution must be at least 1`
+    CamrResolution,
+    /// `CAMR sphere_convention must be 1`
+    CamrConvention,
+    /// `CAMR reserved field must be 0`
+    CamrReserved,
+    /// `PTCH patch_count must be at least 1`
+    PatchCount,
+    /// `patch_count`
+    PatchCountLimit,
+    /// `triangle_count`
+    TriangleCount,
+    /// `PTCH reserved field must be 0`
+    PtchReserved,
+    /// `PTCH patch center must be finite`
+    PatchCenter,
+    /// `PTCH patch radius must be finite and >= 0`
+    PatchRadius,
+    /// `PTCH patch cone_axis must be finite`
+    PatchConeAxis,
+    /// `PTCH patch cone_cos must be in [-1, 1]`
+    PatchConeCos,
+    /// `PTCH origin must be finite`
+    Origin,
+    /// `PTCH step must be finite and > 0`
+    Step,
+    /// `PTCH count_bits must be at most 32`
+    CountBits,
+    /// `PTCH center_bits must be at most 24`
+    CenterBits,
+    /// `PTCH radius_bits must be at most 24`
+    RadiusBits,
+    /// `PTCH axis_bits must be in 2..=16`
+    AxisBits,
+    /// `PTCH cos_bits must be in 1..=16`
+    CosBits,
+    /// `PTCH reserved bytes must be 0`
+    PtchReservedBytes,
+    /// `PTCH step must keep origin + (2^center_bits - 1) * step finite`
+    StepCenterRange,
+    /// `PTCH step must keep (2^radius_bits - 1) * step finite`
+    StepRadiusRange,
+    /// `PTCH block start must equal the sum of the counts before it`
+    BlockStart,
+    /// `PTCH record's axis coordinate must be at most 2^axis_bits - 2`
+    RecordAxis,
+    /// `PTCH bits after the last record must be 0`
+    RecordPadding,
+    /// `VISB reserved field must be 0`
+    VisbReserved,
+    /// `VISB probability must be in 1..4096`
+    VisbProbability,
+    /// `VISB tree node count must be in 1..=1024`
+    TreeNodeCount,
+    /// `VISB tree leaf must hold a probability in 1..4096`
+    TreeLeaf,
+    /// `VISB tree node must test a feature below 23`
+    TreeFeature,
+    /// `VISB tree node's children must follow it inside the tree`
+    TreeChildren,
+    /// `VISB tree depth`
+    TreeDepth,
+    /// `VISB checkpoint must be the offset of its view's record`
+    Checkpoint,
+    /// `VISB record length must be a LEB128 of at most 4 bytes inside the section`
+    RecordLength,
+    /// `VISB record length must be a minimal LEB128`
+    RecordLengthMinimal,
+    /// `VISB code length`
+    CodeLength,
+    /// `VISB code must not end in a zero byte`
+    CodeEnd,
+}
 
-impl fmt::Display for Tag {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.0.iter().all(|b| b.is_ascii_graphic()) {
-            for &b in &self.0 {
-                write!(f, "{}", b as char)?;
+impl Rule {
+    /// The words a message prints for this rule.
+    pub fn text(self) -> &'static str {
+        match self {
+            Rule::HeaderSectionCount => "header section_count must be at least 1",
+            Rule::SectionCount => "section_count",
+            Rule::HeaderReserved => "header reserved field must be 0",
+            Rule::TableReserved => "section table reserved field must be 0",
+            Rule::Gap => "bytes between sections must be 0",
+            Rule::SphereLevel => "sphere level",
+            Rule::CamrCenter => "CAMR center must be finite",
+            Rule::CamrRadius => "CAMR radius must be finite and > 0",
+            Rule::CamrDistance => "CAMR distance must be finite and >= radius",
+            Rule::CamrFov => "CAMR fov_deg must be in (0, 180)",
+            Rule::CamrResolution => "CAMR resolution must be at least 1",
+            Rule::CamrConvention => "CAMR sphere_convention must be 1",
+            Rule::CamrReserved => "CAMR reserved field must be 0",
+            Rule::PatchCount => "PTCH patch_count must be at least 1",
+            Rule::PatchCountLimit => "patch_count",
+            Rule::TriangleCount => "triangle_count",
+            Rule::PtchReserved => "PTCH reserved field must be 0",
+            Rule::PatchCenter => "PTCH patch center must be finite",
+            Rule::PatchRadius => "PTCH patch radius must be finite and >= 0",
+            Rule::PatchConeAxis => "PTCH patch cone_axis must be finite",
+            Rule::PatchConeCos => "PTCH patch cone_cos must be in [-1, 1]",
+            Rule::Origin => "PTCH origin must be finite",
+            Rule::Step => "PTCH step must be finite and > 0",
+            Rule::CountBits => "PTCH count_bits must be at most 32",
+            Rule::CenterBits => "PTCH center_bits must be at most 24",
+            Rule::RadiusBits => "PTCH radius_bits must be at most 24",
+            Rule::AxisBits => "PTCH axis_bits must be in 2..=16",
+            Rule::CosBits => "PTCH cos_bits must be in 1..=16",
+            Rule::PtchReservedBytes => "PTCH reserved bytes must be 0",
+            Rule::StepCenterRange => {
+                "PTCH step must keep origin + (2^center_bits - 1) * step finite"
             }
-            Ok(())
-        } else {
-            write!(f, "0x{:08X}", u32::from_be_bytes(self.0))
+            Rule::StepRadiusRange => "PTCH step must keep (2^radius_bits - 1) * step finite",
+            Rule::BlockStart => "PTCH block start must equal the sum of the counts before it",
+            Rule::RecordAxis => "PTCH record's axis coordinate must be at most 2^axis_bits - 2",
+            Rule::RecordPadding => "PTCH bits after the last record must be 0",
+            Rule::VisbReserved => "VISB reserved field must be 0",
+            Rule::VisbProbability => "VISB probability must be in 1..4096",
+            Rule::TreeNodeCount => "VISB tree node count must be in 1..=1024",
+            Rule::TreeLeaf => "VISB tree leaf must hold a probability in 1..4096",
+            Rule::TreeFeature => "VISB tree node must test a feature below 23",
+            Rule::TreeChildren => "VISB tree node's children must follow it inside the tree",
+            Rule::TreeDepth => "VISB tree depth",
+            Rule::Checkpoint => "VISB checkpoint must be the offset of its view's record",
+            Rule::RecordLength => {
+                "VISB record length must be a LEB128 of at most 4 bytes inside the section"
+            }
+            Rule::RecordLengthMinimal => "VISB record length must be a minimal LEB128",
+            Rule::CodeLength => "VISB code length",
+            Rule::CodeEnd => "VISB code must not end in a zero byte",
         }
+    }
+}
+
+impl fmt::Display for Rule {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.text())
     }
 }
 
@@ -184,118 +338,241 @@ fn fixed_len(tag: [u8; 4]) -> u64 {
     }
 }
 
-impl fmt::Display for Error {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl Error {
+    /// The one-line message: what was found, where, and what the spec expects. Exactly the
+    /// `Display` text, made without `core::fmt`.
+    pub fn message(&self) -> Message {
+        let mut m = Message::new();
+        self.write(&mut m);
+        m
+    }
+
+    /// Writes [`Error::message`] into `m`. One out-of-line function, so the message texts and
+    /// the formatter exist once in a build however many callers print errors.
+    #[inline(never)]
+    fn write(&self, m: &mut Message) {
         match *self {
             Error::Truncated { needed, have } => {
-                write!(f, "truncated: needed {needed} bytes, have {have}")
+                m.text("truncated: needed ")
+                    .u64(needed)
+                    .text(" bytes, have ")
+                    .u64(have);
             }
-            Error::BadMagic => write!(f, "not a .pvis file: bad signature"),
-            Error::UnsupportedVersion { found } => write!(
-                f,
-                "unsupported version {found}: this reader understands version {}",
-                consts::VERSION
-            ),
-            Error::UnknownFlags { flags } => write!(
-                f,
-                "unknown header flags 0x{:08X}",
-                flags & !consts::KNOWN_FLAGS
-            ),
-            Error::LengthMismatch { header, actual } => write!(
-                f,
-                "length mismatch: header says {header} bytes, data has {actual}"
-            ),
-            Error::ChecksumMismatch { stored, computed } => write!(
-                f,
-                "checksum mismatch: trailer has CRC-32C 0x{stored:08X}, data has 0x{computed:08X}"
-            ),
-            Error::MissingSection { tag } => write!(f, "missing section {}", Tag(tag)),
-            Error::DuplicateSection { tag } => write!(f, "section {} appears twice", Tag(tag)),
-            Error::BadSection { tag } => write!(
-                f,
-                "section {}: shorter than its {}-byte fixed part",
-                Tag(tag),
-                fixed_len(tag)
-            ),
+            Error::BadMagic => {
+                m.text("not a .pvis file: bad signature");
+            }
+            Error::UnsupportedVersion { found } => {
+                m.text("unsupported version ")
+                    .u64(found.into())
+                    .text(": this reader understands version ")
+                    .u64(consts::VERSION.into());
+            }
+            Error::UnknownFlags { flags } => {
+                m.text("unknown header flags ")
+                    .hex32(flags & !consts::KNOWN_FLAGS);
+            }
+            Error::LengthMismatch { header, actual } => {
+                m.text("length mismatch: header says ")
+                    .u64(header)
+                    .text(" bytes, data has ")
+                    .u64(actual);
+            }
+            Error::ChecksumMismatch { stored, computed } => {
+                m.text("checksum mismatch: trailer has CRC-32C ")
+                    .hex32(stored)
+                    .text(", data has ")
+                    .hex32(computed);
+            }
+            Error::MissingSection { tag } => {
+                m.text("missing section ").tag(tag);
+            }
+            Error::DuplicateSection { tag } => {
+                m.text("section ").tag(tag).text(" appears twice");
+            }
+            Error::BadSection { tag } => {
+                m.text("section ")
+                    .tag(tag)
+                    .text(": shorter than its ")
+                    .u64(fixed_len(tag))
+                    .text("-byte fixed part");
+            }
             Error::SectionLength {
                 tag,
                 length,
                 expected,
-            } => write!(
-                f,
-                "section {}: length {length} but its contents need {expected}",
-                Tag(tag)
-            ),
+            } => {
+                m.text("section ")
+                    .tag(tag)
+                    .text(": length ")
+                    .u64(length)
+                    .text(" but its contents need ")
+                    .u64(expected);
+            }
             Error::SectionOutOfBounds {
                 tag,
                 offset,
                 length,
                 start,
                 end,
-            } => write!(
-                f,
-                "section {}: bytes {offset}..{offset}+{length} not inside {start}..{end} \
-                 (after the table or previous section, before the trailer)",
-                Tag(tag)
-            ),
-            Error::SectionMisaligned { tag, offset } => write!(
-                f,
-                "section {}: offset {offset} is not a multiple of {}",
-                Tag(tag),
-                consts::SECTION_ALIGN
-            ),
+            } => {
+                m.text("section ")
+                    .tag(tag)
+                    .text(": bytes ")
+                    .u64(offset)
+                    .text("..")
+                    .u64(offset)
+                    .text("+")
+                    .u64(length)
+                    .text(" not inside ")
+                    .u64(start)
+                    .text("..")
+                    .u64(end)
+                    .text(" (after the table or previous section, before the trailer)");
+            }
+            Error::SectionMisaligned { tag, offset } => {
+                m.text("section ")
+                    .tag(tag)
+                    .text(": offset ")
+                    .u64(offset)
+                    .text(" is not a multiple of ")
+                    .u64(consts::SECTION_ALIGN);
+            }
             Error::LimitExceeded { what, value, limit } => {
-                write!(f, "{what} {value} exceeds the limit {limit}")
+                m.text(what.text())
+                    .text(" ")
+                    .u64(value)
+                    .text(" exceeds the limit ")
+                    .u64(limit);
             }
             Error::Invalid {
                 what,
                 offset,
                 value,
-            } => write!(f, "{what}: found {value} at byte {offset}"),
+            } => {
+                m.text(what.text())
+                    .text(": found ")
+                    .u64(value)
+                    .text(" at byte ")
+                    .u64(offset);
+            }
             Error::InvalidFloat { what, offset, bits } => {
-                write!(
-                    f,
-                    "{what}: found {} at byte {offset}",
-                    super::float_text::FloatText(f32::from_bits(bits))
-                )
+                m.text(what.text())
+                    .text(": found ")
+                    .f32(f32::from_bits(bits))
+                    .text(" at byte ")
+                    .u64(offset);
             }
             Error::ViewCountMismatch {
                 level,
                 found,
                 expected,
-            } => write!(
-                f,
-                "section CAMR: view_count {found} but level {level} has {expected} views"
-            ),
+            } => {
+                m.text("section CAMR: view_count ")
+                    .u64(found.into())
+                    .text(" but level ")
+                    .u64(level.into())
+                    .text(" has ")
+                    .u64(expected.into())
+                    .text(" views");
+            }
             Error::PatchRange {
                 patch,
                 first,
                 count,
                 expected_first,
-            } => write!(
-                f,
-                "section PTCH: patch {patch} covers triangles {first}+{count}, \
-                 expected a non-empty range starting at {expected_first}"
-            ),
-            Error::TriangleCountMismatch { header, sum } => write!(
-                f,
-                "section PTCH: triangle_count {header} but the patches cover {sum}"
-            ),
-            Error::UnsupportedEncoding { found } => write!(
-                f,
-                "section VISB: unsupported encoding {found} (encoding {} is read from version 1, \
-                 {} from version 2, {} from version 3)",
-                consts::ENCODING_RAW,
-                consts::ENCODING_HIERARCHICAL,
-                consts::ENCODING_TREE,
-            ),
-            Error::PaddingBits { view, offset } => write!(
-                f,
-                "section VISB: row of view {view} sets bits past the last patch (byte {offset})"
-            ),
+            } => {
+                m.text("section PTCH: patch ")
+                    .u64(patch.into())
+                    .text(" covers triangles ")
+                    .u64(first.into())
+                    .text("+")
+                    .u64(count.into())
+                    .text(", expected a non-empty range starting at ")
+                    .u64(expected_first);
+            }
+            Error::TriangleCountMismatch { header, sum } => {
+                m.text("section PTCH: triangle_count ")
+                    .u64(header)
+                    .text(" but the patches cover ")
+                    .u64(sum);
+            }
+            Error::UnsupportedEncoding { found } => {
+                m.text("section VISB: unsupported encoding ")
+                    .u64(found.into())
+                    .text(" (encoding ")
+                    .u64(consts::ENCODING_RAW.into())
+                    .text(" is read from version 1, ")
+                    .u64(consts::ENCODING_HIERARCHICAL.into())
+                    .text(" from version 2, ")
+                    .u64(consts::ENCODING_TREE.into())
+                    .text(" from version 3)");
+            }
+            Error::PaddingBits { view, offset } => {
+                m.text("section VISB: row of view ")
+                    .u64(view.into())
+                    .text(" sets bits past the last patch (byte ")
+                    .u64(offset)
+                    .text(")");
+            }
         }
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.message().as_str())
     }
 }
 
 #[cfg(feature = "std")]
 impl std::error::Error for Error {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    extern crate std;
+    use std::format;
+
+    /// The longest messages fit a `Message` whole, and read as `core::fmt` would write them.
+    #[test]
+    fn the_longest_messages_fit() {
+        let big = u64::MAX;
+        let bounds = Error::SectionOutOfBounds {
+            tag: [0xFF, 0, b'A', 2],
+            offset: big,
+            length: big,
+            start: big,
+            end: big,
+        };
+        let expected = format!(
+            "section 0xFF004102: bytes {big}..{big}+{big} not inside {big}..{big} \
+             (after the table or previous section, before the trailer)"
+        );
+        assert_eq!(bounds.message().as_str(), expected);
+        for bits in [1, 0x8000_0001, 0xFF7F_FFFF, 0x0080_0001, 0x3E4C_CCCD] {
+            let what = Rule::StepCenterRange;
+            let e = Error::InvalidFloat {
+                what,
+                offset: big,
+                bits,
+            };
+            let v = f32::from_bits(bits);
+            assert_eq!(
+                e.message().as_str(),
+                format!("{}: found {v} at byte {big}", what.text())
+            );
+        }
+        let invalid = Error::Invalid {
+            what: Rule::RecordLength,
+            offset: big,
+            value: big,
+        };
+        assert_eq!(
+            invalid.message().as_str(),
+            format!("{}: found {big} at byte {big}", Rule::RecordLength.text())
+        );
+        for e in [bounds, invalid] {
+            assert!(e.message().as_bytes().len() < Message::CAPACITY);
+        }
+    }
+}

@@ -2,8 +2,8 @@
 //! each read reports where the file ended or which rule the value broke (spec § Header …
 //! § VISB), so every error names a field and its byte offset. Also where a section lies.
 
-use super::Error;
 use super::stream::{FromData, Stream};
+use super::{Error, Rule};
 
 /// Where a section lies.
 #[derive(Clone, Copy)]
@@ -29,7 +29,7 @@ pub(crate) fn read<T: FromData>(s: &mut Stream<'_>, have: usize) -> Result<T, Er
 }
 
 /// Reads a `u32` that must be zero (reserved fields).
-pub(crate) fn reserved(s: &mut Stream<'_>, have: usize, what: &'static str) -> Result<(), Error> {
+pub(crate) fn reserved(s: &mut Stream<'_>, have: usize, what: Rule) -> Result<(), Error> {
     let offset = s.offset() as u64;
     match read::<u32>(s, have)? {
         0 => Ok(()),
@@ -45,7 +45,7 @@ pub(crate) fn reserved(s: &mut Stream<'_>, have: usize, what: &'static str) -> R
 pub(crate) fn float(
     s: &mut Stream<'_>,
     have: usize,
-    what: &'static str,
+    what: Rule,
     ok: impl Fn(f32) -> bool,
 ) -> Result<f32, Error> {
     let offset = s.offset() as u64;
@@ -62,14 +62,10 @@ pub(crate) fn float(
 }
 
 /// Reads three finite `f32`s.
-pub(crate) fn finite3(
-    s: &mut Stream<'_>,
-    have: usize,
-    what: &'static str,
-) -> Result<[f32; 3], Error> {
-    Ok([
-        float(s, have, what, |_| true)?,
-        float(s, have, what, |_| true)?,
-        float(s, have, what, |_| true)?,
-    ])
+pub(crate) fn finite3(s: &mut Stream<'_>, have: usize, what: Rule) -> Result<[f32; 3], Error> {
+    let mut out = [0.0; 3];
+    for v in &mut out {
+        *v = float(s, have, what, |_| true)?;
+    }
+    Ok(out)
 }

@@ -1,102 +1,66 @@
 //! Writes an `f32` the way `Display` does, shortest round-trip digits without an exponent, in
-//! a few hundred bytes of code instead of `core`'s float formatting (about 13 KB of
-//! WebAssembly, most of the reader's error path).
+//! a few hundred bytes of code instead of `core`'s float formatting.
 //!
 //! The reader's error messages name the offending float (`found inf at byte 172`), and the
 //! conformance vectors hold those messages, so every build must print a float exactly as
-//! `Display` does. The digits are the fewest that read back to the same `f32`, the closest
-//! to it among those (a tie goes up): for 1 to 9 significant digits, the multiples of the digit unit just
-//! below and just above the value are tested against the interval of reals that round to it
-//! (half the gap to each neighbour; the lower gap is half as wide at a power of two; the
-//! bounds are inside when the significand is even). Exact, in fixed-size integers of 512
-//! bits scaled by `2^151 · 10^t`: no allocation. Tested against `Display` on every exponent
-//! and on random bit patterns.
+//! `Display` does: the fewest digits that read back to the same `f32`, the closest to it
+//! among those, a tie going up. The digits come from Steele & White's free-format algorithm
+//! as Burger & Dybvig state it ("Printing floating-point numbers quickly and accurately",
+//! 1996): the value and the half gaps to its neighbours as exact fractions `r / s`,
+//! `m⁺ / s`, `m⁻ / s` (the lower gap half as wide at a power of two; the bounds belong to the
+//! interval when the significand is even), scaled by a power of ten, then one digit per step
+//! until one of the two candidates at that digit is inside the interval. Exact, in
+//! fixed-size integers of 256 bits (an `f32` needs at most 180): no allocation. Tested
+//! against `Display` on every exponent and on random bit patterns.
 
-use core::fmt;
+use super::message::Message;
 
-/// Limbs of [`Big`]: 512 bits, room for a significand below `2^24` times `2^(104 + 151)` or
-/// times `10^54 · 2^2` (the largest and smallest scaled values).
-const LIMBS: usize = 16;
+/// Limbs of [`Big`]: 256 bits. The largest value is `r · 10 < 2^180` (the smallest
+/// subnormal, scaled by `2^151 · 10^45`).
+const LIMBS: usize = 8;
 
 /// An unsigned integer of `LIMBS` 32-bit limbs, least significant first.
 #[derive(Clone, Copy, PartialEq, Eq)]
 struct Big([u32; LIMBS]);
 
 impl Big {
-    fn from_u64(x: u64) -> Big {
+    #[inline(never)]
+    fn from_u32(x: u32) -> Big {
         let mut b = [0; LIMBS];
-        b[0] = x as u32;
-        b[1] = (x >> 32) as u32;
+        b[0] = x;
         Big(b)
     }
 
     /// `self · k`.
-    fn mul_small(mut self, k: u32) -> Big {
+    #[inline(never)]
+    fn mul_small(&mut self, k: u32) {
         let mut carry = 0u64;
         for limb in &mut self.0 {
             let t = u64::from(*limb) * u64::from(k) + carry;
             *limb = t as u32;
             carry = t >> 32;
         }
-        self
     }
 
-    /// `self · 10^p`.
-    fn mul_pow10(mut self, p: u32) -> Big {
-        for _ in 0..p {
-            self = self.mul_small(10);
+    /// `self · 2^n`.
+    #[inline(never)]
+    fn shl(mut self, n: u32) -> Big {
+        for _ in 0..n {
+            self.mul_small(2);
         }
         self
     }
 
-    /// `self · 2^s`.
-    fn shl(self, s: u32) -> Big {
-        let (words, bits) = ((s / 32) as usize, s % 32);
-        let mut out = [0; LIMBS];
-        for i in (words..LIMBS).rev() {
-            let lo = self.0[i - words];
-            let below = if bits > 0 && i > words {
-                self.0[i - words - 1] >> (32 - bits)
-            } else {
-                0
-            };
-            out[i] = (lo << bits) | below;
+    /// `self · 10^n`.
+    #[inline(never)]
+    fn mul_pow10(&mut self, n: u32) {
+        for _ in 0..n {
+            self.mul_small(10);
         }
-        Big(out)
     }
 
-    /// `floor(self / 2^s)`.
-    fn shr(self, s: u32) -> Big {
-        let (words, bits) = ((s / 32) as usize, s % 32);
-        let mut out = [0; LIMBS];
-        for (i, slot) in out.iter_mut().enumerate().take(LIMBS - words) {
-            let lo = self.0[i + words];
-            let above = if bits > 0 && i + words + 1 < LIMBS {
-                self.0[i + words + 1] << (32 - bits)
-            } else {
-                0
-            };
-            *slot = (lo >> bits) | above;
-        }
-        Big(out)
-    }
-
-    /// `floor(self / 10)`.
-    fn div10(mut self) -> Big {
-        let mut rem = 0u64;
-        for limb in self.0.iter_mut().rev() {
-            let t = (rem << 32) | u64::from(*limb);
-            *limb = (t / 10) as u32;
-            rem = t % 10;
-        }
-        self
-    }
-
-    /// The low 64 bits.
-    fn low64(&self) -> u64 {
-        u64::from(self.0[0]) | u64::from(self.0[1]) << 32
-    }
-
+    /// `self + other`.
+    #[inline(never)]
     fn add(mut self, other: &Big) -> Big {
         let mut carry = 0u64;
         for (a, b) in self.0.iter_mut().zip(other.0) {
@@ -108,31 +72,33 @@ impl Big {
     }
 
     /// `self − other`, which must not be negative.
-    fn sub(mut self, other: &Big) -> Big {
-        let mut borrow = 0i64;
+    #[inline(never)]
+    fn sub(&mut self, other: &Big) {
+        let mut borrow = 0u64;
         for (a, b) in self.0.iter_mut().zip(other.0) {
-            let t = i64::from(*a) - i64::from(b) - borrow;
+            let t = u64::from(*a)
+                .wrapping_sub(u64::from(b))
+                .wrapping_sub(borrow);
             *a = t as u32;
-            borrow = i64::from(t < 0);
+            borrow = t >> 63;
         }
-        self
     }
-}
 
-impl PartialOrd for Big {
-    fn partial_cmp(&self, other: &Big) -> Option<core::cmp::Ordering> {
-        Some(self.cmp(other))
-    }
-}
-
-impl Ord for Big {
-    fn cmp(&self, other: &Big) -> core::cmp::Ordering {
-        self.0.iter().rev().cmp(other.0.iter().rev())
+    /// `self ≥ other` (or `>` when `!or_equal`).
+    #[inline(never)]
+    fn above(&self, other: &Big, or_equal: bool) -> bool {
+        for (a, b) in self.0.iter().zip(other.0).rev() {
+            if *a != b {
+                return *a > b;
+            }
+        }
+        or_equal
     }
 }
 
 /// The shortest digits of a finite `v > 0`: `(d, j)` with `v` reading back from `d · 10^j`,
 /// `d` without trailing zeros.
+#[inline(never)]
 fn shortest(v: f32) -> (u64, i32) {
     let bits = v.to_bits();
     let (biased, fraction) = ((bits >> 23) & 0xFF, bits & 0x7F_FFFF);
@@ -141,121 +107,114 @@ fn shortest(v: f32) -> (u64, i32) {
     } else {
         (fraction | 1 << 23, biased as i32 - 150)
     };
+    // Round-to-nearest-even reads the interval's bounds back to `v` when `m` is even.
     let even = m % 2 == 0;
-    // Scaled by 2^151, the value and the half gaps to the neighbours are integers.
-    let value = |t: u32| {
-        Big::from_u64(u64::from(m))
-            .shl((e + 151) as u32)
-            .mul_pow10(t)
-    };
-    let up = |t: u32| Big::from_u64(1).shl((e + 150) as u32).mul_pow10(t);
+    // At a power of two (not the smallest normal) the gap below is half the gap above.
     let lower_closer = fraction == 0 && biased > 1;
-    let down = |t: u32| {
-        let shift = if lower_closer { e + 149 } else { e + 150 };
-        Big::from_u64(1).shl(shift as u32).mul_pow10(t)
+    let extra = u32::from(lower_closer);
+    // v = r / s, the half gaps m⁺ / s and m⁻ / s.
+    let (mut r, mut s, mut up, mut down) = if e >= 0 {
+        let e = e as u32;
+        (
+            Big::from_u32(m).shl(e + 1 + extra),
+            Big::from_u32(2 << extra),
+            Big::from_u32(1).shl(e + extra),
+            Big::from_u32(1).shl(e),
+        )
+    } else {
+        let e = (-e) as u32;
+        (
+            Big::from_u32(m << (1 + extra)),
+            Big::from_u32(1).shl(e + 1 + extra),
+            Big::from_u32(1 << extra),
+            Big::from_u32(1),
+        )
     };
-    // 10^j scaled by 2^151 and 10^t (j + t ≥ 0).
-    let unit = |j: i32, t: u32| Big::from_u64(1).mul_pow10((j + t as i32) as u32).shl(151);
-    // The decimal exponent k: 10^k ≤ v < 10^(k+1), from an estimate made exact.
-    // floor(log10(2^e2)) for v in [2^e2, 2^(e2+1)): 78913 / 2^18 is log10(2) to 6 digits,
-    // enough for |e2| ≤ 1650.
+    // k with 10^(k−1) ≤ v + m⁺/s < 10^k (≤ at the top when the bound is in the interval):
+    // floor(log10(2^e2)) + 1 for v in [2^e2, 2^(e2+1)) is k or k − 1. 78913 / 2^18 is
+    // log10(2) to 6 digits, enough for |e2| ≤ 1650.
     let e2 = e + 31 - m.leading_zeros() as i32;
-    let mut k = (e2 * 78_913) >> 18;
-    let below = |k: i32| {
-        let t = (-k).max(0) as u32;
-        value(t) < unit(k, t)
-    };
-    while below(k) {
-        k -= 1;
+    let mut k = ((e2 * 78_913) >> 18) + 1;
+    if k >= 0 {
+        s.mul_pow10(k as u32);
+    } else {
+        for x in [&mut r, &mut up, &mut down] {
+            x.mul_pow10((-k) as u32);
+        }
     }
-    while !below(k + 1) {
+    if r.add(&up).above(&s, even) {
+        s.mul_small(10);
         k += 1;
     }
-    for n in 1..=9 {
-        let j = k - n + 1;
-        let t = (-j).max(0) as u32;
-        let (x, u) = (value(t), unit(j, t));
-        let mut q = x.shr(151);
-        for _ in 0..(j + t as i32) {
-            q = q.div10();
+    // v = 0.d₁d₂… · 10^k: one digit a step, until d or d + 1 is inside the interval.
+    let mut d = 0u64;
+    let mut n = 0;
+    loop {
+        r.mul_small(10);
+        up.mul_small(10);
+        down.mul_small(10);
+        let mut digit = 0u64;
+        while r.above(&s, true) {
+            r.sub(&s);
+            digit += 1;
         }
-        let q = q.low64();
-        let lo = Big::from_u64(q).mul_pow10((j + t as i32) as u32).shl(151);
-        let hi = lo.add(&u);
-        let (d_lo, d_hi) = (x.sub(&lo), hi.sub(&x));
-        let (h_down, h_up) = (down(t), up(t));
-        let lo_ok = d_lo < h_down || (even && d_lo == h_down);
-        let hi_ok = d_hi < h_up || (even && d_hi == h_up);
-        let pick = match (lo_ok, hi_ok) {
-            // A tie goes up, as `core`'s formatting does.
-            (true, true) if d_lo < d_hi => Some(q),
-            (true, true) | (false, true) => Some(q + 1),
-            (true, false) => Some(q),
-            (false, false) => None,
+        n += 1;
+        let low_ok = down.above(&r, even);
+        let high_ok = r.add(&up).above(&s, even);
+        // Nine digits always read back; the bound only keeps the loop visibly finite.
+        if !(low_ok || high_ok) && n < 12 {
+            d = d * 10 + digit;
+            continue;
+        }
+        // Both inside: the closer one, a tie going up, as `core`'s formatting does.
+        let round_up = match (low_ok, high_ok) {
+            (true, true) => r.add(&r).above(&s, true),
+            (low, _) => !low,
         };
-        if let Some(mut d) = pick {
-            let mut j = j;
-            while d % 10 == 0 && d != 0 {
-                d /= 10;
-                j += 1;
-            }
-            return (d, j);
-        }
+        d = d * 10 + digit + u64::from(round_up);
+        break;
     }
-    // Nine digits always read back (unreachable for a finite f32).
-    (0, 0)
+    let mut j = k - n;
+    while d.is_multiple_of(10) && d != 0 {
+        d /= 10;
+        j += 1;
+    }
+    (d, j)
 }
 
-/// ASCII digits as text.
-fn text(digits: &[u8]) -> &str {
-    core::str::from_utf8(digits).unwrap_or("")
-}
-
-/// `v` as `Display` writes it: `NaN`, `inf`, `-inf`, `0`, `-0`, or the shortest round-trip
+/// Writes `v` as `Display` does: `NaN`, `inf`, `-inf`, `0`, `-0`, or the shortest round-trip
 /// digits in positional notation.
-pub(crate) struct FloatText(pub f32);
-
-impl fmt::Display for FloatText {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let v = self.0;
-        if v.is_nan() {
-            return f.write_str("NaN");
-        }
-        if v.is_sign_negative() {
-            f.write_str("-")?;
-        }
-        let v = v.abs();
-        if v.is_infinite() {
-            return f.write_str("inf");
-        }
-        if v == 0.0 {
-            return f.write_str("0");
-        }
-        let (d, j) = shortest(v);
-        let mut digits = [0u8; 20];
-        let mut len = 0;
-        let mut rest = d;
-        while rest > 0 {
-            digits[len] = b'0' + (rest % 10) as u8;
-            rest /= 10;
-            len += 1;
-        }
-        digits[..len].reverse();
-        let digits = &digits[..len];
-        let zeros = |f: &mut fmt::Formatter<'_>, n: i32| (0..n).try_for_each(|_| f.write_str("0"));
-        if j >= 0 {
-            f.write_str(text(digits))?;
-            zeros(f, j)
-        } else if len as i32 + j > 0 {
-            let point = (len as i32 + j) as usize;
-            f.write_str(text(&digits[..point]))?;
-            f.write_str(".")?;
-            f.write_str(text(&digits[point..]))
-        } else {
-            f.write_str("0.")?;
-            zeros(f, -j - len as i32)?;
-            f.write_str(text(digits))
-        }
+pub(crate) fn write(v: f32, out: &mut Message) {
+    if v.is_nan() {
+        out.text("NaN");
+        return;
+    }
+    if v.is_sign_negative() {
+        out.text("-");
+    }
+    let v = v.abs();
+    if v.is_infinite() {
+        out.text("inf");
+        return;
+    }
+    if v == 0.0 {
+        out.text("0");
+        return;
+    }
+    let (d, j) = shortest(v);
+    let mut buf = [0u8; 20];
+    let start = super::message::decimal(d, &mut buf);
+    let digits = &buf[start..];
+    let len = digits.len() as i32;
+    if j >= 0 {
+        out.digits(digits).zeros(j);
+    } else if len + j > 0 {
+        let point = (len + j) as usize;
+        out.digits(&digits[..point])
+            .text(".")
+            .digits(&digits[point..]);
+    } else {
+        out.text("0.").zeros(-j - len).digits(digits);
     }
 }
 
@@ -266,12 +225,9 @@ mod tests {
     use std::format;
 
     fn same(v: f32) {
-        assert_eq!(
-            format!("{}", FloatText(v)),
-            format!("{v}"),
-            "bits {:#010x}",
-            v.to_bits()
-        );
+        let mut m = Message::new();
+        write(v, &mut m);
+        assert_eq!(m.as_str(), format!("{v}"), "bits {:#010x}", v.to_bits());
     }
 
     #[test]

@@ -23,9 +23,11 @@ mod coder;
 pub mod consts;
 pub mod crc32c;
 mod error;
+mod exact;
 mod expanded;
 mod fields;
 mod float_text;
+mod message;
 pub(crate) mod model;
 mod parse;
 mod ptch;
@@ -39,8 +41,9 @@ mod tests;
 
 #[cfg(feature = "bake")]
 pub(crate) use coder::context;
-pub use error::Error;
+pub use error::{Error, Rule};
 pub use expanded::Expanded;
+pub use message::Message;
 pub use ptch::{Quantisation, Record, unit_axis};
 pub use query::{Patches, TriangleRanges, Visible, ranges, ranges_of_bits};
 pub use streaming::Streaming;
@@ -223,13 +226,7 @@ impl<'a> Pvis<'a> {
         match self.visb {
             Visb::Raw { rows, row_bytes } => {
                 for &view in views {
-                    let start = view as usize * row_bytes;
-                    let row = rows.get(start..start + row_bytes).unwrap_or(&[]);
-                    for (word, chunk) in out.iter_mut().zip(row.chunks(8)) {
-                        let mut le = [0u8; 8];
-                        le[..chunk.len()].copy_from_slice(chunk);
-                        *word |= u64::from_le_bytes(le);
-                    }
+                    or_raw_row(rows, row_bytes, view, out);
                 }
             }
             Visb::Hierarchical { .. } => {
@@ -248,9 +245,11 @@ impl<'a> Pvis<'a> {
         cache: &mut model::TreeCache<'_>,
     ) {
         match self.visb {
-            Visb::Raw { .. } => {
+            // Not through `or_rows`: a build that only streams (the WebAssembly reader) then
+            // carries no lock-step decoder.
+            Visb::Raw { rows, row_bytes } => {
                 out.fill(0);
-                self.or_rows(&[view], out);
+                or_raw_row(rows, row_bytes, view, out);
             }
             Visb::Hierarchical { .. } => {
                 self.visb
@@ -352,5 +351,16 @@ impl<'a> Pvis<'a> {
     /// Merged triangle ranges of the patches in `visible`; see [`ranges`].
     pub fn ranges<'v>(&'v self, visible: &'v Visible<'_>) -> TriangleRanges<'v> {
         ranges(self, visible)
+    }
+}
+
+/// ORs the stored row of `view` (encoding 0: `row_bytes` bytes a view in `rows`) into `out`.
+fn or_raw_row(rows: &[u8], row_bytes: usize, view: u32, out: &mut [u64]) {
+    let start = view as usize * row_bytes;
+    let row = rows.get(start..start + row_bytes).unwrap_or(&[]);
+    for (word, chunk) in out.iter_mut().zip(row.chunks(8)) {
+        let mut le = [0u8; 8];
+        le[..chunk.len()].copy_from_slice(chunk);
+        *word |= u64::from_le_bytes(le);
     }
 }

@@ -122,10 +122,37 @@ pub fn table_context(key: u32) -> usize {
 /// Feature [`feature::FRONT`] of a patch with cone axis `q` seen from a view at lattice point
 /// `v` (§ Sampling sphere, Lattice): `(q.x·v.x + q.y·v.y) + q.z·v.z > 0` in binary64, the
 /// `f32` components widened. Each product is exact (24 + 8 significant bits), so only the two
-/// additions round, identically everywhere, fused multiply-add or not.
+/// additions round, identically everywhere, fused multiply-add or not. The definition, as the
+/// writer evaluates it; the reader reaches the same bit through [`Axis::front`] without
+/// binary64 arithmetic.
 #[inline(always)]
+#[cfg_attr(not(feature = "bake"), allow(dead_code))] // the writer's, and the tests'
 pub fn facing(q: [f32; 3], v: [f64; 3]) -> u32 {
     u32::from((f64::from(q[0]) * v[0] + f64::from(q[1]) * v[1]) + f64::from(q[2]) * v[2] > 0.0)
+}
+
+/// A patch's cone axis as the `front` feature reads it (§ Features): the `f32` axis of a
+/// full-layout record, or the integer axis of a compact one.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Axis {
+    /// Versions 1–3.
+    Float([f32; 3]),
+    /// Version 4: `|x| + |y| + |z| = 2^(axis_bits − 1) − 1 < 2^15`.
+    Int([i32; 3]),
+}
+
+impl Axis {
+    /// [`facing`] of this axis from lattice point `v` (`|v.x| + |v.y| + |v.z| ≤ 2^7`). An
+    /// integer axis needs no rounding at all: every product and sum is an integer below
+    /// `2^22`, exact in binary64 as in `i32`. A float axis takes the binary64 steps in
+    /// integers (`exact.rs`), so targets without binary64 hardware need no soft-float code.
+    #[inline(always)]
+    pub fn front(self, v: [i32; 3]) -> u32 {
+        match self {
+            Axis::Int(a) => u32::from(a[0] * v[0] + a[1] * v[1] + a[2] * v[2] > 0),
+            Axis::Float(a) => u32::from(super::exact::dot_positive(a, v)),
+        }
+    }
 }
 
 /// Node `i` of a tree (little-endian `u16`s), or a leaf of probability ½ past the end.
@@ -203,7 +230,7 @@ impl<'c> TreeCache<'c> {
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum ViewModel<'a> {
     /// Encoding 1: the level's 32 probabilities.
-    Table([u32; CONTEXTS]),
+    Table(&'a [u8; 2 * CONTEXTS]),
     /// Encoding 2.
     Tree {
         /// The tree's nodes.
@@ -213,7 +240,7 @@ pub(crate) enum ViewModel<'a> {
         /// The features the tree tests (a mask of key bits).
         used: u32,
         /// The view's lattice point.
-        lattice: [f64; 3],
+        lattice: [i32; 3],
         /// The view's level.
         level: u32,
     },
@@ -223,10 +250,10 @@ impl ViewModel<'_> {
     /// The facing bit of a patch with cone axis `axis` (as [`PatchTable::facing_axis`] reads
     /// it) for this view; 0 for encoding 1, which does not use it.
     #[inline(always)]
-    pub fn front(&self, axis: [f32; 3]) -> u32 {
+    pub fn front(&self, axis: Axis) -> u32 {
         match *self {
             ViewModel::Table(_) => 0,
-            ViewModel::Tree { lattice, .. } => facing(axis, lattice),
+            ViewModel::Tree { lattice, .. } => axis.front(lattice),
         }
     }
 
@@ -243,7 +270,10 @@ impl ViewModel<'_> {
         cache: &mut TreeCache<'_>,
     ) -> u32 {
         match *self {
-            ViewModel::Table(probs) => probs[table_context(key(wa, wb, state, 0, 0))],
+            ViewModel::Table(probs) => {
+                let c = table_context(key(wa, wb, state, 0, 0)) & (CONTEXTS - 1);
+                u32::from(u16::from_le_bytes([probs[2 * c], probs[2 * c + 1]]))
+            }
             ViewModel::Tree {
                 nodes, level, used, ..
             } => cache.p0(nodes, key(wa, wb, state, front, level) & used),
@@ -259,7 +289,7 @@ impl ViewModel<'_> {
             ViewModel::Tree {
                 patches, lattice, ..
             } => (0..n).fold(0, |bits, i| {
-                bits | u64::from(facing(patches.facing_axis(first + i), lattice)) << i
+                bits | u64::from(patches.facing_axis(first + i).front(lattice)) << i
             }),
         }
     }
@@ -307,6 +337,37 @@ mod tests {
         // binary32 arithmetic would round away.
         assert_eq!(facing([0.1, -0.3, 0.0], [3.0, 1.0, 0.0]), 0);
         assert_eq!(facing([-0.1, 0.3, 0.0], [3.0, 1.0, 0.0]), 1);
+        for (q, v) in [
+            ([1.0, 0.0, 0.0], [1, 0, 0]),
+            ([1.0, 0.0, 0.0], [-1, 0, 0]),
+            ([1.0, 0.0, 0.0], [0, 1, 0]),
+            ([0.0; 3], [1, 0, 0]),
+            ([0.1, -0.3, 0.0], [3, 1, 0]),
+            ([-0.1, 0.3, 0.0], [3, 1, 0]),
+        ] {
+            assert_eq!(Axis::Float(q).front(v), facing(q, v.map(f64::from)));
+        }
+    }
+
+    /// The integer axes of a compact table give `facing`'s bit in `i32`, for every axis of
+    /// the widest table against lattice points of every level.
+    #[test]
+    fn integer_axes_face_as_in_binary64() {
+        let m = (1 << 15) - 1;
+        let mut rng = crate::test_kit::rng::Rng::new(15);
+        for _ in 0..200_000 {
+            let mut r = |n: i32| (rng.next_u64() % (2 * n as u64 + 1)) as i32 - n;
+            let (x, y) = (r(m), r(m));
+            let z = (m - x.abs() - y.abs()).max(-m);
+            let a = [x, y, z];
+            let (vx, vy) = (r(128), r(64));
+            let v = [vx, vy, 128 - vx.abs() - vy.abs()];
+            assert_eq!(
+                Axis::Int(a).front(v),
+                facing(a.map(|c| c as f32), v.map(f64::from)),
+                "{a:?} · {v:?}"
+            );
+        }
     }
 
     #[test]

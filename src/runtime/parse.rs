@@ -14,7 +14,7 @@ use super::model::{FEATURES, LEAF, MAX_TREE_DEPTH, MAX_TREE_NODES};
 use super::ptch::{self, PatchTable};
 use super::stream::Stream;
 use super::visb::{Model, Visb, read_varint};
-use super::{Error, Pvis, Sampling};
+use super::{Error, Pvis, Rule, Sampling};
 
 pub(super) fn parse(data: &[u8]) -> Result<Pvis<'_>, Error> {
     let have = data.len();
@@ -61,19 +61,19 @@ pub(super) fn parse(data: &[u8]) -> Result<Pvis<'_>, Error> {
     let section_count = read::<u32>(&mut s, have)?;
     if section_count == 0 {
         return Err(Error::Invalid {
-            what: "header section_count must be at least 1",
+            what: Rule::HeaderSectionCount,
             offset: count_offset,
             value: 0,
         });
     }
     if section_count > MAX_SECTIONS {
         return Err(Error::LimitExceeded {
-            what: "section_count",
+            what: Rule::SectionCount,
             value: section_count as u64,
             limit: MAX_SECTIONS as u64,
         });
     }
-    reserved(&mut s, have, "header reserved field must be 0")?;
+    reserved(&mut s, have, Rule::HeaderReserved)?;
 
     // § Section table.
     let table_end = HEADER_LEN + SECTION_ENTRY_LEN * section_count as u64;
@@ -87,7 +87,7 @@ pub(super) fn parse(data: &[u8]) -> Result<Pvis<'_>, Error> {
     let mut previous_end = table_end;
     for _ in 0..section_count {
         let tag = read::<[u8; 4]>(&mut s, have)?;
-        reserved(&mut s, have, "section table reserved field must be 0")?;
+        reserved(&mut s, have, Rule::TableReserved)?;
         let offset = read::<u64>(&mut s, have)?;
         let length = read::<u64>(&mut s, have)?;
         if offset % SECTION_ALIGN != 0 {
@@ -146,7 +146,7 @@ fn zero_gap(data: &[u8], start: u64, end: u64) -> Result<(), Error> {
     match gap.iter().position(|&b| b != 0) {
         None => Ok(()),
         Some(i) => Err(Error::Invalid {
-            what: "bytes between sections must be 0",
+            what: Rule::Gap,
             offset: start + i as u64,
             value: gap[i] as u64,
         }),
@@ -167,7 +167,7 @@ fn parse_camr(data: &[u8], section: Section) -> Result<Sampling, Error> {
     let level = read::<u32>(&mut s, have)?;
     if level > MAX_LEVEL {
         return Err(Error::LimitExceeded {
-            what: "sphere level",
+            what: Rule::SphereLevel,
             value: level as u64,
             limit: MAX_LEVEL as u64,
         });
@@ -181,24 +181,15 @@ fn parse_camr(data: &[u8], section: Section) -> Result<Sampling, Error> {
             expected,
         });
     }
-    let center = finite3(&mut s, have, "CAMR center must be finite")?;
-    let radius = float(&mut s, have, "CAMR radius must be finite and > 0", |r| {
-        r > 0.0
-    })?;
-    let distance = float(
-        &mut s,
-        have,
-        "CAMR distance must be finite and >= radius",
-        |d| d >= radius,
-    )?;
-    let fov_deg = float(&mut s, have, "CAMR fov_deg must be in (0, 180)", |f| {
-        f > 0.0 && f < 180.0
-    })?;
+    let center = finite3(&mut s, have, Rule::CamrCenter)?;
+    let radius = float(&mut s, have, Rule::CamrRadius, |r| r > 0.0)?;
+    let distance = float(&mut s, have, Rule::CamrDistance, |d| d >= radius)?;
+    let fov_deg = float(&mut s, have, Rule::CamrFov, |f| f > 0.0 && f < 180.0)?;
     let resolution_offset = s.offset() as u64;
     let resolution = read::<u32>(&mut s, have)?;
     if resolution == 0 {
         return Err(Error::Invalid {
-            what: "CAMR resolution must be at least 1",
+            what: Rule::CamrResolution,
             offset: resolution_offset,
             value: 0,
         });
@@ -207,12 +198,12 @@ fn parse_camr(data: &[u8], section: Section) -> Result<Sampling, Error> {
     let convention = read::<u32>(&mut s, have)?;
     if convention != SPHERE_CONVENTION {
         return Err(Error::Invalid {
-            what: "CAMR sphere_convention must be 1",
+            what: Rule::CamrConvention,
             offset: convention_offset,
             value: convention as u64,
         });
     }
-    reserved(&mut s, have, "CAMR reserved field must be 0")?;
+    reserved(&mut s, have, Rule::CamrReserved)?;
     Ok(Sampling {
         level,
         views,
@@ -239,7 +230,7 @@ fn parse_visb<'a>(
     let have = data.len();
     let mut s = Stream::new_at(data, at(section.offset));
     let encoding = read::<u32>(&mut s, have)?;
-    reserved(&mut s, have, "VISB reserved field must be 0")?;
+    reserved(&mut s, have, Rule::VisbReserved)?;
     match encoding {
         ENCODING_RAW => parse_raw(data, section, sampling.views, patch_count),
         ENCODING_HIERARCHICAL if version >= 2 => {
@@ -315,7 +306,7 @@ fn parse_table(
         let p0 = u16::from_le_bytes([pair[0], pair[1]]);
         if p0 == 0 || u32::from(p0) >= 1 << PROB_BITS {
             return Err(Error::Invalid {
-                what: "VISB probability must be in 1..4096",
+                what: Rule::VisbProbability,
                 offset: probs_start + 2 * i as u64,
                 value: p0 as u64,
             });
@@ -343,7 +334,7 @@ fn parse_tree<'a>(
     let count = read::<u32>(&mut Stream::new_at(data, at(count_at)), data.len())?;
     if count == 0 || count > MAX_TREE_NODES {
         return Err(Error::Invalid {
-            what: "VISB tree node count must be in 1..=1024",
+            what: Rule::TreeNodeCount,
             offset: count_at,
             value: count as u64,
         });
@@ -369,7 +360,7 @@ fn parse_tree<'a>(
             let p0 = node & !LEAF;
             if p0 == 0 || u32::from(p0) >= 1 << PROB_BITS {
                 return Err(Error::Invalid {
-                    what: "VISB tree leaf must hold a probability in 1..4096",
+                    what: Rule::TreeLeaf,
                     offset,
                     value: node as u64,
                 });
@@ -379,7 +370,7 @@ fn parse_tree<'a>(
         let feature = u32::from(node >> 10);
         if feature >= FEATURES {
             return Err(Error::Invalid {
-                what: "VISB tree node must test a feature below 23",
+                what: Rule::TreeFeature,
                 offset,
                 value: node as u64,
             });
@@ -388,7 +379,7 @@ fn parse_tree<'a>(
         let child = usize::from(node & 0x3FF);
         if child <= i || child + 1 >= count as usize {
             return Err(Error::Invalid {
-                what: "VISB tree node's children must follow it inside the tree",
+                what: Rule::TreeChildren,
                 offset,
                 value: node as u64,
             });
@@ -396,7 +387,7 @@ fn parse_tree<'a>(
         let d = depth[i] + 1;
         if u32::from(d) > MAX_TREE_DEPTH {
             return Err(Error::LimitExceeded {
-                what: "VISB tree depth",
+                what: Rule::TreeDepth,
                 value: d as u64,
                 limit: MAX_TREE_DEPTH as u64,
             });
@@ -448,27 +439,27 @@ fn parse_records<'a>(
             let stored = read::<u32>(&mut Stream::new_at(data, k), data.len())?;
             if stored as usize != pos {
                 return Err(Error::Invalid {
-                    what: "VISB checkpoint must be the offset of its view's record",
+                    what: Rule::Checkpoint,
                     offset: k as u64,
                     value: stored as u64,
                 });
             }
         }
         let (len, n) = read_varint(records, pos).ok_or(Error::Invalid {
-            what: "VISB record length must be a LEB128 of at most 4 bytes inside the section",
+            what: Rule::RecordLength,
             offset,
             value: view as u64,
         })?;
         if n > 1 && records[pos + n - 1] == 0 {
             return Err(Error::Invalid {
-                what: "VISB record length must be a minimal LEB128",
+                what: Rule::RecordLengthMinimal,
                 offset,
                 value: len as u64,
             });
         }
         if len as u64 > max_len {
             return Err(Error::LimitExceeded {
-                what: "VISB code length",
+                what: Rule::CodeLength,
                 value: len as u64,
                 limit: max_len,
             });
@@ -482,7 +473,7 @@ fn parse_records<'a>(
         }
         if len > 0 && records[code_end - 1] == 0 {
             return Err(Error::Invalid {
-                what: "VISB code must not end in a zero byte",
+                what: Rule::CodeEnd,
                 offset: checkpoints_end + code_end as u64 - 1,
                 value: view as u64,
             });

@@ -13,8 +13,9 @@
 
 use super::consts::*;
 use super::fields::{Section, at, finite3, float, read, reserved};
+use super::model::Axis;
 use super::stream::Stream;
-use super::{Error, PatchInfo};
+use super::{Error, PatchInfo, Rule};
 
 /// How version-4 records are quantised (spec § PTCH, compact layout): the header's frame and
 /// field widths.
@@ -270,15 +271,15 @@ impl PatchTable<'_> {
     /// The cone axis the facing feature of VISB encoding 2 uses (§ Features, `front`): the
     /// stored `f32` axis of a full record, the integer axis of a compact one (exact in `f32`).
     #[inline(always)]
-    pub fn facing_axis(&self, p: u32) -> [f32; 3] {
+    pub(crate) fn facing_axis(&self, p: u32) -> Axis {
         match *self {
             PatchTable::Full(records) => {
                 let at = p as usize * PATCH_RECORD_LEN as usize + 24;
                 match records.get(at..at + 12) {
-                    Some(b) => core::array::from_fn(|i| {
+                    Some(b) => Axis::Float(core::array::from_fn(|i| {
                         f32::from_le_bytes([b[4 * i], b[4 * i + 1], b[4 * i + 2], b[4 * i + 3]])
-                    }),
-                    None => [0.0; 3],
+                    })),
+                    None => Axis::Int([0; 3]),
                 }
             }
             PatchTable::Compact {
@@ -291,7 +292,7 @@ impl PatchTable<'_> {
                 // Both coordinates in one read: 2 · axis_bits ≤ 32.
                 let both = bits(records, at, 2 * q.axis_bits);
                 let mask = (1 << q.axis_bits) - 1;
-                q.axis(both & mask, both >> q.axis_bits).map(|a| a as f32)
+                Axis::Int(q.axis(both & mask, both >> q.axis_bits))
             }
         }
     }
@@ -320,23 +321,23 @@ pub(crate) fn parse(
     let patch_count = read::<u32>(&mut s, have)?;
     if patch_count == 0 {
         return Err(Error::Invalid {
-            what: "PTCH patch_count must be at least 1",
+            what: Rule::PatchCount,
             offset: count_offset,
             value: 0,
         });
     }
     if patch_count > MAX_PATCHES {
         return Err(Error::LimitExceeded {
-            what: "patch_count",
+            what: Rule::PatchCountLimit,
             value: patch_count as u64,
             limit: MAX_PATCHES as u64,
         });
     }
-    reserved(&mut s, have, "PTCH reserved field must be 0")?;
+    reserved(&mut s, have, Rule::PtchReserved)?;
     let triangle_count = read::<u64>(&mut s, have)?;
     if triangle_count > u32::MAX as u64 {
         return Err(Error::LimitExceeded {
-            what: "triangle_count",
+            what: Rule::TriangleCount,
             value: triangle_count,
             limit: u32::MAX as u64,
         });
@@ -380,20 +381,12 @@ fn parse_full<'a>(
             });
         }
         next_first += count as u64;
-        finite3(&mut s, have, "PTCH patch center must be finite")?;
-        float(
-            &mut s,
-            have,
-            "PTCH patch radius must be finite and >= 0",
-            |r| r >= 0.0,
-        )?;
-        finite3(&mut s, have, "PTCH patch cone_axis must be finite")?;
-        float(
-            &mut s,
-            have,
-            "PTCH patch cone_cos must be in [-1, 1]",
-            |c| (-1.0..=1.0).contains(&c),
-        )?;
+        finite3(&mut s, have, Rule::PatchCenter)?;
+        float(&mut s, have, Rule::PatchRadius, |r| r >= 0.0)?;
+        finite3(&mut s, have, Rule::PatchConeAxis)?;
+        float(&mut s, have, Rule::PatchConeCos, |c| {
+            (-1.0..=1.0).contains(&c)
+        })?;
     }
     if next_first != triangle_count {
         return Err(Error::TriangleCountMismatch {
@@ -423,10 +416,8 @@ fn parse_compact<'a>(
             expected: PTCH_COMPACT_HEADER_LEN,
         });
     }
-    let origin = finite3(&mut s, have, "PTCH origin must be finite")?;
-    let step = float(&mut s, have, "PTCH step must be finite and > 0", |v| {
-        v > 0.0
-    })?;
+    let origin = finite3(&mut s, have, Rule::Origin)?;
+    let step = float(&mut s, have, Rule::Step, |v| v > 0.0)?;
     let widths_at = s.offset() as u64;
     let widths = read::<[u8; 4]>(&mut s, have)?;
     let cos_at = s.offset() as u64;
@@ -445,15 +436,15 @@ fn parse_compact<'a>(
     let quantisation = Quantisation {
         origin,
         step,
-        count_bits: width(0, widths[0], 0..=32, "PTCH count_bits must be at most 32")?,
-        center_bits: width(1, widths[1], 0..=24, "PTCH center_bits must be at most 24")?,
-        radius_bits: width(2, widths[2], 0..=24, "PTCH radius_bits must be at most 24")?,
-        axis_bits: width(3, widths[3], 2..=16, "PTCH axis_bits must be in 2..=16")?,
-        cos_bits: width(4, tail[0], 1..=16, "PTCH cos_bits must be in 1..=16")?,
+        count_bits: width(0, widths[0], 0..=32, Rule::CountBits)?,
+        center_bits: width(1, widths[1], 0..=24, Rule::CenterBits)?,
+        radius_bits: width(2, widths[2], 0..=24, Rule::RadiusBits)?,
+        axis_bits: width(3, widths[3], 2..=16, Rule::AxisBits)?,
+        cos_bits: width(4, tail[0], 1..=16, Rule::CosBits)?,
     };
     if let Some(i) = tail[1..].iter().position(|&b| b != 0) {
         return Err(Error::Invalid {
-            what: "PTCH reserved bytes must be 0",
+            what: Rule::PtchReservedBytes,
             offset: cos_at + 1 + i as u64,
             value: tail[1 + i] as u64,
         });
@@ -468,7 +459,7 @@ fn parse_compact<'a>(
             .is_finite()
     }) {
         return Err(Error::InvalidFloat {
-            what: "PTCH step must keep origin + (2^center_bits - 1) * step finite",
+            what: Rule::StepCenterRange,
             offset: step_at,
             bits: step.to_bits(),
         });
@@ -478,7 +469,7 @@ fn parse_compact<'a>(
         .is_finite()
     {
         return Err(Error::InvalidFloat {
-            what: "PTCH step must keep (2^radius_bits - 1) * step finite",
+            what: Rule::StepRadiusRange,
             offset: step_at,
             bits: step.to_bits(),
         });
@@ -506,7 +497,7 @@ fn parse_compact<'a>(
             let start = read::<u32>(&mut Stream::new_at(data, at(offset)), have)?;
             if u64::from(start) != next_first {
                 return Err(Error::Invalid {
-                    what: "PTCH block start must equal the sum of the counts before it",
+                    what: Rule::BlockStart,
                     offset,
                     value: start as u64,
                 });
@@ -526,7 +517,7 @@ fn parse_compact<'a>(
                 )
                 + i as u64 * u64::from(quantisation.axis_bits);
             return Err(Error::Invalid {
-                what: "PTCH record's axis coordinate must be at most 2^axis_bits - 2",
+                what: Rule::RecordAxis,
                 offset: records_at + bit / 8,
                 value: r.axis[i] as u64,
             });
@@ -543,7 +534,7 @@ fn parse_compact<'a>(
         let last = records.last().copied().unwrap_or(0);
         if last >> (used % 8) != 0 {
             return Err(Error::Invalid {
-                what: "PTCH bits after the last record must be 0",
+                what: Rule::RecordPadding,
                 offset: records_at + record_bytes - 1,
                 value: last as u64,
             });

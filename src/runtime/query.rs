@@ -162,10 +162,9 @@ pub(super) fn classify(pvis: &Pvis<'_>, eye: [f32; 3]) -> Eye {
     if !d.iter().all(|x| x.is_finite()) {
         return Eye::Unknown;
     }
-    // Step 3: in binary64, where the squares of binary32 values cannot overflow.
-    let d2: f64 = d.iter().map(|&x| x as f64 * x as f64).sum();
-    let r = pvis.sampling.distance as f64;
-    Eye::Direction(d, d2 < r * r)
+    // Step 3: in binary64, where the squares of binary32 values cannot overflow; taken in
+    // integers, exactly as binary64 rounds (`exact.rs`).
+    Eye::Direction(d, super::exact::norm_below(d, pvis.sampling.distance))
 }
 
 /// Sets every patch's bit in `out` (one row), leaving the padding bits zero.

@@ -246,7 +246,7 @@ fn header_errors() {
     assert_eq!(
         error_after(|f| f[24] = 17),
         Error::LimitExceeded {
-            what: "section_count",
+            what: Rule::SectionCount,
             value: 17,
             limit: 16
         }
@@ -313,7 +313,7 @@ fn camr_errors() {
     assert_eq!(
         error_after(|f| f[at..at + 4].copy_from_slice(&le32(8))),
         Error::LimitExceeded {
-            what: "sphere level",
+            what: Rule::SphereLevel,
             value: 8,
             limit: 7
         }
@@ -329,7 +329,7 @@ fn camr_errors() {
     assert_eq!(
         error_after(|f| f[at + 20..at + 24].copy_from_slice(&f32::NAN.to_le_bytes())),
         Error::InvalidFloat {
-            what: "CAMR radius must be finite and > 0",
+            what: Rule::CamrRadius,
             offset: at as u64 + 20,
             bits: f32::NAN.to_bits()
         }

@@ -15,7 +15,7 @@
 
 use super::coder::RangeDecoder;
 use super::consts::{CHECKPOINT_INTERVAL, CONTEXTS, MAX_LANES, MAX_VARINT_LEN};
-use super::model::{TreeCache, ViewModel, ViewState};
+use super::model::{Axis, TreeCache, ViewModel, ViewState};
 use super::ptch::PatchTable;
 use crate::sphere::{lattice_point, level_of, parents};
 
@@ -71,7 +71,7 @@ impl<'a> Model<'a> {
                 nodes,
                 patches,
                 used,
-                lattice: lattice_point(view).map_or([0.0; 3], |l| l.coords.map(f64::from)),
+                lattice: lattice_point(view).map_or([0; 3], |l| l.coords),
                 level: level_of(view),
             },
         }
@@ -80,9 +80,9 @@ impl<'a> Model<'a> {
     /// The cone axis the facing feature of patch `p` reads (zero for encoding 1, which does
     /// not use it).
     #[inline(always)]
-    fn facing_axis(&self, p: u32) -> [f32; 3] {
+    fn facing_axis(&self, p: u32) -> Axis {
         match *self {
-            Model::Table(_) => [0.0; 3],
+            Model::Table(_) => Axis::Int([0; 3]),
             Model::Tree { patches, .. } => patches.facing_axis(p),
         }
     }
@@ -102,17 +102,28 @@ pub(crate) fn read_varint(data: &[u8], pos: usize) -> Option<(u32, usize)> {
     None
 }
 
-/// The 32 probabilities of `level`, widened for the decoder's multiply.
-pub(crate) fn level_probs(probs: &[u8], level: u32) -> [u32; CONTEXTS] {
+/// The 32 little-endian `u16` probabilities of `level` (validated at parse: present and in
+/// `1..4096`). Borrowed, not widened into an array: a lock-step decoder keeps a model per
+/// lane, 24 of them at level 7, in a microcontroller's stack.
+pub(crate) fn level_probs(probs: &[u8], level: u32) -> &[u8; 2 * CONTEXTS] {
     let start = level as usize * CONTEXTS * 2;
-    core::array::from_fn(|c| {
-        let i = start + 2 * c;
-        // Validated at parse: present and in 1..4096. The fallback keeps this total.
-        probs
-            .get(i..i + 2)
-            .map_or(2048, |b| u16::from_le_bytes([b[0], b[1]]) as u32)
-    })
+    probs
+        .get(start..start + 2 * CONTEXTS)
+        .and_then(|b| b.try_into().ok())
+        // The fallback (probability ½) keeps this total.
+        .unwrap_or(&HALF)
 }
+
+/// 32 probabilities of ½.
+pub(crate) const HALF: [u8; 2 * CONTEXTS] = {
+    let mut table = [0u8; 2 * CONTEXTS];
+    let mut i = 0;
+    while i < CONTEXTS {
+        table[2 * i + 1] = 2048u16.to_le_bytes()[1];
+        i += 1;
+    }
+    table
+};
 
 impl<'a> Visb<'a> {
     /// The code bytes of `view` (encoding 1); empty for encoding 0 or an impossible lookup.
@@ -204,7 +215,7 @@ impl<'a> Visb<'a> {
         let mut views = [0u32; MAX_LANES];
         let n = ancestor_closure(targets, &mut views);
         let views = &views[..n];
-        let mut lanes: [Lane<'a>; MAX_LANES] = core::array::from_fn(|_| Lane::default());
+        let mut lanes = [Lane::default(); MAX_LANES];
         let mut max_lag = 0;
         for (lane, &v) in lanes.iter_mut().zip(views) {
             lane.decoder = RangeDecoder::new(self.code(v));
@@ -223,7 +234,7 @@ impl<'a> Visb<'a> {
         let mut cache = TreeCache::new(&mut slots);
         // Lanes are in level order and the lanes of one level decode the same patch, so the
         // patch's axis (unpacked from a compact table) is read once per level and step.
-        let mut axis: (u32, [f32; 3]) = (u32::MAX, [0.0; 3]);
+        let mut axis = (u32::MAX, Axis::Int([0; 3]));
         for t in 0..patch_count + max_lag {
             for i in 0..lanes.len() {
                 let Some(p) = t.checked_sub(lanes[i].lag).filter(|&p| p < patch_count) else {
@@ -309,7 +320,7 @@ impl Default for Lane<'_> {
     fn default() -> Self {
         Lane {
             decoder: RangeDecoder::new(&[]),
-            model: ViewModel::Table([2048; CONTEXTS]),
+            model: ViewModel::Table(&HALF),
             parents: None,
             lag: 0,
             decoded: 0,

@@ -29,32 +29,53 @@ impl Face {
 /// The 8 faces of the octahedron, indexed by octant: bit 0 set for −X, bit 1 for −Y, bit 2
 /// for −Z.
 pub fn root_faces() -> [Face; 8] {
-    core::array::from_fn(|octant| {
-        let s = [
-            1 - 2 * (octant as i32 & 1),
-            1 - 2 * (octant as i32 >> 1 & 1),
-            1 - 2 * (octant as i32 >> 2 & 1),
-        ];
-        let x = [s[0], 0, 0];
-        let y = [0, s[1], 0];
-        let z = [0, 0, s[2]];
-        // Counter-clockwise from outside is X, Y, Z in octants of positive orientation.
-        let corners = if s[0] * s[1] * s[2] > 0 {
-            [x, y, z]
-        } else {
-            [x, z, y]
-        };
-        let lattice = corners.map(|coords| LatticePoint { level: 0, coords });
-        Face {
-            views: lattice.map(view_index),
-            directions: corners.map(|c| c.map(|v| v as f32)),
-            lattice,
-        }
-    })
+    core::array::from_fn(root_face)
+}
+
+/// The root face of `octant` (see [`root_faces`]). One at a time, so point location numbers
+/// the 3 views of its octant rather than all 24.
+fn root_face(octant: usize) -> Face {
+    let s = [
+        1 - 2 * (octant as i32 & 1),
+        1 - 2 * (octant as i32 >> 1 & 1),
+        1 - 2 * (octant as i32 >> 2 & 1),
+    ];
+    let x = [s[0], 0, 0];
+    let y = [0, s[1], 0];
+    let z = [0, 0, s[2]];
+    // Counter-clockwise from outside is X, Y, Z in octants of positive orientation.
+    let corners = if s[0] * s[1] * s[2] > 0 {
+        [x, y, z]
+    } else {
+        [x, z, y]
+    };
+    let lattice = corners.map(|coords| LatticePoint { level: 0, coords });
+    Face {
+        views: lattice.map(view_index),
+        directions: corners.map(|c| c.map(|v| v as f32)),
+        lattice,
+    }
 }
 
 /// The 4 children of `face`, in the fixed order of the module documentation.
 pub fn children(face: &Face) -> [Face; 4] {
+    let mids = midpoints(face);
+    core::array::from_fn(|k| child(face, k, mids))
+}
+
+/// The directions of the midpoints of `face`'s edges `ab`, `bc` and `ca`.
+fn midpoints(face: &Face) -> [[f32; 3]; 3] {
+    let [da, db, dc] = face.directions;
+    [
+        normalize(add(da, db)),
+        normalize(add(db, dc)),
+        normalize(add(dc, da)),
+    ]
+}
+
+/// Child `k` of `face`, given the directions of its edge midpoints ([`midpoints`]). One child
+/// at a time, so point location numbers 3 views a level rather than 12.
+fn child(face: &Face, k: usize, [dab, dbc, dca]: [[f32; 3]; 3]) -> Face {
     let [a, b, c] = face.lattice.map(LatticePoint::refined);
     let mid = |p: LatticePoint, q: LatticePoint| LatticePoint {
         level: p.level,
@@ -67,22 +88,17 @@ pub fn children(face: &Face) -> [Face; 4] {
     // The refined corners have even coordinates, so the halved sum is the midpoint exactly.
     let (mab, mbc, mca) = (mid(a, b), mid(b, c), mid(c, a));
     let [da, db, dc] = face.directions;
-    let (dab, dbc, dca) = (
-        normalize(add(da, db)),
-        normalize(add(db, dc)),
-        normalize(add(dc, da)),
-    );
-    let make = |lattice: [LatticePoint; 3], directions: [[f32; 3]; 3]| Face {
+    let (lattice, directions) = match k {
+        0 => ([a, mab, mca], [da, dab, dca]),
+        1 => ([mab, b, mbc], [dab, db, dbc]),
+        2 => ([mca, mbc, c], [dca, dbc, dc]),
+        _ => ([mab, mbc, mca], [dab, dbc, dca]),
+    };
+    Face {
         views: lattice.map(view_index),
         directions,
         lattice,
-    };
-    [
-        make([a, mab, mca], [da, dab, dca]),
-        make([mab, b, mbc], [dab, db, dbc]),
-        make([mca, mbc, c], [dca, dbc, dc]),
-        make([mab, mbc, mca], [dab, dbc, dca]),
-    ]
+    }
 }
 
 /// The leaf face at `level` containing direction `dir` (need not be normalised).
@@ -96,7 +112,7 @@ pub fn locate(dir: [f32; 3], level: u32) -> Face {
     // `≥ 0` is positive; NaN compares false and so counts as negative.
     let negative = |c: f32| usize::from(c.partial_cmp(&0.0).is_none_or(|o| o.is_lt()));
     let octant = negative(dir[0]) | negative(dir[1]) << 1 | negative(dir[2]) << 2;
-    let mut face = root_faces()[octant];
+    let mut face = root_face(octant & 7);
     for _ in 0..level {
         face = child_containing(&face, dir);
     }
@@ -105,12 +121,8 @@ pub fn locate(dir: [f32; 3], level: u32) -> Face {
 
 /// The child of `face` containing `dir`, by the tests of [`locate`].
 pub(crate) fn child_containing(face: &Face, dir: [f32; 3]) -> Face {
-    let [da, db, dc] = face.directions;
-    let (dab, dbc, dca) = (
-        normalize(add(da, db)),
-        normalize(add(db, dc)),
-        normalize(add(dc, da)),
-    );
+    let mids = midpoints(face);
+    let [dab, dbc, dca] = mids;
     let which = if dot(dir, cross(dab, dca)) >= 0.0 {
         0
     } else if dot(dir, cross(dbc, dab)) >= 0.0 {
@@ -120,7 +132,7 @@ pub(crate) fn child_containing(face: &Face, dir: [f32; 3]) -> Face {
     } else {
         3
     };
-    children(face)[which]
+    child(face, which, mids)
 }
 
 #[cfg(test)]

@@ -12,8 +12,8 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 root=$(pwd)
 fw=firmware/cortex-m4f
-bin=$fw/target/thumbv7em-none-eabihf/release
-work=$root/target/firmware
+bin=${CARGO_TARGET_DIR:-$root/$fw/target}/thumbv7em-none-eabihf/release
+work=${CARGO_TARGET_DIR:-$root/target}/firmware
 mkdir -p "$work"
 
 qemu() {
