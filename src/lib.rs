@@ -41,6 +41,8 @@ pub(crate) mod mapped;
 #[cfg(feature = "bake")]
 pub mod memory;
 #[cfg(feature = "bake")]
+pub mod meshout;
+#[cfg(feature = "bake")]
 pub mod ooc;
 #[cfg(feature = "bake")]
 pub mod output;

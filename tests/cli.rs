@@ -59,6 +59,7 @@ fn read_patch_mesh(path: &Path) -> PatchMesh {
         "property list uchar uint vertex_indices",
         "property uint patch",
         "property uchar red",
+        "property uint orig_index",
     ] {
         assert!(
             header.contains(expected),
@@ -79,12 +80,12 @@ fn read_patch_mesh(path: &Path) -> PatchMesh {
     let faces = end + 12 * nv;
     let (mut triangles, mut patch) = (Vec::new(), Vec::new());
     for i in 0..nf {
-        let o = faces + 20 * i;
+        let o = faces + 24 * i;
         assert_eq!(bytes[o], 3);
         triangles.push([u32_at(o + 1), u32_at(o + 5), u32_at(o + 9)]);
         patch.push(u32_at(o + 13));
     }
-    assert_eq!(faces + 20 * nf, bytes.len());
+    assert_eq!(faces + 24 * nf, bytes.len());
     PatchMesh {
         positions,
         triangles,

@@ -8,6 +8,8 @@ use super::settings::{BakeSettings, PatchOrder, Supersample};
 use super::{Backend, BakeError, SampledRows, Stages};
 use crate::format::{self, BakeContents};
 use crate::memory::{FixedNeeds, MemoryBudget};
+use crate::meshout::{self, MeshFormat};
+use crate::ooc::attributes::Attributes;
 use crate::ooc::{Mesh, MeshError, MeshErrorKind, OpenOptions, default_cache_dir};
 use crate::output::{AtomicFile, NamedPath};
 use crate::progress::Progress;
@@ -69,7 +71,8 @@ impl Baked {
 pub struct Outputs {
     /// The `.pvis` file.
     pub pvis: PathBuf,
-    /// The mesh reordered by patch as binary PLY (`--mesh-out`).
+    /// The mesh reordered by patch (`--mesh-out`): glTF for `.glb` / `.gltf`, else PLY
+    /// ([`MeshFormat::of`]).
     pub mesh: Option<PathBuf>,
 }
 
@@ -428,17 +431,20 @@ fn spin<T>(progress: &dyn Progress, what: &str, f: impl FnOnce() -> T) -> T {
     out
 }
 
-/// The reordered, patch-coloured PLY of `--mesh-out` in its temporary file beside `path`
-/// (with the permissions of a plain create), to be committed once the `.pvis` is in place.
+/// The reordered mesh of `--mesh-out` (with the input's attributes, read again from it) in
+/// its temporary file beside `path` (with the permissions of a plain create), to be committed
+/// once the `.pvis` is in place.
 fn write_mesh_tmp(path: &Path, mesh: &Mesh, tiling: &Tiling) -> Result<AtomicFile, BakeError> {
     let failed = |source| BakeError::Write {
         path: path.to_path_buf(),
         source,
     };
+    let format = MeshFormat::of(path);
+    let attributes = Attributes::read(mesh, format != MeshFormat::Ply)?;
     let mut tmp = AtomicFile::create(path).map_err(failed)?;
     {
         let mut out = BufWriter::new(tmp.file());
-        crate::ooc::write_ply::write_patch_ply(&mut out, mesh, &tiling.order, &tiling.patch_of)
+        meshout::write(&mut out, format, mesh, &attributes, tiling)
             .and_then(|()| out.flush())
             .map_err(failed)?;
     }

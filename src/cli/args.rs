@@ -52,8 +52,10 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = 45.0, value_name = "DEG")]
     pub fov: f32,
     /// Also write the mesh reordered so that each patch is one contiguous triangle range, with
-    /// per-face `patch` and `red green blue` properties (binary PLY).
-    #[arg(long, value_name = "MESH.ply")]
+    /// the input's normals, texture coordinates and materials: .glb/.gltf (glTF 2.0, patch
+    /// ranges in the mesh's extras), or binary PLY for any other name (per-face patch, colour
+    /// and orig_index).
+    #[arg(long, value_name = "MESH.ply|.glb|.gltf")]
     pub mesh_out: Option<PathBuf>,
     /// Heap budget for the bake, e.g. 512MiB, 2GiB, 1G (default: half the available memory,
     /// at least 256 MiB). Split between the stages in one place (src/memory.rs) and reported

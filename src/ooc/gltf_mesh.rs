@@ -49,7 +49,7 @@ const CHUNK_BIN: u32 = 0x004E_4942;
 
 /// A parsed, validated glTF document and where its GLB `BIN` chunk lies in the file.
 pub(crate) struct Parsed {
-    document: Document,
+    pub(crate) document: Document,
     /// Byte range of the `BIN` chunk's data (GLB only).
     bin: Option<std::ops::Range<usize>>,
 }
@@ -246,14 +246,14 @@ fn split_glb(
 }
 
 /// One buffer's bytes: borrowed from the GLB, mapped from a `.bin` file, or decoded.
-enum BufferBytes<'a> {
+pub(crate) enum BufferBytes<'a> {
     Borrowed(&'a [u8]),
     Mapped(FileBytes),
     Owned(Vec<u8>),
 }
 
 impl BufferBytes<'_> {
-    fn bytes(&self) -> &[u8] {
+    pub(crate) fn bytes(&self) -> &[u8] {
         match self {
             BufferBytes::Borrowed(b) => b,
             BufferBytes::Mapped(m) => m,
@@ -263,7 +263,7 @@ impl BufferBytes<'_> {
 }
 
 /// Loads every buffer, each checked to hold at least its declared `byteLength`.
-fn load_buffers<'a>(
+pub(crate) fn load_buffers<'a>(
     bytes: &'a [u8],
     parsed: &Parsed,
     dir: &Path,
@@ -321,7 +321,7 @@ fn load_buffers<'a>(
 }
 
 /// Decodes a `data:[<media type>];base64,<data>` URI.
-fn data_uri(uri: &str, buffer: usize) -> Result<Vec<u8>, Fault> {
+pub(crate) fn data_uri(uri: &str, buffer: usize) -> Result<Vec<u8>, Fault> {
     let bad = |what: String| {
         Fault::new(
             MeshErrorKind::BadValue,
@@ -353,7 +353,7 @@ fn data_uri(uri: &str, buffer: usize) -> Result<Vec<u8>, Fault> {
 
 /// The file an external buffer URI names: a relative reference, percent-decoded, resolved
 /// against the glTF file's directory.
-fn external_path(dir: &Path, uri: &str, buffer: usize) -> Result<PathBuf, Fault> {
+pub(crate) fn external_path(dir: &Path, uri: &str, buffer: usize) -> Result<PathBuf, Fault> {
     let unsupported = |what: &str| {
         Fault::new(
             MeshErrorKind::UnsupportedFormat,
@@ -394,17 +394,17 @@ fn external_path(dir: &Path, uri: &str, buffer: usize) -> Result<PathBuf, Fault>
 }
 
 /// An accessor's elements inside its buffer: element `i` starts at `i * stride`.
-struct Strided<'b> {
-    bytes: &'b [u8],
-    stride: usize,
-    count: usize,
-    component: DataType,
+pub(crate) struct Strided<'b> {
+    pub(crate) bytes: &'b [u8],
+    pub(crate) stride: usize,
+    pub(crate) count: usize,
+    pub(crate) component: DataType,
 }
 
 impl Strided<'_> {
     /// Element `i` of a `VEC3` `FLOAT` accessor.
     #[inline]
-    fn vec3(&self, i: usize) -> [f32; 3] {
+    pub(crate) fn vec3(&self, i: usize) -> [f32; 3] {
         let at = i * self.stride;
         [0, 4, 8].map(|o| f32::from_le_bytes(super::four(self.bytes, at + o)))
     }
@@ -422,7 +422,7 @@ impl Strided<'_> {
 
 /// Resolves `accessor` to its bytes, checked to lie inside its buffer view and buffer.
 /// `role` says where it is used, for errors (`meshes[0].primitives[1].indices`).
-fn strided<'b>(
+pub(crate) fn strided<'b>(
     accessor: &Accessor,
     buffers: &'b [BufferBytes],
     role: &str,
@@ -505,7 +505,7 @@ fn strided<'b>(
 }
 
 /// Names a type for errors: `VEC2 of UNSIGNED_SHORT`.
-fn type_name(accessor: &Accessor) -> String {
+pub(crate) fn type_name(accessor: &Accessor) -> String {
     let dims = match accessor.dimensions() {
         Dimensions::Scalar => "SCALAR",
         Dimensions::Vec2 => "VEC2",
@@ -532,17 +532,31 @@ struct Totals {
     skipped_primitives: usize,
 }
 
-/// Converts the document's scene(s) into `sink`; returns the bounds.
-pub(crate) fn convert(
-    bytes: &[u8],
-    parsed: &Parsed,
-    dir: &Path,
-    sink: &mut CacheWriter,
-) -> Result<Bounds, Fault> {
-    use MeshErrorKind::*;
-    let document = &parsed.document;
-    let buffers = load_buffers(bytes, parsed, dir)?;
+/// One node that holds a mesh, with its world transform.
+pub(crate) struct Instance<'d> {
+    /// The node's index.
+    pub(crate) node: usize,
+    pub(crate) mesh: gltf::Mesh<'d>,
+    /// The node's transforms composed from its root, in `f64`.
+    pub(crate) world: DMat4,
+}
 
+impl Instance<'_> {
+    /// Names a primitive of this instance for errors.
+    pub(crate) fn role(&self, primitive: &gltf::Primitive) -> String {
+        format!(
+            "meshes[{}].primitives[{}] (via nodes[{}])",
+            self.mesh.index(),
+            primitive.index(),
+            self.node
+        )
+    }
+}
+
+/// The mesh instances of the scene(s) in the order the mesh is built from them: the nodes of
+/// the default scene (or of all scenes; with no scenes, every root node), depth first.
+pub(crate) fn instances(document: &Document) -> Result<Vec<Instance<'_>>, Fault> {
+    use MeshErrorKind::*;
     // glTF requires the node hierarchy to be disjoint trees whose roots are the scenes'
     // nodes; checking that (at most one parent each, scene nodes parentless) also rules out
     // cycles and exponential re-instancing through shared children.
@@ -569,7 +583,7 @@ pub(crate) fn convert(
         Some(scene) => vec![scene],
         None => document.scenes().collect(),
     };
-    let mut roots: Vec<(usize, String)> = Vec::new();
+    let mut roots: Vec<usize> = Vec::new();
     for scene in &scenes {
         for (k, node) in scene.nodes().enumerate() {
             if let Some(p) = parent[node.index()] {
@@ -584,44 +598,61 @@ pub(crate) fn convert(
                     ),
                 ));
             }
-            roots.push((node.index(), format!("scenes[{}]", scene.index())));
+            roots.push(node.index());
         }
     }
     if scenes.is_empty() {
-        roots.extend(
-            (0..node_count)
-                .filter(|&n| parent[n].is_none())
-                .map(|n| (n, "root".to_string())),
-        );
+        roots.extend((0..node_count).filter(|&n| parent[n].is_none()));
     }
 
-    let mut totals = Totals {
-        bounds: BoundsBuilder::new(),
-        skipped_primitives: 0,
-    };
     let nodes: Vec<gltf::Node> = document.nodes().collect();
+    let mut out = Vec::new();
     // Depth-first with an explicit stack: a deep hierarchy cannot overflow the call stack.
-    let mut stack: Vec<(usize, DMat4)> = roots
-        .iter()
-        .rev()
-        .map(|&(n, _)| (n, DMat4::IDENTITY))
-        .collect();
+    let mut stack: Vec<(usize, DMat4)> =
+        roots.iter().rev().map(|&n| (n, DMat4::IDENTITY)).collect();
     while let Some((n, parent_transform)) = stack.pop() {
         let node = &nodes[n];
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
         let world = parent_transform * local;
         if let Some(mesh) = node.mesh() {
-            for primitive in mesh.primitives() {
-                let role = format!(
-                    "meshes[{}].primitives[{}] (via nodes[{n}])",
-                    mesh.index(),
-                    primitive.index()
-                );
-                emit(&primitive, &role, &world, &buffers, sink, &mut totals)?;
-            }
+            out.push(Instance {
+                node: n,
+                mesh,
+                world,
+            });
         }
         for child in node.children().collect::<Vec<_>>().into_iter().rev() {
             stack.push((child.index(), world));
+        }
+    }
+    Ok(out)
+}
+
+/// Converts the document's scene(s) into `sink`; returns the bounds.
+pub(crate) fn convert(
+    bytes: &[u8],
+    parsed: &Parsed,
+    dir: &Path,
+    sink: &mut CacheWriter,
+) -> Result<Bounds, Fault> {
+    use MeshErrorKind::*;
+    let document = &parsed.document;
+    let buffers = load_buffers(bytes, parsed, dir)?;
+    let mut totals = Totals {
+        bounds: BoundsBuilder::new(),
+        skipped_primitives: 0,
+    };
+    for instance in instances(document)? {
+        for primitive in instance.mesh.primitives() {
+            let role = instance.role(&primitive);
+            emit(
+                &primitive,
+                &role,
+                &instance.world,
+                &buffers,
+                sink,
+                &mut totals,
+            )?;
         }
     }
 

@@ -23,8 +23,10 @@
 //! Files: `error.rs` (errors with positions), `cache.rs` (conversion cache files, keyed by
 //! an XXH64 hash of the content), `ply/` (header, in-place and converting readers), `obj.rs`,
 //! `stl.rs`, `gltf_mesh.rs` (converters), `text.rs` (line scanning and number parsing for the
-//! text formats), `write_ply.rs` (`--mesh-out`).
+//! text formats), `attributes/` (normals, texture coordinates, colours and materials, read
+//! again from the source for `--mesh-out`).
 
+pub mod attributes;
 mod cache;
 mod error;
 mod gltf_mesh;
@@ -32,7 +34,6 @@ mod obj;
 mod ply;
 mod stl;
 mod text;
-pub mod write_ply;
 
 use std::fs::File;
 use std::path::{Path, PathBuf};

@@ -236,7 +236,7 @@ fn first_bad_index(bytes: &[u8], vertices: u64, before: u64) -> Option<Fault> {
 
 /// A 0-based vertex index from an OBJ index: `1..` absolute, `-1..` relative to the `seen`
 /// vertices so far.
-fn resolve(text: &[u8], seen: u64, line: u64) -> Result<u32, Fault> {
+pub(crate) fn resolve(text: &[u8], seen: u64, line: u64) -> Result<u32, Fault> {
     let bad = |message: String| Err(Fault::at_line(MeshErrorKind::BadIndex, line, message));
     match integer(text) {
         Some(i) if i > 0 => match u32::try_from(i - 1) {

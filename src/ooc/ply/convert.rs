@@ -217,6 +217,77 @@ pub(crate) fn read(
     }
 }
 
+/// Reads the scalar properties `wanted` (indices into the vertex element) of every vertex,
+/// in file order, and hands each vertex's values to `visit`: what `--mesh-out` keeps of a
+/// PLY's vertices beside `x, y, z` (`super::super::attributes`). Stops after the vertices.
+pub(crate) fn vertex_scalars(
+    bytes: &[u8],
+    header: &Header,
+    schema: &Schema,
+    wanted: &[usize],
+    visit: &mut dyn FnMut(&[f64]) -> Result<(), Fault>,
+) -> Result<(), Fault> {
+    match header.encoding {
+        Encoding::Ascii => scalars_of(
+            &mut AsciiTokens {
+                bytes,
+                offset: header.body_offset,
+                line: header.body_line,
+            },
+            header,
+            schema,
+            wanted,
+            visit,
+        ),
+        Encoding::BinaryLittleEndian => scalars_of(
+            &mut BinaryCursor::new(bytes, header.body_offset, false),
+            header,
+            schema,
+            wanted,
+            visit,
+        ),
+        Encoding::BinaryBigEndian => scalars_of(
+            &mut BinaryCursor::new(bytes, header.body_offset, true),
+            header,
+            schema,
+            wanted,
+            visit,
+        ),
+    }
+}
+
+fn scalars_of(
+    values: &mut impl Values,
+    header: &Header,
+    schema: &Schema,
+    wanted: &[usize],
+    visit: &mut dyn FnMut(&[f64]) -> Result<(), Fault>,
+) -> Result<(), Fault> {
+    let mut row = vec![0f64; wanted.len()];
+    for element in &header.elements[..schema.vertex] {
+        values.skip_element(element)?;
+    }
+    let element = &header.elements[schema.vertex];
+    for _ in 0..element.count {
+        for (i, property) in element.properties.iter().enumerate() {
+            match property.ty {
+                PropertyType::Scalar(s) => {
+                    let value = values.scalar(s)?;
+                    if let Some(k) = wanted.iter().position(|&w| w == i) {
+                        row[k] = value;
+                    }
+                }
+                PropertyType::List { count, item } => {
+                    let n = values.list_count(count)?;
+                    values.skip(n, item)?;
+                }
+            }
+        }
+        visit(&row)?;
+    }
+    Ok(())
+}
+
 fn run(
     values: &mut impl Values,
     header: &Header,

@@ -64,6 +64,32 @@ pub(crate) fn convert(
     convert::read(bytes, &parsed.header, &parsed.schema, sink)
 }
 
+/// The vertex element's scalar property named one of `names`, as an index into it.
+pub(crate) fn vertex_property(parsed: &Parsed, names: &[&str]) -> Option<usize> {
+    let element = &parsed.header.elements[parsed.schema.vertex];
+    names.iter().find_map(|n| {
+        element
+            .property(n)
+            .filter(|&i| matches!(element.properties[i].ty, PropertyType::Scalar(_)))
+    })
+}
+
+/// Whether the vertex property `index` holds integers (colours as `uchar`, say).
+pub(crate) fn vertex_property_is_integer(parsed: &Parsed, index: usize) -> bool {
+    let element = &parsed.header.elements[parsed.schema.vertex];
+    matches!(element.properties[index].ty, PropertyType::Scalar(s) if s.is_integer())
+}
+
+/// Reads the vertex properties `wanted` of every vertex (see `convert::vertex_scalars`).
+pub(crate) fn vertex_scalars(
+    bytes: &[u8],
+    parsed: &Parsed,
+    wanted: &[usize],
+    visit: &mut dyn FnMut(&[f64]) -> Result<(), Fault>,
+) -> Result<(), Fault> {
+    convert::vertex_scalars(bytes, &parsed.header, &parsed.schema, wanted, visit)
+}
+
 /// Locates and checks the vertex and face elements.
 fn schema(header: &Header) -> Result<Schema, Fault> {
     use MeshErrorKind::*;

@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Builds the viewer's demo: bakes the bundled bunny (assets/bunny.ply) into web/demo/bunny.pvis
+# with its mesh as web/demo/bunny.glb (`--mesh-out`), builds the WebAssembly reader
+# (wasm/build.sh) and copies it with its module (wasm/patchvis.mjs) into web/demo/, and
+# installs three.js into web/node_modules (npm, from web/package-lock.json). Then serve web/:
+#
+#   python3 -m http.server -d web 8000     # and open http://localhost:8000/
+#
+# PATCHVIS=/path/to/patchvis uses that binary instead of `cargo run --release`. Needs cargo,
+# the wasm32-unknown-unknown target and npm.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+mkdir -p web/demo
+if [ -n "${PATCHVIS:-}" ]; then
+  patchvis() { "$PATCHVIS" "$@"; }
+else
+  patchvis() { cargo run --quiet --release --bin patchvis -- "$@"; }
+fi
+patchvis bake assets/bunny.ply -o web/demo/bunny.pvis --mesh-out web/demo/bunny.glb --quiet
+bash wasm/build.sh
+cp wasm/patchvis.wasm wasm/patchvis.mjs web/demo/
+if [ ! -d web/node_modules/three ]; then
+  npm ci --prefix web --omit=dev --no-audit --no-fund --silent
+fi
+echo "web/demo: bunny.glb, bunny.pvis, patchvis.wasm, patchvis.mjs; serve with: python3 -m http.server -d web 8000"

@@ -1,0 +1,300 @@
+// The patchvis viewer: draws a `patchvis bake --mesh-out X.glb` mesh with only the triangle
+// ranges that the WebAssembly reader (demo/patchvis.mjs, a copy of wasm/patchvis.mjs) returns
+// for the camera, with three.js (WebGL2).
+//
+// Why it works: the .glb's triangles are in the .pvis file's patch order, so a query's
+// ranges [first, count] are index ranges of the one index buffer view; each glTF primitive (a
+// run of one material) covers triangles [first_triangle, first_triangle + triangle_count)
+// (its extras.patchvis), and a range becomes one draw group of the primitive it falls in.
+//
+// Loads demo/bunny.glb + demo/bunny.pvis (web/build.sh makes them), or a .glb and .pvis
+// dropped on the page. Test hook: window.patchvis (see the end of this file).
+
+import * as THREE from "three";
+import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
+import { OrbitControls } from "three/addons/controls/OrbitControls.js";
+import { FlyControls } from "three/addons/controls/FlyControls.js";
+import { Reader } from "./demo/patchvis.mjs";
+
+const $ = (id) => document.getElementById(id);
+const canvas = $("view");
+const renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
+const scene = new THREE.Scene();
+scene.background = new THREE.Color(0x20242b);
+scene.add(new THREE.HemisphereLight(0xffffff, 0x404050, 1.6));
+const sun = new THREE.DirectionalLight(0xffffff, 1.8);
+scene.add(sun);
+const camera = new THREE.PerspectiveCamera(45, 1, 0.001, 1000);
+const orbit = new OrbitControls(camera, canvas);
+const fly = new FlyControls(camera, canvas);
+fly.dragToLook = true;
+fly.enabled = false;
+const clock = new THREE.Clock();
+
+const reader = await Reader.load(await fetch("./demo/patchvis.wasm"));
+
+/** What is loaded: the file, the drawn meshes, the last answer. */
+const state = {
+  name: "",
+  file: null, // the open .pvis (PvisFile)
+  root: null, // the glTF scene
+  parts: [], // { mesh, colourMesh, first, count }: one per glTF primitive
+  triangles: 0,
+  answer: null, // { patches, ranges, inside }
+  drawn: 0, // triangles drawn
+  lastEye: null,
+  options: { culling: true, colours: false },
+};
+
+/** Loads a .glb (ArrayBuffer) and its .pvis (ArrayBuffer); throws on a mismatch. */
+async function load(name, glbBytes, pvisBytes) {
+  const file = reader.open(new Uint8Array(pvisBytes)); // throws PatchvisError
+  const gltf = await new GLTFLoader().parseAsync(glbBytes, "./");
+  const meshDef = gltf.parser.json.meshes?.[0];
+  const extras = meshDef?.extras?.patchvis;
+  if (!extras) {
+    file.close();
+    throw new Error(`${name}: the .glb has no extras.patchvis; make it with patchvis bake --mesh-out X.glb`);
+  }
+  if (extras.triangle_count !== file.triangleCount || extras.patch_count !== file.patchCount) {
+    file.close();
+    throw new Error(
+      `${name}: the .glb has ${extras.patch_count} patches and ${extras.triangle_count} triangles, ` +
+        `the .pvis ${file.patchCount} and ${file.triangleCount}; load the pair one bake wrote`,
+    );
+  }
+  unload();
+  const parts = [];
+  gltf.scene.traverse((object) => {
+    if (!object.isMesh) return;
+    const where = gltf.parser.associations.get(object);
+    const primitive = meshDef.primitives[where?.primitives ?? 0];
+    const { first_triangle: first, triangle_count: count } = primitive.extras.patchvis;
+    object.material = [object.material];
+    object.frustumCulled = false;
+    const colourMesh = patchColourMesh(object, first, extras.patch_first_triangle);
+    object.parent.add(colourMesh);
+    parts.push({ mesh: object, colourMesh, first, count });
+  });
+  scene.add(gltf.scene);
+  Object.assign(state, { name, file, root: gltf.scene, parts, triangles: extras.triangle_count });
+  frame(gltf.scene);
+  $("name").textContent = `${name}: ${file.patchCount} patches, ${extras.triangle_count} triangles`;
+  $("error").textContent = "";
+  update(true);
+}
+
+/** Removes what is loaded. */
+function unload() {
+  if (state.root) scene.remove(state.root);
+  state.file?.close();
+  Object.assign(state, { file: null, root: null, parts: [], answer: null, lastEye: null });
+}
+
+/**
+ * A copy of a primitive's mesh with one flat colour per patch: the geometry unindexed (so
+ * that a vertex belongs to one triangle), triangle k of the primitive coloured by its patch.
+ */
+function patchColourMesh(mesh, first, patchFirsts) {
+  const geometry = mesh.geometry.toNonIndexed();
+  const triangles = geometry.attributes.position.count / 3;
+  const colours = new Float32Array(9 * triangles);
+  const colour = new THREE.Color();
+  let patch = upperBound(patchFirsts, first) - 1;
+  for (let k = 0; k < triangles; k++) {
+    while (first + k >= patchFirsts[patch + 1]) patch++;
+    // The hue stepped by the golden ratio, as the PLY's patch colours.
+    colour.setHSL((patch * 0.618033988749895) % 1, 0.75, patch % 14 < 7 ? 0.55 : 0.4);
+    for (let c = 0; c < 3; c++) colour.toArray(colours, 9 * k + 3 * c);
+  }
+  geometry.setAttribute("color", new THREE.BufferAttribute(colours, 3));
+  geometry.deleteAttribute("uv");
+  const material = new THREE.MeshLambertMaterial({ vertexColors: true });
+  const copy = new THREE.Mesh(geometry, [material]);
+  copy.frustumCulled = false;
+  copy.visible = false;
+  return copy;
+}
+
+/** The first index whose value is greater than `x` in the ascending `values`. */
+function upperBound(values, x) {
+  let lo = 0;
+  let hi = values.length;
+  while (lo < hi) {
+    const mid = (lo + hi) >> 1;
+    if (values[mid] <= x) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
+}
+
+/** Puts the camera in front of the model, outside the sampling sphere. */
+function frame(object) {
+  const box = new THREE.Box3().setFromObject(object);
+  const sphere = box.getBoundingSphere(new THREE.Sphere());
+  camera.near = sphere.radius / 100;
+  camera.far = sphere.radius * 100;
+  camera.position.copy(sphere.center).add(new THREE.Vector3(0, 0.3, 1).multiplyScalar(3.2 * sphere.radius));
+  orbit.target.copy(sphere.center);
+  fly.movementSpeed = sphere.radius;
+  camera.lookAt(sphere.center);
+  camera.updateProjectionMatrix();
+}
+
+/** Queries the reader for the camera (when it moved, or `force`) and sets the draw groups. */
+function update(force = false) {
+  if (!state.file) return;
+  const eye = camera.position;
+  if (force || !state.lastEye || !state.lastEye.equals(eye)) {
+    const t0 = performance.now();
+    const answer = state.file.query(eye.x, eye.y, eye.z);
+    const ms = performance.now() - t0;
+    state.answer = { patches: Array.from(answer.patches), ranges: answer.ranges, inside: answer.insideSphere };
+    state.lastEye = eye.clone();
+    // Browsers coarsen the clock (to 0.1 ms without cross-origin isolation).
+    $("time").textContent = ms > 0 ? `${ms.toFixed(3)} ms` : "< 0.1 ms";
+  }
+  const { ranges, inside, patches } = state.answer;
+  // Inside the sampling sphere the answer does not hold: everything is drawn.
+  const all = !state.options.culling || inside;
+  const draw = all ? [[0, state.triangles]] : ranges;
+  let drawn = 0;
+  for (const part of state.parts) {
+    const shown = state.options.colours ? part.colourMesh : part.mesh;
+    const hidden = state.options.colours ? part.mesh : part.colourMesh;
+    shown.visible = true;
+    hidden.visible = false;
+    const geometry = shown.geometry;
+    geometry.clearGroups();
+    const end = part.first + part.count;
+    for (const [first, count] of draw) {
+      const a = Math.max(first, part.first);
+      const b = Math.min(first + count, end);
+      if (a < b) {
+        geometry.addGroup(3 * (a - part.first), 3 * (b - a), 0);
+        drawn += b - a;
+      }
+    }
+  }
+  state.drawn = drawn;
+  const patchCount = state.file.patchCount;
+  $("patches").textContent = `${all ? patchCount : patches.length} / ${patchCount}`;
+  $("triangles").textContent = `${drawn} / ${state.triangles} (${((100 * drawn) / state.triangles).toFixed(1)} %)`;
+  const region = $("region");
+  region.textContent = inside ? "inside the sampling sphere: all drawn" : "outside the sphere: answer valid";
+  region.className = inside ? "invalid" : "valid";
+}
+
+function resize() {
+  const { clientWidth: w, clientHeight: h } = canvas;
+  if (canvas.width !== Math.floor(w * renderer.getPixelRatio()) || canvas.height !== Math.floor(h * renderer.getPixelRatio())) {
+    renderer.setSize(w, h, false);
+    camera.aspect = w / h;
+    camera.updateProjectionMatrix();
+  }
+}
+
+function render() {
+  resize();
+  const delta = clock.getDelta();
+  if (fly.enabled) fly.update(delta);
+  else orbit.update();
+  sun.position.copy(camera.position);
+  update();
+  renderer.render(scene, camera);
+}
+renderer.setAnimationLoop(render);
+
+// Controls of the overlay.
+$("culling").addEventListener("change", (e) => {
+  state.options.culling = e.target.checked;
+  update(true);
+});
+$("colours").addEventListener("change", (e) => {
+  state.options.colours = e.target.checked;
+  update(true);
+});
+$("fly").addEventListener("change", (e) => {
+  fly.enabled = e.target.checked;
+  orbit.enabled = !e.target.checked;
+  if (!fly.enabled) {
+    // Back to orbiting around the point the camera looks at.
+    const ahead = new THREE.Vector3(0, 0, -1).applyQuaternion(camera.quaternion);
+    orbit.target.copy(camera.position).addScaledVector(ahead, camera.position.distanceTo(orbit.target));
+  }
+});
+
+// Drag and drop of a .glb and its .pvis (together, or one after the other).
+const dropped = {};
+window.addEventListener("dragover", (e) => {
+  e.preventDefault();
+  document.body.classList.add("dragging");
+});
+window.addEventListener("dragleave", () => document.body.classList.remove("dragging"));
+window.addEventListener("drop", async (e) => {
+  e.preventDefault();
+  document.body.classList.remove("dragging");
+  for (const f of e.dataTransfer.files) {
+    if (/\.glb$/i.test(f.name)) dropped.glb = f;
+    else if (/\.pvis$/i.test(f.name)) dropped.pvis = f;
+  }
+  if (!dropped.glb || !dropped.pvis) {
+    $("error").textContent = `now drop the ${dropped.glb ? ".pvis" : ".glb"} of the same bake`;
+    return;
+  }
+  const { glb, pvis } = dropped;
+  delete dropped.glb;
+  delete dropped.pvis;
+  try {
+    await load(glb.name, await glb.arrayBuffer(), await pvis.arrayBuffer());
+  } catch (err) {
+    $("error").textContent = String(err.message ?? err);
+  }
+});
+
+/** The test hook: drive the camera and read what the page would draw. */
+window.patchvis = {
+  ready: false,
+  /** Moves the camera to `eye` looking at `target` and answers for it at once. */
+  setCamera(eye, target) {
+    camera.position.set(...eye);
+    orbit.target.set(...target);
+    camera.lookAt(...target);
+    update(true);
+    renderer.render(scene, camera);
+  },
+  /** The last answer: visible patch ids, merged ranges, whether inside the sphere. */
+  answer() {
+    return { ...state.answer, drawn: state.drawn, triangles: state.triangles };
+  },
+  /** Switches culling and patch colours. */
+  setOptions({ culling, colours }) {
+    if (culling !== undefined) state.options.culling = $("culling").checked = culling;
+    if (colours !== undefined) state.options.colours = $("colours").checked = colours;
+    update(true);
+    renderer.render(scene, camera);
+  },
+  /** The loaded materials, in glTF order, as [name, has a base colour texture]. */
+  materials() {
+    const seen = new Map();
+    for (const { mesh } of state.parts) {
+      const m = mesh.material[0];
+      seen.set(m.name, [m.name, !!m.map]);
+    }
+    return [...seen.values()].sort();
+  },
+  /** Loads a .glb and .pvis pair from URLs (what a drop does with files). */
+  async load(glbUrl, pvisUrl) {
+    const [glb, pvis] = await Promise.all([glbUrl, pvisUrl].map((u) => fetch(u).then((r) => r.arrayBuffer())));
+    await load(glbUrl.split("/").pop(), glb, pvis);
+  },
+};
+
+try {
+  await window.patchvis.load("./demo/bunny.glb", "./demo/bunny.pvis");
+  window.patchvis.ready = true;
+} catch (err) {
+  $("error").textContent = `${err.message ?? err}\nRun bash web/build.sh to make the demo files.`;
+  throw err;
+}
