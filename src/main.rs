@@ -41,6 +41,8 @@ fn main() -> ExitCode {
         Command::Eval(args) => cli::eval::run(args).map(|()| ExitCode::SUCCESS),
         Command::Gen(args) => cli::generate::run(&args).map(|()| ExitCode::SUCCESS),
         Command::Verify(args) => cli::verify::run(&args),
+        Command::Tile(args) => cli::shard::tile(&args).map(|()| ExitCode::SUCCESS),
+        Command::Merge(args) => cli::shard::merge(&args).map(|()| ExitCode::SUCCESS),
     };
     match result {
         Ok(code) => code,

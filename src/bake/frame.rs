@@ -23,7 +23,7 @@
 use super::BakeError;
 use crate::ooc::{Mesh, MeshError, MeshErrorKind};
 use crate::sampler::bounding_sphere_f64;
-use crate::tiling::{Tiling, patch_bounds};
+use crate::tiling::{Patch, Tiling, patch_bounds};
 use crate::visibility::SamplingParams;
 use rayon::prelude::*;
 
@@ -113,17 +113,21 @@ impl Frame {
     /// `tiling` (made in this frame) with every patch's area, bounding sphere and normal
     /// cone computed from `mesh` (the original), as a tiling of it would compute them.
     pub(crate) fn world_tiling(mesh: &Mesh, mut tiling: Tiling) -> Tiling {
+        tiling.patches = Frame::world_patches(mesh, &tiling);
+        tiling
+    }
+
+    /// The patch records of [`Frame::world_tiling`] alone.
+    pub(crate) fn world_patches(mesh: &Mesh, tiling: &Tiling) -> Vec<Patch> {
         let order: &[u32] = &tiling.order;
-        let patches = tiling
+        tiling
             .patches
             .par_iter()
             .map(|p| {
                 let range = p.first as usize..(p.first + p.count) as usize;
                 patch_bounds(mesh, &order[range], p.first).0
             })
-            .collect();
-        tiling.patches = patches;
-        tiling
+            .collect()
     }
 }
 

@@ -20,19 +20,36 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
+//! A bake can also be split by view over machines: [`Recipe::tile_framed`] once into a tiling
+//! file ([`write_tiling_file`]), [`Recipe::run_shard`] per [`Shard`] into a [`Part`], then
+//! [`merge`] writes the single bake's bytes.
+//!
 //! Files: `settings.rs` (options, defaults, checks), `recipe.rs` (the stages), `rows.rs`
 //! (sampled rows and the fold), `backend.rs` (CPU or GPU), `stages.rs` (time and heap),
-//! `frame.rs` (the working frame of coordinates `f32` cameras cannot handle).
+//! `frame.rs` (the working frame of coordinates `f32` cameras cannot handle). Sharded bakes:
+//! `shard.rs` (which views a shard owns, `--shard auto`), `shard_run.rs` (a shard's bake and
+//! the shared tiling step), `tiling_file.rs` and `part.rs` (their files), `merge.rs`,
+//! `fingerprint.rs` (mesh and tiling hashes), `wire.rs` (the files' fields).
 
 mod backend;
+mod fingerprint;
 mod frame;
+mod merge;
+mod part;
 mod recipe;
 mod rows;
 mod settings;
+mod shard;
+mod shard_run;
 mod stages;
+mod tiling_file;
+mod wire;
 
 pub use crate::memory::{FixedNeeds, MemoryBudget, StageBudgets};
 pub use backend::{Backend, BackendChoice};
+pub use fingerprint::{mesh_hash, tiling_hash};
+pub use merge::{LoadedPart, MergeError, Merged, merge, read_part};
+pub use part::{Part, PartSettings, PassRows};
 pub use recipe::{Baked, Outputs, Recipe};
 pub use rows::SampledRows;
 pub use settings::{
@@ -40,7 +57,10 @@ pub use settings::{
     DEFAULT_VIEW_SUPERSAMPLE, MIN_RESOLUTION, PatchOrder, SettingsError, Supersample,
     WARN_RESOLUTION,
 };
+pub use shard::{SHARD_COUNT_ENV, Shard, ShardError};
+pub use shard_run::ShardBaked;
 pub use stages::{StageRecord, Stages};
+pub use tiling_file::{TilingFile, read_tiling_file, write_tiling_file};
 
 use std::path::PathBuf;
 
@@ -86,6 +106,10 @@ pub enum BakeError {
         #[source]
         source: std::io::Error,
     },
+    /// A sharded bake's tiling file or part is of another bake, damaged, or missing (the
+    /// message names the file).
+    #[error("{0}")]
+    Sharded(String),
     /// A bug: the pipeline produced something it should not have.
     #[error("internal error: {0}")]
     Internal(String),

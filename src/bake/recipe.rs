@@ -5,7 +5,7 @@
 
 use super::frame::Frame;
 use super::settings::{BakeSettings, PatchOrder, Supersample};
-use super::{Backend, BakeError, SampledRows, Stages};
+use super::{Backend, BakeError, SampledRows, Shard, Stages};
 use crate::format::{self, BakeContents};
 use crate::memory::{FixedNeeds, MemoryBudget};
 use crate::meshout::{self, MeshFormat};
@@ -15,7 +15,7 @@ use crate::output::{AtomicFile, NamedPath};
 use crate::progress::Progress;
 use crate::runtime::Pvis;
 use crate::sampler::SamplingOptions;
-use crate::tiling::{self, Tiling, TilingOptions};
+use crate::tiling::{self, Patch, PatchId, Tiling, TilingOptions};
 use crate::visibility::{SamplingParams, VisibilityMatrix};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -212,8 +212,14 @@ impl Recipe {
         Ok(tiling)
     }
 
-    /// Sampling options with `min_pixels` and `checkpoint`, the rest from the settings.
-    fn sampling_options(&self, min_pixels: u32, checkpoint: Option<PathBuf>) -> SamplingOptions {
+    /// Sampling options with `min_pixels`, `checkpoint` and `views`, the rest from the
+    /// settings.
+    fn sampling_options(
+        &self,
+        min_pixels: u32,
+        checkpoint: Option<PathBuf>,
+        views: Option<Vec<u32>>,
+    ) -> SamplingOptions {
         let s = &self.settings;
         SamplingOptions {
             min_pixels,
@@ -223,6 +229,7 @@ impl Recipe {
             checkpoint,
             resume: s.resume,
             memory_budget: Some(self.memory().split().sampling),
+            views,
         }
     }
 
@@ -236,7 +243,22 @@ impl Recipe {
         backend: &Backend,
         progress: &dyn Progress,
     ) -> Result<SampledRows, BakeError> {
+        self.sample_share(mesh, tiling, backend, None, progress)
+    }
+
+    /// [`Recipe::sample`] of the views `shard` owns in each pass (every view with `None`);
+    /// the other rows are empty. Each view is seeded and rendered as in the whole bake, so its
+    /// row is the same bit for bit.
+    pub fn sample_share(
+        &self,
+        mesh: &Mesh,
+        tiling: &Tiling,
+        backend: &Backend,
+        shard: Option<Shard>,
+        progress: &dyn Progress,
+    ) -> Result<SampledRows, BakeError> {
         let params = self.sampling_params(mesh);
+        let views = |level: u32| shard.map(|s| s.views(level));
         let Supersample {
             extra_levels,
             fold_min_pixels,
@@ -252,13 +274,22 @@ impl Recipe {
         };
         let min_pixels = self.settings.min_pixels;
         let (plain, fine) = if fold_min_pixels > 0 {
-            let coarse_options = self.sampling_options(min_pixels, self.coarse_checkpoint.clone());
+            let coarse_options = self.sampling_options(
+                min_pixels,
+                self.coarse_checkpoint.clone(),
+                views(params.level),
+            );
             let plain = backend.sample(mesh, tiling, &params, &coarse_options, progress)?;
-            let fine_options = self.sampling_options(fold_min_pixels, self.fine_checkpoint.clone());
+            let fine_options = self.sampling_options(
+                fold_min_pixels,
+                self.fine_checkpoint.clone(),
+                views(fine.level),
+            );
             let rows = backend.sample(mesh, tiling, &fine, &fine_options, progress)?;
             (plain, Some(rows))
         } else {
-            let options = self.sampling_options(min_pixels, self.fine_checkpoint.clone());
+            let options =
+                self.sampling_options(min_pixels, self.fine_checkpoint.clone(), views(fine.level));
             (
                 backend.sample(mesh, tiling, &fine, &options, progress)?,
                 None,
@@ -280,15 +311,22 @@ impl Recipe {
         tiling: Tiling,
         visibility: VisibilityMatrix,
     ) -> Result<(Tiling, VisibilityMatrix, bool), BakeError> {
-        if self.settings.patch_order == PatchOrder::Spatial {
-            return Ok((tiling, visibility, false));
-        }
-        match format::covisibility_order(&visibility) {
+        match self.file_patch_order(&visibility) {
             Some(order) => {
                 let tiling = tiling.renumbered(&order).map_err(BakeError::TempFile)?;
                 Ok((tiling, visibility.with_patch_order(&order), true))
             }
             None => Ok((tiling, visibility, false)),
+        }
+    }
+
+    /// The file's patch numbering of the stored rows `visibility` (file id `i` is tiling
+    /// patch `order[i]`), or `None` to keep the tiling's. [`Recipe::number`] and the merge of
+    /// a sharded bake (`merge.rs`) both number through here.
+    pub(crate) fn file_patch_order(&self, visibility: &VisibilityMatrix) -> Option<Vec<PatchId>> {
+        match self.settings.patch_order {
+            PatchOrder::Spatial => None,
+            PatchOrder::Covisibility => format::covisibility_order(visibility),
         }
     }
 
@@ -300,11 +338,23 @@ impl Recipe {
         tiling: &Tiling,
         visibility: &VisibilityMatrix,
     ) -> Vec<u8> {
+        self.encode_patches(params, triangle_count, &tiling.patches, visibility)
+    }
+
+    /// [`Recipe::encode`] from the patch records alone, which is all the merge of a sharded
+    /// bake has.
+    pub(crate) fn encode_patches(
+        &self,
+        params: &SamplingParams,
+        triangle_count: u32,
+        patches: &[Patch],
+        visibility: &VisibilityMatrix,
+    ) -> Vec<u8> {
         format::encode_with(
             &BakeContents {
                 sampling: params,
                 triangle_count: u64::from(triangle_count),
-                patches: &tiling.patches,
+                patches,
                 visibility,
             },
             self.settings.encoding,

@@ -29,6 +29,10 @@ pub enum Command {
     Gen(GenArgs),
     /// Check a .pvis file against the format specification; report the first violation.
     Verify(VerifyArgs),
+    /// Tile a mesh once for a sharded bake: a tiling file every `bake --shard` can read.
+    Tile(TileArgs),
+    /// Merge the parts of a sharded bake (`bake --shard`) into the .pvis one bake writes.
+    Merge(MergeArgs),
 }
 
 /// `patchvis bake`.
@@ -135,6 +139,15 @@ pub struct BakeArgs {
     /// version 3) or raw (encoding 0, one bit per view and patch, no decoding).
     #[arg(long, value_enum, default_value_t = EncodingArg::Tree, value_name = "ENCODING")]
     pub encoding: EncodingArg,
+    /// Bake only shard I of N (I from 0 to N - 1) of the views into a part file (-o), for
+    /// `patchvis merge`; `auto` takes I and N from a Slurm job array or a Kubernetes Indexed
+    /// Job (JOB_COMPLETION_INDEX with PATCHVIS_SHARD_COUNT). Every shard needs the same
+    /// input and flags.
+    #[arg(long, value_name = "I/N|auto", conflicts_with = "mesh_out")]
+    pub shard: Option<String>,
+    /// With --shard: read the tiling from this file (`patchvis tile`) instead of tiling again.
+    #[arg(long, value_name = "T.ptile", requires = "shard")]
+    pub tiling_file: Option<PathBuf>,
 }
 
 /// `--encoding`.
@@ -251,6 +264,45 @@ impl GenKind {
             GenKind::Truss => "truss",
         }
     }
+}
+
+/// `patchvis tile`.
+#[derive(Debug, clap::Args)]
+pub struct TileArgs {
+    /// Input mesh: PLY, OBJ, STL or glTF 2.0 (.gltf / .glb).
+    pub input: PathBuf,
+    /// Output tiling file.
+    #[arg(short, long, value_name = "T.ptile")]
+    pub output: PathBuf,
+    /// Number of patches (the bake's --patches).
+    #[arg(long, default_value_t = 1000, value_name = "N")]
+    pub patches: u32,
+    /// Heap budget (the bake's --memory; out of core, it decides the tiling's chunks).
+    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    pub memory: Option<u64>,
+    /// Tiling algorithm (the bake's --tiling).
+    #[arg(long, value_enum, default_value_t = TilingArg::Auto, value_name = "MODE")]
+    pub tiling: TilingArg,
+    /// Field of view of the sampling cameras, degrees (the bake's --fov).
+    #[arg(long, default_value_t = 45.0, value_name = "DEG")]
+    pub fov: f32,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// `patchvis merge`.
+#[derive(Debug, clap::Args)]
+pub struct MergeArgs {
+    /// The part files of every shard, in any order.
+    #[arg(required = true, value_name = "PART")]
+    pub parts: Vec<PathBuf>,
+    /// Output .pvis file.
+    #[arg(short, long, value_name = "OUT.pvis")]
+    pub output: PathBuf,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
 /// `patchvis info`.

@@ -23,7 +23,7 @@ use std::path::Path;
 use std::time::Instant;
 
 /// The library's settings for these flags.
-fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
+pub(super) fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
     Ok(BakeSettings {
         patches: args.patches,
         level: args.level,
@@ -61,7 +61,7 @@ fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
 
 /// A bake error as the command reports it: settings are usage errors (exit 2), the rest
 /// name the input where the library's message does not.
-fn report(input: &Path, e: BakeError) -> anyhow::Error {
+pub(super) fn report(input: &Path, e: BakeError) -> anyhow::Error {
     match e {
         BakeError::Settings(message) => UsageError(message).into(),
         BakeError::Tiling(_) => anyhow!("{}: {e}", input.display()),
@@ -72,6 +72,9 @@ fn report(input: &Path, e: BakeError) -> anyhow::Error {
 /// Runs `patchvis bake`.
 pub fn run(args: BakeArgs) -> Result<()> {
     let recipe = settings(&args)?.check().map_err(|e| UsageError(e.0))?;
+    if let Some(shard) = &args.shard {
+        return super::shard::bake(&args, shard, &recipe);
+    }
     let outputs = Outputs {
         pvis: args.output.clone(),
         mesh: args.mesh_out.clone(),
@@ -320,7 +323,11 @@ fn parse_patch_ids(spec: &str) -> Result<Vec<PatchId>, UsageError> {
 
 /// Every file the bake writes, checked against its inputs, each other and the file system
 /// before any work: a clash, a device node or an unwritable directory is a usage error.
-fn check_paths(args: &BakeArgs, recipe: &Recipe, outputs: &Outputs) -> Result<(), UsageError> {
+pub(super) fn check_paths(
+    args: &BakeArgs,
+    recipe: &Recipe,
+    outputs: &Outputs,
+) -> Result<(), UsageError> {
     let mut inputs = vec![NamedPath::new("the input mesh", "INPUT", &args.input)];
     if let Some(spec) = &args.always_visible {
         inputs.push(NamedPath::new(

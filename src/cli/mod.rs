@@ -8,6 +8,7 @@ pub mod generate;
 pub mod inspect;
 pub mod out;
 pub mod progress;
+pub mod shard;
 pub mod verify;
 
 /// An invocation that cannot run as given (exit code 2), e.g. `--patches 0`.

@@ -43,20 +43,20 @@ const BYTES: [u32; 256] = table::<256>();
 #[cfg(any(not(feature = "bake"), test))]
 const NIBBLES: [u32; 16] = table::<16>();
 
-/// CRC-32C of `data`, a byte a step.
+/// [`crc32c_append`] a byte a step.
 #[cfg(any(feature = "bake", test))]
-fn by_bytes(data: &[u8]) -> u32 {
-    let mut crc = !0u32;
+fn by_bytes(crc: u32, data: &[u8]) -> u32 {
+    let mut crc = !crc;
     for &byte in data {
         crc = BYTES[((crc ^ byte as u32) & 0xFF) as usize] ^ (crc >> 8);
     }
     !crc
 }
 
-/// CRC-32C of `data`, half a byte a step.
+/// [`crc32c_append`] half a byte a step.
 #[cfg(any(not(feature = "bake"), test))]
-fn by_nibbles(data: &[u8]) -> u32 {
-    let mut crc = !0u32;
+fn by_nibbles(crc: u32, data: &[u8]) -> u32 {
+    let mut crc = !crc;
     for &byte in data {
         crc ^= byte as u32;
         crc = NIBBLES[(crc & 0xF) as usize] ^ (crc >> 4);
@@ -67,10 +67,16 @@ fn by_nibbles(data: &[u8]) -> u32 {
 
 /// CRC-32C of `data`.
 pub fn crc32c(data: &[u8]) -> u32 {
+    crc32c_append(0, data)
+}
+
+/// CRC-32C of the bytes `crc` was computed over followed by `data`, for checksums of data
+/// read piece by piece: `crc32c_append(crc32c(a), b) == crc32c(a ++ b)`.
+pub fn crc32c_append(crc: u32, data: &[u8]) -> u32 {
     #[cfg(feature = "bake")]
-    return by_bytes(data);
+    return by_bytes(crc, data);
     #[cfg(not(feature = "bake"))]
-    return by_nibbles(data);
+    return by_nibbles(crc, data);
 }
 
 #[cfg(test)]
@@ -84,6 +90,8 @@ mod tests {
         assert_eq!(crc32c(b""), 0);
         // RFC 3720 (iSCSI) B.4: 32 bytes of zeros.
         assert_eq!(crc32c(&[0u8; 32]), 0x8A91_36AA);
+        let piecewise = super::crc32c_append(crc32c(b"1234"), b"56789");
+        assert_eq!(piecewise, 0xE306_9283);
     }
 
     #[test]
@@ -93,8 +101,8 @@ mod tests {
             .collect();
         for n in [0, 1, 7, 100, 4096] {
             assert_eq!(
-                super::by_bytes(&data[..n]),
-                super::by_nibbles(&data[..n]),
+                super::by_bytes(0, &data[..n]),
+                super::by_nibbles(0, &data[..n]),
                 "{n} bytes"
             );
         }

@@ -64,6 +64,12 @@ pub(crate) fn input_hash(
     for &p in &options.always_visible {
         h.word(u64::from(p));
     }
+    if let Some(views) = &options.views {
+        h.word(views.len() as u64 | 1 << 63);
+        for &v in views {
+            h.word(u64::from(v));
+        }
+    }
     h.word(u64::from(mesh.vertex_count()));
     h.word(u64::from(mesh.triangle_count()));
     for v in 0..mesh.vertex_count() {

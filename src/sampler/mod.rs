@@ -35,7 +35,7 @@ pub use supersample::{
     FoldCorners, FoldTargets, MAX_VIEW_SUPERSAMPLE, fold_into, fold_into_with, fold_targets,
     supersample_rows,
 };
-pub use tiled::{SamplingError, SamplingOptions, sample_tiled};
+pub use tiled::{SamplingError, SamplingOptions, rendered_view_count, sample_tiled};
 
 mod bounding;
 

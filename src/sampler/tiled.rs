@@ -32,8 +32,9 @@
 //!
 //! Options: `min_pixels` (a patch counts only if it covers that many pixels), `dilate` (also
 //! mark edge neighbours of visible patches that may face the eye), `always_visible` (patches
-//! set in every row), `conservative` (conservative rasterization, `conservative.rs`), and a
-//! checkpoint written after each level (`checkpoint.rs`).
+//! set in every row), `conservative` (conservative rasterization, `conservative.rs`), a
+//! checkpoint written after each level (`checkpoint.rs`), and `views` (render only some views
+//! and the ancestors that seed them: a shard of a sharded bake, `bake::Shard`).
 //! Cost per view: a sphere test per patch, the triangles of the drawn patches (a tile test
 //! for those drawn after the tiles), one pass over the pixels. Memory: one
 //! `resolution² × 8`-byte buffer per thread, the result (one bit per view and patch), and
@@ -41,7 +42,7 @@
 //! a mapped temporary file when it would take more than a quarter of
 //! [`SamplingOptions::memory_budget`], so that the heap stays independent of the mesh size.
 //! **Invariant**: the result is the same for any number of threads, and with or without a
-//! resumed checkpoint.
+//! resumed checkpoint; a row rendered with `views` equals the row of a run without.
 
 use super::camera::{Camera, SphereBounds};
 use super::checkpoint;
@@ -86,6 +87,11 @@ pub struct SamplingOptions {
     /// of it, the copy lives in a memory-mapped temporary file instead (`patch_mesh.rs`).
     /// `None`: on the heap. Never changes the result.
     pub memory_budget: Option<u64>,
+    /// Render only these views (ascending ids) and the coarser views that seed them (their
+    /// ancestors through [`parents`]), so that each is rendered exactly as in a full run;
+    /// the other rows stay empty. `None`: every view. A sharded bake (`bake::Shard`) renders
+    /// its share this way.
+    pub views: Option<Vec<u32>>,
 }
 
 /// Why tiled sampling failed: only its checkpoint file can.
@@ -135,6 +141,12 @@ pub fn sample_tiled(
     );
     let views = view_count(params.level);
     let mut matrix = VisibilityMatrix::new(views, patch_count);
+    let rendered = rendered_views(views, options.views.as_deref());
+    let rendered_below = |view: u32| {
+        rendered.as_ref().map_or(view, |r| {
+            r[..view as usize].iter().filter(|&&b| b).count() as u32
+        })
+    };
     let marks = Marks::new(mesh, tiling, options);
     let hash = options
         .checkpoint
@@ -146,9 +158,9 @@ pub fn sample_tiled(
     {
         first_level = levels_done;
     }
-    progress.start("sampling", u64::from(views));
+    progress.start("sampling", u64::from(rendered_below(views)));
     if first_level > 0 {
-        progress.inc(u64::from(view_count(first_level - 1)));
+        progress.inc(u64::from(rendered_below(view_count(first_level - 1))));
     }
     let other_needs = crate::memory::FixedNeeds {
         triangles: mesh.triangle_count(),
@@ -187,6 +199,9 @@ pub fn sample_tiled(
                 || WorkerScratch::new(params.resolution, patch_count),
                 |scratch, (i, row)| {
                     let view = first_view + i as u32;
+                    if rendered.as_ref().is_some_and(|r| !r[view as usize]) {
+                        return;
+                    }
                     let hint = parents(view).map(|pair| {
                         pair.map(|p| &done[p as usize * words_per_row..][..words_per_row])
                     });
@@ -200,6 +215,38 @@ pub fn sample_tiled(
     }
     progress.finish();
     Ok(matrix)
+}
+
+/// How many of the `views` views of a pass a run with [`SamplingOptions::views`] `wanted`
+/// renders: those and their ancestors.
+pub fn rendered_view_count(views: u32, wanted: &[u32]) -> u32 {
+    rendered_views(views, Some(wanted)).map_or(views, |r| r.iter().filter(|&&b| b).count() as u32)
+}
+
+/// Which of the `views` views a run renders when it wants `wanted` (ascending ids below
+/// `views`): those and every ancestor that seeds them; `None` when it wants every view.
+fn rendered_views(views: u32, wanted: Option<&[u32]>) -> Option<Vec<bool>> {
+    let wanted = wanted?;
+    let mut rendered = vec![false; views as usize];
+    for &v in wanted {
+        assert!(
+            v < views,
+            "view {v} is not one of the {views} views sampled"
+        );
+        rendered[v as usize] = true;
+    }
+    // Parents are coarser, so they have smaller ids: one pass from the finest view down
+    // closes the set.
+    for v in (0..views).rev() {
+        if rendered[v as usize]
+            && let Some(pair) = parents(v)
+        {
+            for p in pair {
+                rendered[p as usize] = true;
+            }
+        }
+    }
+    Some(rendered)
 }
 
 /// Most back faces a view puts off until its occlusion tiles exist (about 40 bytes each, so

@@ -48,6 +48,7 @@ pub(crate) use bounds::{bounding_sphere, corners, cross_normal, first_with_area,
 use greedy::Fusion;
 pub(crate) use morton::morton_code;
 pub use quality::TilingQuality;
+pub use renumber::renumbered_patches;
 pub use triangle_map::TriangleMap;
 
 /// Peak heap of the in-core tiling per triangle, an upper bound with margin: measured 111 to

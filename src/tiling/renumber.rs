@@ -40,16 +40,13 @@ impl Tiling {
                 Ok(TriangleMap::from_vec(vec![0; triangles]))
             }
         };
-        let mut patches = Vec::with_capacity(count);
+        let patches = renumbered_patches(&self.patches, order);
         let mut reordered = fresh(self.order.is_mapped())?;
-        let mut first = 0u32;
-        for &old in order {
+        for (&old, new) in order.iter().zip(&patches) {
             let patch = &self.patches[old as usize];
             let range = patch.first as usize..(patch.first + patch.count) as usize;
-            let to = first as usize..first as usize + range.len();
+            let to = new.first as usize..new.first as usize + range.len();
             reordered[to].copy_from_slice(&self.order[range]);
-            patches.push(Patch { first, ..*patch });
-            first += patch.count;
         }
         let mut patch_of = fresh(self.patch_of.is_mapped())?;
         for (new, &old) in patch_of.iter_mut().zip(self.patch_of.iter()) {
@@ -63,6 +60,24 @@ impl Tiling {
             quality: self.quality,
         })
     }
+}
+
+/// The patch records of [`Tiling::renumbered`] alone: record `i` is `patches[order[i]]`, its
+/// range moved so that the ranges are adjacent in the new order from 0. What a merge of a
+/// sharded bake, which has the records but no per-triangle maps, renumbers with.
+///
+/// Panics (caller contract) if an id in `order` is not below `patches.len()`.
+pub fn renumbered_patches(patches: &[Patch], order: &[PatchId]) -> Vec<Patch> {
+    let mut first = 0u32;
+    order
+        .iter()
+        .map(|&old| {
+            let patch = patches[old as usize];
+            let moved = Patch { first, ..patch };
+            first += patch.count;
+            moved
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -1,0 +1,366 @@
+//! The merge of a sharded bake (`patchvis merge PARTS… -o OUT.pvis`): the parts' rows put
+//! back together and run through the rest of `Recipe::run` (fold, numbering, encoding), so
+//! that the file is byte for byte the one a single bake writes.
+//!
+//! Before anything is merged every part must be whole (`part.rs`'s checks), of the same mesh,
+//! settings and tiling as the others (their hashes), of the same shard count, hold exactly
+//! the views its shard owns, and every shard must be there once. A part that differs from the
+//! others is named by its path; when the parts disagree, the value most of them share is
+//! taken as the bake's (the first part's on a tie). The merge needs no mesh: the parts carry
+//! the file's camera and patch records. Cost: the fold, the numbering and the encoding of a
+//! bake, and the parts in memory (together, the sampled rows once).
+
+use super::part::Part;
+use super::{BakeError, BakeSettings, Recipe, SampledRows};
+use crate::runtime::Pvis;
+use crate::sphere::view_count;
+use crate::tiling::renumbered_patches;
+use crate::visibility::VisibilityMatrix;
+use std::path::{Path, PathBuf};
+
+/// A part and the path it was read from (which errors name).
+#[derive(Clone, Debug)]
+pub struct LoadedPart {
+    /// Where it was read from.
+    pub path: PathBuf,
+    /// The part.
+    pub part: Part,
+}
+
+/// Why a merge was refused: a part (named) or the set of parts.
+#[derive(Debug, thiserror::Error)]
+#[error("{}{reason}", part.as_ref().map(|p| format!("{}: ", p.display())).unwrap_or_default())]
+pub struct MergeError {
+    /// The part at fault, if one is.
+    pub part: Option<PathBuf>,
+    /// What is wrong and what to do.
+    pub reason: String,
+}
+
+impl MergeError {
+    fn part(path: &Path, reason: String) -> MergeError {
+        MergeError {
+            part: Some(path.to_path_buf()),
+            reason,
+        }
+    }
+}
+
+/// What [`merge`] made.
+#[derive(Debug)]
+pub struct Merged {
+    /// The `.pvis` file.
+    pub bytes: Vec<u8>,
+    /// Bytes of its VISB payload.
+    pub visibility_bytes: u64,
+    /// Stored views.
+    pub views: u32,
+    /// Patches.
+    pub patches: u32,
+    /// Shards merged.
+    pub shards: u32,
+}
+
+/// Reads the part file at `path`.
+pub fn read_part(path: &Path) -> Result<LoadedPart, MergeError> {
+    let bytes = crate::mapped::open_regular(path)
+        .and_then(|(mut file, meta)| {
+            let mut bytes = Vec::with_capacity(meta.len() as usize);
+            std::io::Read::read_to_end(&mut file, &mut bytes)?;
+            Ok(bytes)
+        })
+        .map_err(|e| MergeError::part(path, format!("cannot read: {e}")))?;
+    let part = Part::decode(&bytes).map_err(|reason| MergeError::part(path, reason))?;
+    Ok(LoadedPart {
+        path: path.to_path_buf(),
+        part,
+    })
+}
+
+/// The value of `key` most parts share (the earliest part's on a tie).
+fn consensus(parts: &[LoadedPart], key: impl Fn(&Part) -> u64) -> u64 {
+    let keys: Vec<u64> = parts.iter().map(|p| key(&p.part)).collect();
+    let mut counts = std::collections::HashMap::new();
+    for &k in &keys {
+        *counts.entry(k).or_insert(0usize) += 1;
+    }
+    let most = counts.values().copied().max().unwrap_or(0);
+    keys.into_iter()
+        .find(|k| counts[k] == most)
+        .expect("at least one part")
+}
+
+/// Merges `parts` (in any order) into the `.pvis` a single bake with their settings writes.
+pub fn merge(parts: &[LoadedPart]) -> Result<Merged, MergeError> {
+    let whole = |reason: String| MergeError { part: None, reason };
+    if parts.is_empty() {
+        return Err(whole("no parts to merge".into()));
+    }
+    let mesh = consensus(parts, |p| p.mesh_hash);
+    let settings = consensus(parts, |p| p.settings.hash());
+    let tiling = consensus(parts, |p| p.tiling_hash);
+    let count = consensus(parts, |p| u64::from(p.shard.count)) as u32;
+    for LoadedPart { path, part } in parts {
+        let differs = |what: &str, found: u64, expected: u64| {
+            MergeError::part(
+                path,
+                format!(
+                    "{what} (hash {found:016x}; the other parts' is {expected:016x}); bake \
+                     this shard again with the others' input and flags"
+                ),
+            )
+        };
+        if part.mesh_hash != mesh {
+            return Err(differs("from another mesh", part.mesh_hash, mesh));
+        }
+        if part.settings.hash() != settings {
+            return Err(differs(
+                "baked with other settings",
+                part.settings.hash(),
+                settings,
+            ));
+        }
+        if part.tiling_hash != tiling {
+            return Err(differs(
+                "sampled another tiling (another tiling file, --patches, --tiling or --memory)",
+                part.tiling_hash,
+                tiling,
+            ));
+        }
+        if part.shard.count != count {
+            return Err(MergeError::part(
+                path,
+                format!(
+                    "shard {} of a bake in {} shards; the other parts are of {count} shards",
+                    part.shard, part.shard.count
+                ),
+            ));
+        }
+    }
+    let mut holder: Vec<Option<&Path>> = vec![None; count as usize];
+    for LoadedPart { path, part } in parts {
+        if let Some(other) = holder[part.shard.index as usize] {
+            return Err(MergeError::part(
+                path,
+                format!(
+                    "shard {} is given twice (also {}); give each shard's part once",
+                    part.shard,
+                    other.display()
+                ),
+            ));
+        }
+        holder[part.shard.index as usize] = Some(path);
+    }
+    if let Some(missing) = holder.iter().position(Option::is_none) {
+        let n = holder.iter().filter(|h| h.is_none()).count();
+        return Err(whole(format!(
+            "shard {missing}/{count} is missing ({n} of {count} shards have no part among the \
+             {} given); bake it with --shard {missing}/{count} and merge all {count}",
+            parts.len()
+        )));
+    }
+    let first = &parts[0].part;
+    let recipe = recipe_of(first).map_err(|e| MergeError::part(&parts[0].path, e))?;
+    let patch_count = first.patches.len() as u32;
+    let levels = first.settings.pass_levels();
+    let mut matrices: Vec<VisibilityMatrix> = levels
+        .iter()
+        .map(|&l| VisibilityMatrix::new(view_count(l), patch_count))
+        .collect();
+    let mut seen: Vec<Vec<bool>> = levels
+        .iter()
+        .map(|&l| vec![false; view_count(l) as usize])
+        .collect();
+    for LoadedPart { path, part } in parts {
+        let wrong = |what: String| {
+            MergeError::part(
+                path,
+                format!("{what} (written by another patchvis build?); bake this shard again"),
+            )
+        };
+        if part.passes.len() != levels.len() || part.patches.len() as u32 != patch_count {
+            return Err(wrong(
+                "holds other passes or patches than its settings say".into(),
+            ));
+        }
+        for (pass, ((&level, matrix), seen)) in part
+            .passes
+            .iter()
+            .zip(levels.iter().zip(&mut matrices).zip(&mut seen))
+        {
+            if pass.level != level || pass.views != part.shard.views(level) {
+                return Err(wrong(format!(
+                    "holds other views than shard {} owns at level {level}",
+                    part.shard
+                )));
+            }
+            let words = matrix.words_per_row();
+            for (i, &v) in pass.views.iter().enumerate() {
+                if std::mem::replace(&mut seen[v as usize], true) {
+                    return Err(wrong(format!("holds view {v} of level {level} again")));
+                }
+                matrix
+                    .row_mut(v)
+                    .copy_from_slice(&pass.words[i * words..][..words]);
+            }
+        }
+    }
+    if let Some((level, view)) = levels
+        .iter()
+        .zip(&seen)
+        .find_map(|(&l, s)| s.iter().position(|&b| !b).map(|v| (l, v)))
+    {
+        return Err(whole(format!(
+            "no part holds view {view} of level {level}; bake every shard with one patchvis build"
+        )));
+    }
+    let mut matrices = matrices.into_iter();
+    let rows = SampledRows {
+        plain: matrices.next().expect("one pass at least"),
+        fine: matrices.next(),
+        params: first.params,
+        supersample: recipe.supersample,
+    };
+    // What `Recipe::run` does after sampling, on the records instead of the tiling.
+    let level = recipe.settings.level;
+    let visibility = rows.stored(level);
+    let params = rows.params(level);
+    drop(rows);
+    let (patches, visibility) = match recipe.file_patch_order(&visibility) {
+        Some(order) => (
+            renumbered_patches(&first.patches, &order),
+            visibility.with_patch_order(&order),
+        ),
+        None => (first.patches.clone(), visibility),
+    };
+    let bytes = recipe.encode_patches(&params, first.triangle_count, &patches, &visibility);
+    let visibility_bytes = Pvis::parse(&bytes)
+        .map(|p| p.visibility_bytes())
+        .map_err(|e| {
+            whole(format!(
+                "internal error: the merged file does not parse: {e}"
+            ))
+        })?;
+    Ok(Merged {
+        bytes,
+        visibility_bytes,
+        views: visibility.views(),
+        patches: patch_count,
+        shards: count,
+    })
+}
+
+/// The recipe of the bake `part` is a shard of: its recorded settings, checked again.
+fn recipe_of(part: &Part) -> Result<Recipe, String> {
+    let s = &part.settings;
+    BakeSettings {
+        patches: (part.patches.len() as u32).max(1),
+        level: s.level,
+        resolution: s.resolution,
+        fov_deg: s.fov_deg,
+        min_pixels: s.min_pixels,
+        dilate: s.dilate,
+        always_visible: s.always_visible.clone(),
+        conservative: false,
+        conservative_raster: s.conservative_raster,
+        view_supersample: Some(s.extra_levels),
+        fold_min_pixels: Some(s.fold_min_pixels),
+        fold_corners: Some(s.fold_corners),
+        patch_order: s.patch_order,
+        encoding: s.encoding,
+        ..BakeSettings::default()
+    }
+    .check()
+    .map_err(|e| format!("its settings do not check: {e}; bake this shard again"))
+    .and_then(|recipe| {
+        if recipe.part_settings() == *s && part.params.level == s.level {
+            Ok(recipe)
+        } else {
+            Err(
+                "its settings do not resolve to themselves (written by another patchvis \
+                 build?); bake this shard again"
+                    .into(),
+            )
+        }
+    })
+}
+
+/// [`merge`] as a [`BakeError`], for callers that handle both.
+impl From<MergeError> for BakeError {
+    fn from(e: MergeError) -> BakeError {
+        BakeError::Sharded(e.to_string())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bake::{Backend, Stages};
+    use crate::progress::NoProgress;
+    use crate::test_kit::bunny::bunny;
+
+    /// Shards of the bunny merge into the single bake's bytes, in any order, for a plain
+    /// and a thresholded fold; a missing or repeated shard is refused.
+    #[test]
+    fn shards_merge_into_the_single_bake() {
+        // The bunny far from the origin is baked in a working frame (`frame.rs`): the parts
+        // must carry the original's camera and patch records as the bake computes them.
+        let near = bunny();
+        let b = near.bounds();
+        let offset = 4096.0 * (b.max[0] - b.min[0]);
+        let far = crate::ooc::Mesh::from_memory(
+            "far bunny",
+            (0..near.vertex_count())
+                .map(|v| near.position(v).map(|c| c + offset))
+                .collect(),
+            (0..near.triangle_count())
+                .map(|t| near.triangle(t))
+                .collect(),
+        )
+        .unwrap();
+        assert!(
+            super::super::frame::Frame::choose(&far, 45.0)
+                .unwrap()
+                .is_some()
+        );
+        for (mesh, fold_min_pixels) in [(&near, None), (&near, Some(3)), (&far, None)] {
+            let recipe = BakeSettings {
+                patches: 120,
+                level: 2,
+                resolution: 48,
+                fold_min_pixels,
+                ..BakeSettings::default()
+            }
+            .check()
+            .unwrap();
+            let mut stages = Stages::new();
+            let single = recipe
+                .run(mesh, &Backend::Cpu, &NoProgress, &mut stages)
+                .unwrap();
+            let mut parts: Vec<LoadedPart> = (0..3)
+                .map(|index| {
+                    let shard = crate::bake::Shard { index, count: 3 };
+                    let baked = recipe
+                        .run_shard(mesh, None, shard, &Backend::Cpu, &NoProgress, &mut stages)
+                        .unwrap();
+                    let part = Part::decode(&baked.part.encode()).unwrap();
+                    assert_eq!(part, baked.part);
+                    LoadedPart {
+                        path: format!("p{index}").into(),
+                        part,
+                    }
+                })
+                .collect();
+            parts.reverse();
+            assert_eq!(merge(&parts).unwrap().bytes, single.bytes);
+            let missing = merge(&parts[1..]).unwrap_err();
+            assert!(missing.reason.contains("is missing"), "{missing}");
+            let mut twice = parts.clone();
+            twice[0] = parts[1].clone();
+            twice[0].path = "again".into();
+            let err = merge(&twice).unwrap_err();
+            assert_eq!(err.part, Some("p1".into()), "{err}");
+            assert!(err.reason.contains("given twice (also again)"), "{err}");
+        }
+    }
+}
