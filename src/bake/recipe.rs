@@ -417,6 +417,26 @@ impl Recipe {
         })
     }
 
+    /// Removes this bake's sampling checkpoints (once its output is complete, they have
+    /// served their purpose); a missing one is fine.
+    pub(crate) fn remove_checkpoints(&self) -> Result<(), BakeError> {
+        for checkpoint in [&self.fine_checkpoint, &self.coarse_checkpoint]
+            .into_iter()
+            .flatten()
+        {
+            match std::fs::remove_file(checkpoint) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    return Err(BakeError::Remove {
+                        path: checkpoint.clone(),
+                        source: e,
+                    });
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
     /// Writes `baked` (from `mesh`) to `outputs`: the reordered mesh to a temporary file
     /// first, then the `.pvis` atomically, then the mesh renamed into place, so that a failure
     /// anywhere leaves no partial output behind; the finished bake's checkpoints are removed.
@@ -438,20 +458,7 @@ impl Recipe {
             source,
         })?;
         // The output is complete: its checkpoints have served their purpose.
-        for checkpoint in [&self.fine_checkpoint, &self.coarse_checkpoint]
-            .into_iter()
-            .flatten()
-        {
-            match std::fs::remove_file(checkpoint) {
-                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                    return Err(BakeError::Remove {
-                        path: checkpoint.clone(),
-                        source: e,
-                    });
-                }
-                _ => {}
-            }
-        }
+        self.remove_checkpoints()?;
         if let (Some(tmp), Some(path)) = (mesh_tmp, &outputs.mesh) {
             tmp.commit().map_err(|source| BakeError::Write {
                 path: path.clone(),

@@ -154,21 +154,7 @@ impl Recipe {
             path: path.to_path_buf(),
             source,
         })?;
-        for checkpoint in [&self.fine_checkpoint, &self.coarse_checkpoint]
-            .into_iter()
-            .flatten()
-        {
-            match std::fs::remove_file(checkpoint) {
-                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                    return Err(BakeError::Remove {
-                        path: checkpoint.clone(),
-                        source: e,
-                    });
-                }
-                _ => {}
-            }
-        }
-        Ok(())
+        self.remove_checkpoints()
     }
 
     /// The tiling of a tiling file, if it tiles the mesh hashing to `mesh_hash` into
