@@ -24,4 +24,4 @@ for step in tile-job shard-job merge-job; do
         sleep 10
     done
 done
-echo "done: /work/mesh.pvis on the patchvis-work volume"
+echo "done: /bake/mesh.pvis on the patchvis-work volume"

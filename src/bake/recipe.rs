@@ -370,18 +370,7 @@ impl Recipe {
         progress: &dyn Progress,
         stages: &mut Stages,
     ) -> Result<Baked, BakeError> {
-        for warning in mesh
-            .warnings()
-            .iter()
-            .cloned()
-            .chain(self.resolution_warning())
-        {
-            progress.warn(&warning);
-        }
-        self.check_mesh(mesh)?;
-        // Coordinates binary32 cameras cannot handle are tiled and sampled in a frame of
-        // their own (`frame.rs`); the file gets the original's camera and patch records.
-        let frame = Frame::choose(mesh, self.settings.fov_deg)?;
+        let frame = self.prepare(mesh, progress)?;
         let local = match &frame {
             Some(frame) => Some(stages.run("frame", || frame.apply(mesh))?),
             None => None,
@@ -415,6 +404,27 @@ impl Recipe {
             bytes,
             visibility_bytes,
         })
+    }
+
+    /// What every bake (whole or one shard) does first: reports the mesh's and the
+    /// settings' warnings, checks the mesh, and chooses the working frame. Coordinates
+    /// binary32 cameras cannot handle are tiled and sampled in a frame of their own
+    /// (`frame.rs`); the file gets the original's camera and patch records.
+    pub(crate) fn prepare(
+        &self,
+        mesh: &Mesh,
+        progress: &dyn Progress,
+    ) -> Result<Option<Frame>, BakeError> {
+        for warning in mesh
+            .warnings()
+            .iter()
+            .cloned()
+            .chain(self.resolution_warning())
+        {
+            progress.warn(&warning);
+        }
+        self.check_mesh(mesh)?;
+        Frame::choose(mesh, self.settings.fov_deg)
     }
 
     /// Removes this bake's sampling checkpoints (once its output is complete, they have

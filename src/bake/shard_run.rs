@@ -81,17 +81,8 @@ impl Recipe {
                 backend.describe()
             )));
         }
-        for warning in mesh
-            .warnings()
-            .iter()
-            .cloned()
-            .chain(self.resolution_warning())
-        {
-            progress.warn(&warning);
-        }
-        self.check_mesh(mesh)?;
+        let frame = self.prepare(mesh, progress)?;
         let mesh_hash = stages.run("hash", || mesh_hash(mesh));
-        let frame = Frame::choose(mesh, self.settings.fov_deg)?;
         let local = match &frame {
             Some(frame) => Some(stages.run("frame", || frame.apply(mesh))?),
             None => None,
