@@ -128,6 +128,19 @@ const char *patchvis_error_message(int32_t code);
  * to size a buffer). Parses the file again. */
 size_t patchvis_error_detail(const uint8_t *data, size_t len, char *buf, size_t buf_len);
 
+/* The parts patchvis_error_detail's message is made of, for a host that prints it itself
+ * (the WebAssembly module's JavaScript): kind indexes the reader's message templates
+ * (runtime::MESSAGE_TEMPLATES; kind = file-error code - 1) and values fill their holes in
+ * order, unused ones 0. */
+typedef struct PatchvisErrorParts {
+    uint32_t kind;
+    uint64_t values[6];
+} PatchvisErrorParts;
+
+/* Parses the file again; if it is refused, writes the parts of the reader's message to *out.
+ * Returns PATCHVIS_OK (valid; *out untouched), the file-error code, or PATCHVIS_ERR_ARGUMENT. */
+int32_t patchvis_error_parts(const uint8_t *data, size_t len, PatchvisErrorParts *out);
+
 /* Fills *out. Returns PATCHVIS_OK, PATCHVIS_ERR_ARGUMENT or PATCHVIS_ERR_NOT_PARSED. */
 int32_t patchvis_info(const PatchvisFile *file, PatchvisInfo *out);
 

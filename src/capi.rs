@@ -316,7 +316,7 @@ pub extern "C" fn patchvis_error_message(code: i32) -> *const c_char {
 /// # Safety
 /// `data` as for `patchvis_parse` (for the duration of the call only); `buf` must be null with
 /// `buf_len` 0, or valid for writes of `buf_len` bytes.
-#[unsafe(no_mangle)]
+#[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
 pub unsafe extern "C" fn patchvis_error_detail(
     data: *const u8,
     len: usize,
@@ -346,6 +346,54 @@ pub unsafe extern "C" fn patchvis_error_detail(
         out[n] = 0;
     }
     text.len()
+}
+
+/// The parts of the reader's message for a refused file (`runtime::MessageParts`): the
+/// template of its kind of error and the values of the template's holes, for a host that
+/// prints the message itself (the WebAssembly module: `wasm/patchvis.mjs` fills the
+/// templates, so the `.wasm` carries neither the texts nor a number formatter).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PatchvisErrorParts {
+    /// Index of the template in `runtime::MESSAGE_TEMPLATES` (the file-error code less 1).
+    pub kind: u32,
+    /// The values of the template's holes, in order; unused ones are 0.
+    pub values: [u64; 6],
+}
+
+/// Validates `len` bytes at `data` as `patchvis_parse` does and, if the reader refuses them,
+/// writes the parts of its message to `*out` (what `patchvis_error_detail` prints, before
+/// formatting). Returns 0 (the file is valid; `*out` is untouched), a positive file-error
+/// code, or `PATCHVIS_ERR_ARGUMENT`. Parses the file again.
+///
+/// # Safety
+/// `data` as for `patchvis_parse` (for the duration of the call only); `out` must be null or
+/// valid for a write of a `PatchvisErrorParts`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn patchvis_error_parts(
+    data: *const u8,
+    len: usize,
+    out: *mut PatchvisErrorParts,
+) -> i32 {
+    // SAFETY: caller contract on `data`/`len` for this call.
+    let Some(bytes) = (unsafe { bytes(data, len) }) else {
+        return PATCHVIS_ERR_ARGUMENT;
+    };
+    if out.is_null() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    let Err(error) = Pvis::parse(bytes) else {
+        return PATCHVIS_OK;
+    };
+    let parts = error.parts();
+    // SAFETY: `out` is non-null and valid for a write (caller contract).
+    unsafe {
+        out.write(PatchvisErrorParts {
+            kind: parts.kind,
+            values: parts.values,
+        })
+    };
+    file_error_code(&error)
 }
 
 /// Fills `*out` with what the file holds. Returns 0, `PATCHVIS_ERR_ARGUMENT` or

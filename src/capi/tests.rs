@@ -254,6 +254,56 @@ fn refusals_have_codes_and_exact_messages() {
     assert_eq!(unknown.to_str().unwrap(), "unknown error code");
 }
 
+/// The parts of a refused file's message, as the WebAssembly module's JavaScript gets them:
+/// the kind is the file-error code less one, and filling the kind's template with the values
+/// gives the reader's exact message.
+#[test]
+fn error_parts_name_the_template_and_its_values() {
+    let mut parts = PatchvisErrorParts::default();
+    // SAFETY: `INVALID` is readable; `parts` writable.
+    let code = unsafe { patchvis_error_parts(INVALID.as_ptr(), INVALID.len(), &mut parts) };
+    assert_eq!(code, 17);
+    assert_eq!(parts.kind, 16);
+    let error = Pvis::parse(INVALID).unwrap_err();
+    assert_eq!(parts.values, error.parts().values);
+    let mut values = parts.values.iter();
+    let filled: String = crate::runtime::MESSAGE_TEMPLATES[parts.kind as usize]
+        .split("{}")
+        .enumerate()
+        .map(|(i, text)| match i {
+            0 => text.into(),
+            _ => format!("{}{text}", values.next().unwrap()),
+        })
+        .collect();
+    assert_eq!(filled, INVALID_ERR.trim_end());
+
+    // Every kind's code is its index plus one.
+    let bad_magic = *b"NOTAPVIS";
+    // SAFETY: as above.
+    let code = unsafe { patchvis_error_parts(bad_magic.as_ptr(), bad_magic.len(), &mut parts) };
+    assert_eq!((code, parts.kind), (2, 1));
+
+    // A valid file leaves `*out` as it was; misuse is an error code.
+    let before = parts;
+    // SAFETY: as above.
+    assert_eq!(
+        unsafe { patchvis_error_parts(VALID.as_ptr(), VALID.len(), &mut parts) },
+        PATCHVIS_OK
+    );
+    assert_eq!(parts, before);
+    // SAFETY: null pointers are refused before any access.
+    unsafe {
+        assert_eq!(
+            patchvis_error_parts(VALID.as_ptr(), VALID.len(), core::ptr::null_mut()),
+            PATCHVIS_ERR_ARGUMENT
+        );
+        assert_eq!(
+            patchvis_error_parts(core::ptr::null(), 4, &mut parts),
+            PATCHVIS_ERR_ARGUMENT
+        );
+    }
+}
+
 #[test]
 fn streaming_answers_equal_the_stateless_query() {
     assert_eq!(patchvis_stream_size(), PATCHVIS_STREAM_SIZE);

@@ -1,12 +1,15 @@
 //! Why the reader refused a file: one small `Copy` enum carrying the values that caused it.
 //!
 //! Every variant's message ([`Error::message`], also its `Display`) is one precise line saying
-//! what was found, where, and what the spec (`spec/FORMAT.md`) expects. The message is built
-//! with the reader's own small formatter (`message.rs`) rather than `core::fmt`, and what a
-//! refused field is and which rule it breaks is a [`Rule`], a one-byte id whose text is only
-//! looked up when a message is made: a build that never prints an error (a microcontroller)
-//! carries neither the texts nor a formatter, and one that does (WebAssembly) carries no
-//! `core::fmt`. `std::error::Error` comes with the `std` feature.
+//! what was found, where, and what the spec (`spec/FORMAT.md`) expects. Its words are a
+//! template per kind of error ([`MESSAGE_TEMPLATES`]) with holes for the values
+//! ([`Error::parts`]), and what a refused field is and which rule it breaks is a [`Rule`], a
+//! one-byte id whose text ([`RULE_TEXTS`]) fills a hole. The message is built with the
+//! reader's own small formatter (`message.rs`) rather than `core::fmt`: a build that never
+//! prints an error (a microcontroller) carries neither the texts nor a formatter, one that
+//! does (the C ABI) carries no `core::fmt`, and one whose host prints the message from the
+//! parts (WebAssembly, whose JavaScript holds a generated copy of the templates) carries
+//! neither. `std::error::Error` comes with the `std` feature.
 
 use core::fmt;
 
@@ -267,60 +270,60 @@ pub enum Rule {
 impl Rule {
     /// The words a message prints for this rule.
     pub fn text(self) -> &'static str {
-        match self {
-            Rule::HeaderSectionCount => "header section_count must be at least 1",
-            Rule::SectionCount => "section_count",
-            Rule::HeaderReserved => "header reserved field must be 0",
-            Rule::TableReserved => "section table reserved field must be 0",
-            Rule::Gap => "bytes between sections must be 0",
-            Rule::SphereLevel => "sphere level",
-            Rule::CamrCenter => "CAMR center must be finite",
-            Rule::CamrRadius => "CAMR radius must be finite and > 0",
-            Rule::CamrDistance => "CAMR distance must be finite and >= radius",
-            Rule::CamrFov => "CAMR fov_deg must be in (0, 180)",
-            Rule::CamrResolution => "CAMR resolution must be at least 1",
-            Rule::CamrConvention => "CAMR sphere_convention must be 1",
-            Rule::CamrReserved => "CAMR reserved field must be 0",
-            Rule::PatchCount => "PTCH patch_count must be at least 1",
-            Rule::PatchCountLimit => "patch_count",
-            Rule::TriangleCount => "triangle_count",
-            Rule::PtchReserved => "PTCH reserved field must be 0",
-            Rule::PatchCenter => "PTCH patch center must be finite",
-            Rule::PatchRadius => "PTCH patch radius must be finite and >= 0",
-            Rule::PatchConeAxis => "PTCH patch cone_axis must be finite",
-            Rule::PatchConeCos => "PTCH patch cone_cos must be in [-1, 1]",
-            Rule::Origin => "PTCH origin must be finite",
-            Rule::Step => "PTCH step must be finite and > 0",
-            Rule::CountBits => "PTCH count_bits must be at most 32",
-            Rule::CenterBits => "PTCH center_bits must be at most 24",
-            Rule::RadiusBits => "PTCH radius_bits must be at most 24",
-            Rule::AxisBits => "PTCH axis_bits must be in 2..=16",
-            Rule::CosBits => "PTCH cos_bits must be in 1..=16",
-            Rule::PtchReservedBytes => "PTCH reserved bytes must be 0",
-            Rule::StepCenterRange => {
-                "PTCH step must keep origin + (2^center_bits - 1) * step finite"
-            }
-            Rule::StepRadiusRange => "PTCH step must keep (2^radius_bits - 1) * step finite",
-            Rule::BlockStart => "PTCH block start must equal the sum of the counts before it",
-            Rule::RecordAxis => "PTCH record's axis coordinate must be at most 2^axis_bits - 2",
-            Rule::RecordPadding => "PTCH bits after the last record must be 0",
-            Rule::VisbReserved => "VISB reserved field must be 0",
-            Rule::VisbProbability => "VISB probability must be in 1..4096",
-            Rule::TreeNodeCount => "VISB tree node count must be in 1..=1024",
-            Rule::TreeLeaf => "VISB tree leaf must hold a probability in 1..4096",
-            Rule::TreeFeature => "VISB tree node must test a feature below 23",
-            Rule::TreeChildren => "VISB tree node's children must follow it inside the tree",
-            Rule::TreeDepth => "VISB tree depth",
-            Rule::Checkpoint => "VISB checkpoint must be the offset of its view's record",
-            Rule::RecordLength => {
-                "VISB record length must be a LEB128 of at most 4 bytes inside the section"
-            }
-            Rule::RecordLengthMinimal => "VISB record length must be a minimal LEB128",
-            Rule::CodeLength => "VISB code length",
-            Rule::CodeEnd => "VISB code must not end in a zero byte",
-        }
+        RULE_TEXTS.get(self as usize).copied().unwrap_or("")
     }
 }
+
+/// What each [`Rule`] prints, in declaration order (`RULE_TEXTS[rule as usize]`): the `{r}`
+/// of [`MESSAGE_TEMPLATES`].
+pub const RULE_TEXTS: [&str; 46] = [
+    "header section_count must be at least 1",
+    "section_count",
+    "header reserved field must be 0",
+    "section table reserved field must be 0",
+    "bytes between sections must be 0",
+    "sphere level",
+    "CAMR center must be finite",
+    "CAMR radius must be finite and > 0",
+    "CAMR distance must be finite and >= radius",
+    "CAMR fov_deg must be in (0, 180)",
+    "CAMR resolution must be at least 1",
+    "CAMR sphere_convention must be 1",
+    "CAMR reserved field must be 0",
+    "PTCH patch_count must be at least 1",
+    "patch_count",
+    "triangle_count",
+    "PTCH reserved field must be 0",
+    "PTCH patch center must be finite",
+    "PTCH patch radius must be finite and >= 0",
+    "PTCH patch cone_axis must be finite",
+    "PTCH patch cone_cos must be in [-1, 1]",
+    "PTCH origin must be finite",
+    "PTCH step must be finite and > 0",
+    "PTCH count_bits must be at most 32",
+    "PTCH center_bits must be at most 24",
+    "PTCH radius_bits must be at most 24",
+    "PTCH axis_bits must be in 2..=16",
+    "PTCH cos_bits must be in 1..=16",
+    "PTCH reserved bytes must be 0",
+    "PTCH step must keep origin + (2^center_bits - 1) * step finite",
+    "PTCH step must keep (2^radius_bits - 1) * step finite",
+    "PTCH block start must equal the sum of the counts before it",
+    "PTCH record's axis coordinate must be at most 2^axis_bits - 2",
+    "PTCH bits after the last record must be 0",
+    "VISB reserved field must be 0",
+    "VISB probability must be in 1..4096",
+    "VISB tree node count must be in 1..=1024",
+    "VISB tree leaf must hold a probability in 1..4096",
+    "VISB tree node must test a feature below 23",
+    "VISB tree node's children must follow it inside the tree",
+    "VISB tree depth",
+    "VISB checkpoint must be the offset of its view's record",
+    "VISB record length must be a LEB128 of at most 4 bytes inside the section",
+    "VISB record length must be a minimal LEB128",
+    "VISB code length",
+    "VISB code must not end in a zero byte",
+];
 
 impl fmt::Display for Rule {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -338,6 +341,52 @@ fn fixed_len(tag: [u8; 4]) -> u64 {
     }
 }
 
+/// What a message is made of: the template of the error's kind and the values of its holes.
+/// [`Error::message`] fills them in; a host that prints messages itself (the WebAssembly
+/// module's JavaScript, through the C ABI's `patchvis_error_parts`) gets these instead, so
+/// that the reader it embeds carries neither the texts nor a number formatter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MessageParts {
+    /// The error's kind: its index in [`MESSAGE_TEMPLATES`] (the declaration order of
+    /// [`Error`]).
+    pub kind: u32,
+    /// The values of the template's holes, in order; unused ones are 0.
+    pub values: [u64; 6],
+}
+
+/// The message of each kind of [`Error`], in declaration order, with holes filled in order
+/// from [`MessageParts::values`]: `{}` a value in decimal; `{x}` a `u32` as `0x` and eight
+/// upper-case hexadecimal digits; `{t}` a section tag given as its big-endian `u32`, as text
+/// when its four bytes are printable ASCII and else as `{x}`; `{f}` an `f32` given by its
+/// bits, as `Display` writes it (shortest round-trip digits, no exponent; `NaN`, `inf`);
+/// `{r}` the text of the [`Rule`] with that index ([`RULE_TEXTS`]). The one source of every
+/// message's words: `wasm/patchvis.mjs` holds a copy generated from these by a test.
+pub const MESSAGE_TEMPLATES: [&str; 20] = [
+    "truncated: needed {} bytes, have {}",
+    "not a .pvis file: bad signature",
+    "unsupported version {}: this reader understands version {}",
+    "unknown header flags {x}",
+    "length mismatch: header says {} bytes, data has {}",
+    "checksum mismatch: trailer has CRC-32C {x}, data has {x}",
+    "missing section {t}",
+    "section {t} appears twice",
+    "section {t}: shorter than its {}-byte fixed part",
+    "section {t}: length {} but its contents need {}",
+    "section {t}: bytes {}..{}+{} not inside {}..{} \
+     (after the table or previous section, before the trailer)",
+    "section {t}: offset {} is not a multiple of {}",
+    "{r} {} exceeds the limit {}",
+    "{r}: found {} at byte {}",
+    "{r}: found {f} at byte {}",
+    "section CAMR: view_count {} but level {} has {} views",
+    "section PTCH: patch {} covers triangles {}+{}, \
+     expected a non-empty range starting at {}",
+    "section PTCH: triangle_count {} but the patches cover {}",
+    "section VISB: unsupported encoding {} \
+     (encoding {} is read from version 1, {} from version 2, {} from version 3)",
+    "section VISB: row of view {} sets bits past the last patch (byte {})",
+];
+
 impl Error {
     /// The one-line message: what was found, where, and what the spec expects. Exactly the
     /// `Display` text, made without `core::fmt`.
@@ -347,174 +396,112 @@ impl Error {
         m
     }
 
-    /// Writes [`Error::message`] into `m`. One out-of-line function, so the message texts and
-    /// the formatter exist once in a build however many callers print errors.
-    #[inline(never)]
-    fn write(&self, m: &mut Message) {
-        match *self {
-            Error::Truncated { needed, have } => {
-                m.text("truncated: needed ")
-                    .u64(needed)
-                    .text(" bytes, have ")
-                    .u64(have);
-            }
-            Error::BadMagic => {
-                m.text("not a .pvis file: bad signature");
-            }
+    /// The template and values the message is made of (see [`MessageParts`]).
+    pub fn parts(&self) -> MessageParts {
+        let tag = |t: [u8; 4]| u64::from(u32::from_be_bytes(t));
+        let (kind, values): (u32, [u64; 6]) = match *self {
+            Error::Truncated { needed, have } => (0, [needed, have, 0, 0, 0, 0]),
+            Error::BadMagic => (1, [0, 0, 0, 0, 0, 0]),
             Error::UnsupportedVersion { found } => {
-                m.text("unsupported version ")
-                    .u64(found.into())
-                    .text(": this reader understands version ")
-                    .u64(consts::VERSION.into());
+                (2, [found.into(), consts::VERSION.into(), 0, 0, 0, 0])
             }
             Error::UnknownFlags { flags } => {
-                m.text("unknown header flags ")
-                    .hex32(flags & !consts::KNOWN_FLAGS);
+                (3, [(flags & !consts::KNOWN_FLAGS).into(), 0, 0, 0, 0, 0])
             }
-            Error::LengthMismatch { header, actual } => {
-                m.text("length mismatch: header says ")
-                    .u64(header)
-                    .text(" bytes, data has ")
-                    .u64(actual);
-            }
+            Error::LengthMismatch { header, actual } => (4, [header, actual, 0, 0, 0, 0]),
             Error::ChecksumMismatch { stored, computed } => {
-                m.text("checksum mismatch: trailer has CRC-32C ")
-                    .hex32(stored)
-                    .text(", data has ")
-                    .hex32(computed);
+                (5, [stored.into(), computed.into(), 0, 0, 0, 0])
             }
-            Error::MissingSection { tag } => {
-                m.text("missing section ").tag(tag);
-            }
-            Error::DuplicateSection { tag } => {
-                m.text("section ").tag(tag).text(" appears twice");
-            }
-            Error::BadSection { tag } => {
-                m.text("section ")
-                    .tag(tag)
-                    .text(": shorter than its ")
-                    .u64(fixed_len(tag))
-                    .text("-byte fixed part");
-            }
+            Error::MissingSection { tag: t } => (6, [tag(t), 0, 0, 0, 0, 0]),
+            Error::DuplicateSection { tag: t } => (7, [tag(t), 0, 0, 0, 0, 0]),
+            Error::BadSection { tag: t } => (8, [tag(t), fixed_len(t), 0, 0, 0, 0]),
             Error::SectionLength {
-                tag,
+                tag: t,
                 length,
                 expected,
-            } => {
-                m.text("section ")
-                    .tag(tag)
-                    .text(": length ")
-                    .u64(length)
-                    .text(" but its contents need ")
-                    .u64(expected);
-            }
+            } => (9, [tag(t), length, expected, 0, 0, 0]),
             Error::SectionOutOfBounds {
-                tag,
+                tag: t,
                 offset,
                 length,
                 start,
                 end,
-            } => {
-                m.text("section ")
-                    .tag(tag)
-                    .text(": bytes ")
-                    .u64(offset)
-                    .text("..")
-                    .u64(offset)
-                    .text("+")
-                    .u64(length)
-                    .text(" not inside ")
-                    .u64(start)
-                    .text("..")
-                    .u64(end)
-                    .text(" (after the table or previous section, before the trailer)");
-            }
-            Error::SectionMisaligned { tag, offset } => {
-                m.text("section ")
-                    .tag(tag)
-                    .text(": offset ")
-                    .u64(offset)
-                    .text(" is not a multiple of ")
-                    .u64(consts::SECTION_ALIGN);
+            } => (10, [tag(t), offset, offset, length, start, end]),
+            Error::SectionMisaligned { tag: t, offset } => {
+                (11, [tag(t), offset, consts::SECTION_ALIGN, 0, 0, 0])
             }
             Error::LimitExceeded { what, value, limit } => {
-                m.text(what.text())
-                    .text(" ")
-                    .u64(value)
-                    .text(" exceeds the limit ")
-                    .u64(limit);
+                (12, [what as u64, value, limit, 0, 0, 0])
             }
             Error::Invalid {
                 what,
                 offset,
                 value,
-            } => {
-                m.text(what.text())
-                    .text(": found ")
-                    .u64(value)
-                    .text(" at byte ")
-                    .u64(offset);
-            }
+            } => (13, [what as u64, value, offset, 0, 0, 0]),
             Error::InvalidFloat { what, offset, bits } => {
-                m.text(what.text())
-                    .text(": found ")
-                    .f32(f32::from_bits(bits))
-                    .text(" at byte ")
-                    .u64(offset);
+                (14, [what as u64, bits.into(), offset, 0, 0, 0])
             }
             Error::ViewCountMismatch {
                 level,
                 found,
                 expected,
-            } => {
-                m.text("section CAMR: view_count ")
-                    .u64(found.into())
-                    .text(" but level ")
-                    .u64(level.into())
-                    .text(" has ")
-                    .u64(expected.into())
-                    .text(" views");
-            }
+            } => (15, [found.into(), level.into(), expected.into(), 0, 0, 0]),
             Error::PatchRange {
                 patch,
                 first,
                 count,
                 expected_first,
-            } => {
-                m.text("section PTCH: patch ")
-                    .u64(patch.into())
-                    .text(" covers triangles ")
-                    .u64(first.into())
-                    .text("+")
-                    .u64(count.into())
-                    .text(", expected a non-empty range starting at ")
-                    .u64(expected_first);
-            }
-            Error::TriangleCountMismatch { header, sum } => {
-                m.text("section PTCH: triangle_count ")
-                    .u64(header)
-                    .text(" but the patches cover ")
-                    .u64(sum);
-            }
-            Error::UnsupportedEncoding { found } => {
-                m.text("section VISB: unsupported encoding ")
-                    .u64(found.into())
-                    .text(" (encoding ")
-                    .u64(consts::ENCODING_RAW.into())
-                    .text(" is read from version 1, ")
-                    .u64(consts::ENCODING_HIERARCHICAL.into())
-                    .text(" from version 2, ")
-                    .u64(consts::ENCODING_TREE.into())
-                    .text(" from version 3)");
-            }
-            Error::PaddingBits { view, offset } => {
-                m.text("section VISB: row of view ")
-                    .u64(view.into())
-                    .text(" sets bits past the last patch (byte ")
-                    .u64(offset)
-                    .text(")");
-            }
+            } => (
+                16,
+                [
+                    patch.into(),
+                    first.into(),
+                    count.into(),
+                    expected_first,
+                    0,
+                    0,
+                ],
+            ),
+            Error::TriangleCountMismatch { header, sum } => (17, [header, sum, 0, 0, 0, 0]),
+            Error::UnsupportedEncoding { found } => (
+                18,
+                [
+                    found.into(),
+                    consts::ENCODING_RAW.into(),
+                    consts::ENCODING_HIERARCHICAL.into(),
+                    consts::ENCODING_TREE.into(),
+                    0,
+                    0,
+                ],
+            ),
+            Error::PaddingBits { view, offset } => (19, [view.into(), offset, 0, 0, 0, 0]),
+        };
+        MessageParts { kind, values }
+    }
+
+    /// Writes [`Error::message`] into `m`: the kind's template with its holes filled. One
+    /// out-of-line function, so the texts and the formatter exist once in a build however
+    /// many callers print errors.
+    #[inline(never)]
+    fn write(&self, m: &mut Message) {
+        let parts = self.parts();
+        let mut values = parts.values.into_iter();
+        let template = MESSAGE_TEMPLATES.get(parts.kind as usize).copied();
+        let mut rest = template.unwrap_or("").as_bytes();
+        while let Some(open) = rest.iter().position(|&b| b == b'{') {
+            let close = rest[open..].iter().position(|&b| b == b'}').unwrap_or(1) + open;
+            m.bytes(&rest[..open]);
+            let v = values.next().unwrap_or(0);
+            match rest.get(open + 1..close) {
+                Some(b"x") => m.hex32(v as u32),
+                Some(b"t") => m.tag((v as u32).to_be_bytes()),
+                Some(b"f") => m.f32(f32::from_bits(v as u32)),
+                Some(b"r") => m.text(RULE_TEXTS.get(v as usize).copied().unwrap_or("")),
+                _ => m.u64(v),
+            };
+            rest = rest.get(close + 1..).unwrap_or(&[]);
         }
+        m.bytes(rest);
     }
 }
 

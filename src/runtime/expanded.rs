@@ -21,7 +21,7 @@
 //! eye mostly walks no level at all. Cost: 8·`GRID`² cells of 2 bytes (256 KiB), built
 //! in `expand` by evaluating the planes at each cell's 4 corners.
 
-use super::query::{Eye, classify, everything, visible};
+use super::query::{Eye, classify, everything, origin_leaf, visible};
 use super::streaming::{choose, octant, planes};
 use super::{Pvis, Visible};
 use crate::sphere::{Face, children, parents, root_faces};
@@ -139,7 +139,8 @@ impl<'a, 't> Expanded<'a, 't> {
                 &done[s..s + words]
             };
             let parent_rows = parents(v as u32).map(|[a, b]| (row(a), row(b)));
-            pvis.decode_row(v as u32, parent_rows, &mut rest[..words], &mut cache);
+            let point = super::visb::point_of(v as u32);
+            pvis.decode_row(v as u32, point, parent_rows, &mut rest[..words], &mut cache);
         }
         let level = pvis.sampling.level;
         let at = layout(level, pvis.sampling.views, words);
@@ -180,7 +181,7 @@ impl<'a, 't> Expanded<'a, 't> {
         let pvis = self.pvis;
         let words = pvis.row_words();
         let Eye::Direction(d, inside_sphere) = classify(&pvis, eye) else {
-            return everything(&pvis, &mut self.table[..words]);
+            return everything(&pvis, &mut self.table[..words], origin_leaf(&pvis));
         };
         let level = pvis.sampling.level;
         let at = layout(level, pvis.sampling.views, words);

@@ -207,14 +207,14 @@ pub(crate) fn write(v: f32, out: &mut Message) {
     let digits = &buf[start..];
     let len = digits.len() as i32;
     if j >= 0 {
-        out.digits(digits).zeros(j);
+        out.bytes(digits).zeros(j);
     } else if len + j > 0 {
         let point = (len + j) as usize;
-        out.digits(&digits[..point])
+        out.bytes(&digits[..point])
             .text(".")
-            .digits(&digits[point..]);
+            .bytes(&digits[point..]);
     } else {
-        out.text("0.").zeros(-j - len).digits(digits);
+        out.text("0.").zeros(-j - len).bytes(digits);
     }
 }
 

@@ -51,18 +51,14 @@ impl Message {
     }
 
     /// Appends `s`.
-    #[inline(never)]
     pub(crate) fn text(&mut self, s: &str) -> &mut Self {
-        for &b in s.as_bytes() {
-            self.byte(b);
-        }
-        self
+        self.bytes(s.as_bytes())
     }
 
-    /// Appends `digits` (ASCII digits).
+    /// Appends `bytes` (ASCII: text or digits).
     #[inline(never)]
-    pub(crate) fn digits(&mut self, digits: &[u8]) -> &mut Self {
-        for &b in digits {
+    pub(crate) fn bytes(&mut self, bytes: &[u8]) -> &mut Self {
+        for &b in bytes {
             self.byte(b);
         }
         self
@@ -81,7 +77,7 @@ impl Message {
     pub(crate) fn u64(&mut self, v: u64) -> &mut Self {
         let mut buf = [0u8; 20];
         let start = decimal(v, &mut buf);
-        self.digits(&buf[start..])
+        self.bytes(&buf[start..])
     }
 
     /// Appends `v` as `0x` and eight upper-case hexadecimal digits (`{:#010X}`).

@@ -41,7 +41,7 @@ mod tests;
 
 #[cfg(feature = "bake")]
 pub(crate) use coder::context;
-pub use error::{Error, Rule};
+pub use error::{Error, MESSAGE_TEMPLATES, MessageParts, RULE_TEXTS, Rule};
 pub use expanded::Expanded;
 pub use message::Message;
 pub use ptch::{Quantisation, Record, unit_axis};
@@ -235,11 +235,13 @@ impl<'a> Pvis<'a> {
         }
     }
 
-    /// Decodes the row of `view` into `out` given its parents' decoded rows (`None` for a
-    /// level-0 view; ignored for encoding 0, which reads the row directly).
+    /// Decodes the row of `view`, at lattice point `point`, into `out` given its parents'
+    /// decoded rows (`None` for a level-0 view; ignored for encoding 0, which reads the row
+    /// directly).
     fn decode_row(
         &self,
         view: u32,
+        point: crate::sphere::LatticePoint,
         parent_rows: Option<(&[u64], &[u64])>,
         out: &mut [u64],
         cache: &mut model::TreeCache<'_>,
@@ -253,7 +255,7 @@ impl<'a> Pvis<'a> {
             }
             Visb::Hierarchical { .. } => {
                 self.visb
-                    .decode_row(view, parent_rows, out, self.patch_count, cache)
+                    .decode_row(view, point, parent_rows, out, self.patch_count, cache)
             }
         }
     }

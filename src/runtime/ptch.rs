@@ -147,37 +147,48 @@ pub(crate) fn bits(bytes: &[u8], bit: u64, n: u32) -> u32 {
     // byte by byte at the end of the records.
     let word = match bytes.get(start..start.wrapping_add(8)) {
         Some(b) => u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]),
-        None => (0..5).fold(0, |w, i| {
-            w | u64::from(bytes.get(start + i).copied().unwrap_or(0)) << (8 * i)
-        }),
+        None => tail_word(bytes, start),
     };
     ((word >> (bit % 8)) & ((1u64 << n) - 1)) as u32
 }
 
-/// Reads compact record `p`.
+/// The 5 bytes at `start` as a little-endian word, 0 past the end: [`bits`] near the end of
+/// the records. Out of line, so that the many inlined copies of `bits` share it.
+#[cold]
+#[inline(never)]
+fn tail_word(bytes: &[u8], start: usize) -> u64 {
+    (0..5).fold(0, |w, i| {
+        w | u64::from(bytes.get(start.wrapping_add(i)).copied().unwrap_or(0)) << (8 * i)
+    })
+}
+
+/// Reads compact record `p`. The fields are read in one loop over their widths rather than
+/// one inlined bit read each: a record is read at parse and by [`PatchTable::info`], never
+/// in a query's inner loop, so the smaller code wins (a few hundred bytes of WebAssembly).
 #[inline]
 pub(crate) fn read_record(q: &Quantisation, records: &[u8], p: u32) -> Record {
-    let mut bit = u64::from(p) * u64::from(q.record_bits());
-    let mut field = |n: u32| {
-        let v = bits(records, bit, n);
-        bit += u64::from(n);
-        v
-    };
-    let count = u64::from(field(q.count_bits)) + 1;
-    let center = [
-        field(q.center_bits),
-        field(q.center_bits),
-        field(q.center_bits),
+    let widths = [
+        q.count_bits,
+        q.center_bits,
+        q.center_bits,
+        q.center_bits,
+        q.radius_bits,
+        q.axis_bits,
+        q.axis_bits,
+        q.cos_bits,
     ];
-    let radius = field(q.radius_bits);
-    let axis = [field(q.axis_bits), field(q.axis_bits)];
-    let cos = field(q.cos_bits);
+    let mut bit = u64::from(p) * u64::from(q.record_bits());
+    let mut f = [0u32; 8];
+    for (v, &n) in f.iter_mut().zip(&widths) {
+        *v = bits(records, bit, n);
+        bit += u64::from(n);
+    }
     Record {
-        count,
-        center,
-        radius,
-        axis,
-        cos,
+        count: u64::from(f[0]) + 1,
+        center: [f[1], f[2], f[3]],
+        radius: f[4],
+        axis: [f[5], f[6]],
+        cos: f[7],
     }
 }
 
@@ -453,11 +464,8 @@ fn parse_compact<'a>(
     // decoded value is.
     let top = |bits: u32| ((1u64 << bits) - 1) as u32;
     let step_at = section.offset + PTCH_HEADER_LEN + 12;
-    if (0..3).any(|i| {
-        !quantisation
-            .center(i, top(quantisation.center_bits))
-            .is_finite()
-    }) {
+    let far = top(quantisation.center_bits);
+    if !(0..3).all(|i| quantisation.center(i, far).is_finite()) {
         return Err(Error::InvalidFloat {
             what: Rule::StepCenterRange,
             offset: step_at,

@@ -176,15 +176,18 @@ pub(super) fn fill_all(out: &mut [u64], patch_count: u32) {
     }
 }
 
-/// The conservative answer of § Query step 2.
-pub(super) fn everything<'s>(pvis: &Pvis<'_>, out: &'s mut [u64]) -> Visible<'s> {
+/// The conservative answer of § Query step 2, reported with `leaf`, the views of the leaf
+/// that the zero direction locates to ([`origin_leaf`]; a query mode that has its own way of
+/// finding it passes that).
+pub(super) fn everything<'s>(pvis: &Pvis<'_>, out: &'s mut [u64], leaf: [u32; 3]) -> Visible<'s> {
     fill_all(out, pvis.patch_count);
-    visible(
-        pvis,
-        true,
-        sphere::locate([0.0; 3], pvis.sampling.level).views,
-        out,
-    )
+    visible(pvis, true, leaf, out)
+}
+
+/// The views of the leaf face that point location gives the zero direction, which the
+/// conservative answer reports.
+pub(super) fn origin_leaf(pvis: &Pvis<'_>) -> [u32; 3] {
+    sphere::locate([0.0; 3], pvis.sampling.level).views
 }
 
 /// Wraps a computed answer.
@@ -211,7 +214,7 @@ pub(super) fn query<'s>(pvis: &Pvis<'_>, eye: [f32; 3], scratch: &'s mut [u64]) 
     );
     let out = &mut scratch[..words];
     let Eye::Direction(d, inside_sphere) = classify(pvis, eye) else {
-        return everything(pvis, out);
+        return everything(pvis, out, origin_leaf(pvis));
     };
     // § Query steps 4–5.
     out.fill(0);

@@ -15,7 +15,7 @@
 use super::model::TreeCache;
 use super::query::{Eye, classify, everything, visible};
 use super::{Pvis, Visible};
-use crate::sphere::{Face, MAX_LEVEL, children, cross, dot, root_faces};
+use crate::sphere::{Face, LatticePoint, MAX_LEVEL, children, cross, dot, root_face};
 
 /// Row slots the streaming state keeps: the answer, the root face's 3 corners, and the 3 edge
 /// midpoints of the path's face at each level above the leaf.
@@ -86,9 +86,23 @@ pub(super) fn planes(kids: &[Face; 4]) -> [[f32; 3]; 3] {
     [cross(mab, mca), cross(mbc, mab), cross(mca, mbc)]
 }
 
-/// Midpoint views of `face` from its children: `[m_ab, m_bc, m_ca]`.
-pub(super) fn mids(kids: &[Face; 4]) -> [u32; 3] {
-    [kids[0].views[1], kids[1].views[2], kids[0].views[2]]
+/// Midpoint `j` (0 = `m_ab`, 1 = `m_bc`, 2 = `m_ca`) of a face, from its children: its view
+/// and its lattice point (at the children's level, the midpoint's own).
+fn mid(kids: &[Face; 4], j: usize) -> (u32, LatticePoint) {
+    let (kid, corner) = [(0, 1), (1, 2), (0, 2)][j % 3];
+    (kids[kid].views[corner], kids[kid].lattice[corner])
+}
+
+/// The views of the leaf that [`crate::sphere::locate`] gives the zero direction (the
+/// conservative answer reports them): every plane test of a zero vector is `0 ≥ 0`, so the
+/// path stays in child 0 of root face 0. Walked through [`children`], which the streaming
+/// path links anyway, rather than through `locate`, which it otherwise does not need.
+pub(super) fn origin_leaf(level: u32) -> [u32; 3] {
+    let mut face = root_face(0);
+    for _ in 0..level {
+        face = children(&face)[0];
+    }
+    face.views
 }
 
 /// Streaming query state: see the module documentation. Made by [`Pvis::streaming`].
@@ -119,7 +133,7 @@ impl<'a, 's> Streaming<'a, 's> {
         let (rows, cache) = rows[..need].split_at_mut(need - pvis.tree_cache_words());
         cache.fill(0);
         let cache = TreeCache::new(cache);
-        let root = root_faces()[0];
+        let root = root_face(0);
         let level = PathLevel {
             face: root,
             slots: [1, 2, 3],
@@ -152,9 +166,14 @@ impl<'a, 's> Streaming<'a, 's> {
         let words = pvis.row_words();
         let Eye::Direction(d, inside_sphere) = classify(&pvis, eye) else {
             self.answer_valid = false;
-            return everything(&pvis, &mut self.rows[..words]);
+            return everything(
+                &pvis,
+                &mut self.rows[..words],
+                origin_leaf(pvis.sampling.level),
+            );
         };
-        let level = pvis.sampling.level as usize;
+        // Parse checked the level; the bound lets the compiler drop the path's index checks.
+        let level = (pvis.sampling.level as usize).min(MAX_LEVEL as usize);
         let oct = octant(d);
         if self.depth == 0 || self.octant != oct {
             self.enter_root(oct);
@@ -170,10 +189,12 @@ impl<'a, 's> Streaming<'a, 's> {
         if !self.answer_valid {
             let [a, b, c] = leaf.slots.map(|s| s as usize * words);
             let (answer, rest) = self.rows.split_at_mut(words);
-            // Corner slots are ≥ 1, so they lie in `rest`, shifted by one row.
-            let row = |at: usize| &rest[at - words..at];
-            for (i, w) in answer.iter_mut().enumerate() {
-                *w = row(a)[i] | row(b)[i] | row(c)[i];
+            // Corner slots are ≥ 1, so they lie in `rest`, shifted by one row (and hold a
+            // whole row: `Pvis::scratch_bound`).
+            let row = |at: usize| rest.get(at - words..at).unwrap_or(&[]);
+            let rows = row(a).iter().zip(row(b)).zip(row(c));
+            for (w, ((x, y), z)) in answer.iter_mut().zip(rows) {
+                *w = x | y | z;
             }
             self.answer_valid = true;
         }
@@ -184,11 +205,14 @@ impl<'a, 's> Streaming<'a, 's> {
     /// Starts the path at root face `oct`, decoding its three level-0 corners.
     fn enter_root(&mut self, oct: usize) {
         let words = self.pvis.row_words();
-        let face = root_faces()[oct];
+        let face = root_face(oct);
         for (i, &v) in face.views.iter().enumerate() {
             let slot = (1 + i) * words;
-            self.pvis
-                .decode_row(v, None, &mut self.rows[slot..slot + words], &mut self.cache);
+            // The scratch holds every slot (`Pvis::scratch_bound`), so the row is there.
+            if let Some(row) = self.rows.get_mut(slot..slot + words) {
+                self.pvis
+                    .decode_row(v, face.lattice[i], None, row, &mut self.cache);
+            }
         }
         self.decoded += 3;
         self.set_level(0, face, [1, 2, 3]);
@@ -220,7 +244,7 @@ impl<'a, 's> Streaming<'a, 's> {
             }
             let j = c - 3;
             let entry = &self.path[k];
-            let mid = mids(&entry.kids)[j];
+            let (mid, point) = mid(&entry.kids, j);
             let [e0, e1] = EDGES[j];
             // The context orders the parents by view index (spec § Context).
             let (mut pa, mut pb) = (e0, e1);
@@ -232,14 +256,17 @@ impl<'a, 's> Streaming<'a, 's> {
                 entry.slots[pb] as usize * words,
             );
             let target = mid_slot(k, j) as usize * words;
-            // Corner slots of level k are roots or midpoints of levels < k: all below target.
-            let (lo, hi) = self.rows.split_at_mut(target);
-            self.pvis.decode_row(
-                mid,
-                Some((&lo[sa..sa + words], &lo[sb..sb + words])),
-                &mut hi[..words],
-                &mut self.cache,
-            );
+            // Corner slots of level k are roots or midpoints of levels < k: all below target,
+            // and every slot is in the scratch (`Pvis::scratch_bound`).
+            let (lo, hi) = self.rows.split_at_mut(target.min(self.rows.len()));
+            if let (Some(ra), Some(rb), Some(out)) = (
+                lo.get(sa..sa + words),
+                lo.get(sb..sb + words),
+                hi.get_mut(..words),
+            ) {
+                self.pvis
+                    .decode_row(mid, point, Some((ra, rb)), out, &mut self.cache);
+            }
             self.decoded += 1;
             self.path[k].mid_ready[j] = true;
         }
@@ -255,5 +282,24 @@ impl<'a, 's> Streaming<'a, 's> {
         let face = entry.kids[which];
         self.path[k].child = which as u8;
         self.set_level(k + 1, face, corners.map(|c| all[c]));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sphere::locate;
+
+    /// The conservative answer's leaf, found without point location, is the one point
+    /// location gives the zero direction, at every level.
+    #[test]
+    fn origin_leaf_is_where_locate_puts_the_zero_direction() {
+        for level in 0..=MAX_LEVEL {
+            assert_eq!(
+                origin_leaf(level),
+                locate([0.0; 3], level).views,
+                "level {level}"
+            );
+        }
     }
 }

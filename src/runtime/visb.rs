@@ -17,7 +17,7 @@ use super::coder::RangeDecoder;
 use super::consts::{CHECKPOINT_INTERVAL, CONTEXTS, MAX_LANES, MAX_VARINT_LEN};
 use super::model::{Axis, TreeCache, ViewModel, ViewState};
 use super::ptch::PatchTable;
-use crate::sphere::{lattice_point, level_of, parents};
+use crate::sphere::{LatticePoint, lattice_point, level_of, parents};
 
 /// The VISB payload of a validated file.
 #[derive(Clone, Copy, Debug)]
@@ -59,10 +59,10 @@ pub(crate) enum Model<'a> {
 }
 
 impl<'a> Model<'a> {
-    /// The model a decoder of `view` uses.
-    fn for_view(&self, view: u32) -> ViewModel<'a> {
+    /// The model a decoder of the view at lattice point `point` uses.
+    fn for_point(&self, point: LatticePoint) -> ViewModel<'a> {
         match *self {
-            Model::Table(probs) => ViewModel::Table(level_probs(probs, level_of(view))),
+            Model::Table(probs) => ViewModel::Table(level_probs(probs, point.level)),
             Model::Tree {
                 nodes,
                 patches,
@@ -71,8 +71,8 @@ impl<'a> Model<'a> {
                 nodes,
                 patches,
                 used,
-                lattice: lattice_point(view).map_or([0; 3], |l| l.coords),
-                level: level_of(view),
+                lattice: point.coords,
+                level: point.level,
             },
         }
     }
@@ -86,6 +86,15 @@ impl<'a> Model<'a> {
             Model::Tree { patches, .. } => patches.facing_axis(p),
         }
     }
+}
+
+/// The lattice point of `view`, which a decoder's model reads (a view of the file has one;
+/// zero coordinates stand in otherwise).
+pub(crate) fn point_of(view: u32) -> LatticePoint {
+    lattice_point(view).unwrap_or(LatticePoint {
+        level: level_of(view),
+        coords: [0; 3],
+    })
 }
 
 /// Reads an unsigned LEB128 of at most `MAX_VARINT_LEN` bytes at `pos`; returns the value and
@@ -154,11 +163,14 @@ impl<'a> Visb<'a> {
         }
     }
 
-    /// Decodes the row of `view` (encodings 1 and 2) into `out` (`ceil(patch_count / 64)`
-    /// words), given its parents' decoded rows (`None` for a level-0 view).
+    /// Decodes the row of `view` (encodings 1 and 2), whose lattice point is `point`
+    /// ([`point_of`]; a caller that walks the face hierarchy has it at hand), into `out`
+    /// (`ceil(patch_count / 64)` words), given its parents' decoded rows (`None` for a
+    /// level-0 view).
     pub(crate) fn decode_row(
         &self,
         view: u32,
+        point: LatticePoint,
         parent_rows: Option<(&[u64], &[u64])>,
         out: &mut [u64],
         patch_count: u32,
@@ -167,7 +179,7 @@ impl<'a> Visb<'a> {
         let Visb::Hierarchical { model, .. } = *self else {
             return;
         };
-        let model = model.for_view(view);
+        let model = model.for_point(point);
         let (ra, rb) = parent_rows.unwrap_or((&[], &[]));
         let mut d = RangeDecoder::new(self.code(view));
         let mut state = ViewState::default();
@@ -219,7 +231,7 @@ impl<'a> Visb<'a> {
         let mut max_lag = 0;
         for (lane, &v) in lanes.iter_mut().zip(views) {
             lane.decoder = RangeDecoder::new(self.code(v));
-            lane.model = model.for_view(v);
+            lane.model = model.for_point(point_of(v));
             lane.lag = 2 * level_of(v);
             max_lag = max_lag.max(lane.lag);
             lane.parents = parents(v).map(|[a, b]| {

@@ -32,9 +32,9 @@ pub fn root_faces() -> [Face; 8] {
     core::array::from_fn(root_face)
 }
 
-/// The root face of `octant` (see [`root_faces`]). One at a time, so point location numbers
-/// the 3 views of its octant rather than all 24.
-fn root_face(octant: usize) -> Face {
+/// The root face of `octant` (see [`root_faces`]; bits above the third are ignored). One at
+/// a time, so point location numbers the 3 views of its octant rather than all 24.
+pub fn root_face(octant: usize) -> Face {
     let s = [
         1 - 2 * (octant as i32 & 1),
         1 - 2 * (octant as i32 >> 1 & 1),

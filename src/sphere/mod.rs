@@ -12,7 +12,7 @@
 mod locate;
 mod numbering;
 
-pub use locate::{Face, children, locate, root_faces};
+pub use locate::{Face, children, locate, root_face, root_faces};
 pub use numbering::{LatticePoint, direction, lattice_point, level_of, parents, view_index};
 
 /// Index of a sampling view (a vertex of the subdivided octahedron). Level `l`'s views are
