@@ -198,6 +198,49 @@ int32_t patchvis_stream_init(const PatchvisFile *file, uint64_t *scratch, size_t
  * against ~0.7 ms for every patchvis_query. */
 int32_t patchvis_stream_query(PatchvisStream *stream, const float eye[3], PatchvisVisible *out);
 
+/* Frustum culling (spec/FORMAT.md, section Frustum culling): the same answers without the
+ * patches whose bounding spheres lie wholly outside the camera's view frustum, so one call
+ * gives the set to draw. The test is conservative: a patch any part of which is inside is
+ * kept, whatever the float rounding.
+ *
+ *     PatchvisFrustum fr;
+ *     patchvis_frustum_from_view_proj(view_proj, PATCHVIS_DEPTH_ZERO_TO_ONE, &fr);  // once a frame
+ *     patchvis_query_frustum(&file, eye, &fr, scratch, words, &vis);
+ */
+
+/* Clip-space depth ranges of patchvis_frustum_from_view_proj. */
+#define PATCHVIS_DEPTH_NEGATIVE_ONE_TO_ONE 0 /* -w <= z <= w: OpenGL, WebGL */
+#define PATCHVIS_DEPTH_ZERO_TO_ONE 1         /* 0 <= z <= w: Direct3D, Vulkan, Metal, wgpu */
+
+/* A view frustum as six planes {a, b, c, d}, each keeping the model-space points with
+ * a*x + b*y + c*z + d >= 0 (any scale, any order). Fill it with
+ * patchvis_frustum_from_view_proj, or write the planes yourself; {0, 0, 0, 1} drops nothing.
+ * Any values are safe: NaN or infinities keep every patch. */
+typedef struct PatchvisFrustum {
+    float planes[6][4];
+} PatchvisFrustum;
+
+/* Fills *out with the frustum of a column-major view-projection matrix (model space to clip
+ * space; element (row, col) at m[4 * col + row], as OpenGL, WebGPU and glam store it), for
+ * clip coordinates with -w <= x, y <= w and depth's range of z. Returns PATCHVIS_OK or
+ * PATCHVIS_ERR_ARGUMENT (a NULL pointer, or depth not one of PATCHVIS_DEPTH_*). */
+int32_t patchvis_frustum_from_view_proj(const float m[16], int32_t depth, PatchvisFrustum *out);
+
+/* As patchvis_query, without the patches the frustum drops: the set to draw, in scratch.
+ * Returns the codes of patchvis_query (PATCHVIS_ERR_ARGUMENT also for a NULL frustum).
+ * Cost: patchvis_query's, plus one patch record decoded and tested per visible patch. */
+int32_t patchvis_query_frustum(const PatchvisFile *file, const float eye[3],
+                               const PatchvisFrustum *frustum, uint64_t *scratch,
+                               size_t scratch_words, PatchvisVisible *out);
+
+/* As patchvis_stream_query, without the patches the frustum drops. The answer is written to
+ * bits (words >= patchvis_scratch_words(file); not the state's scratch, whose cached answer
+ * the next query reuses), and out->bits points there. Returns PATCHVIS_OK,
+ * PATCHVIS_ERR_ARGUMENT, PATCHVIS_ERR_NOT_PARSED or PATCHVIS_ERR_RANGE (words too small). */
+int32_t patchvis_stream_query_frustum(PatchvisStream *stream, const float eye[3],
+                                      const PatchvisFrustum *frustum, uint64_t *bits,
+                                      size_t words, PatchvisVisible *out);
+
 #ifdef __cplusplus
 }
 #endif

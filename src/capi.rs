@@ -32,7 +32,7 @@ use core::ffi::c_char;
 use core::mem::{MaybeUninit, align_of, size_of};
 use core::ptr::{addr_of, addr_of_mut};
 
-use crate::runtime::{Error, Pvis, Streaming};
+use crate::runtime::{DepthRange, Error, Frustum, Pvis, Streaming};
 
 /// The panic handler of the `no_std` WebAssembly build (feature `wasm`, a `cdylib` for
 /// `wasm32-unknown-unknown`). Nothing through this ABI panics (see above), so it only
@@ -710,6 +710,153 @@ pub unsafe extern "C" fn patchvis_stream_query(
     // SAFETY: `eye` is non-null and points to 3 readable floats (caller contract).
     let eye = unsafe { [eye.read(), eye.add(1).read(), eye.add(2).read()] };
     let visible = state.query(eye);
+    // SAFETY: `out` is non-null and valid for a write (caller contract).
+    unsafe { out.write(PatchvisVisible::of(&visible)) };
+    PATCHVIS_OK
+}
+
+/// A view frustum (spec § Frustum culling) as six planes `[a, b, c, d]`, each keeping the
+/// points with `a·x + b·y + c·z + d ≥ 0` (model space). Filled by
+/// [`patchvis_frustum_from_view_proj`] or by the caller; any values are safe (NaN and
+/// infinities keep every patch).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PatchvisFrustum {
+    /// Left, right, bottom, top, near, far (any order works).
+    pub planes: [[f32; 4]; 6],
+}
+
+impl PatchvisFrustum {
+    fn frustum(&self) -> Frustum {
+        Frustum::from_planes(self.planes)
+    }
+}
+
+/// `depth` of [`patchvis_frustum_from_view_proj`]: clip `−w ≤ z ≤ w` (OpenGL, WebGL).
+pub const PATCHVIS_DEPTH_NEGATIVE_ONE_TO_ONE: i32 = 0;
+/// `depth` of [`patchvis_frustum_from_view_proj`]: clip `0 ≤ z ≤ w` (Direct3D, Vulkan, Metal,
+/// wgpu).
+pub const PATCHVIS_DEPTH_ZERO_TO_ONE: i32 = 1;
+
+/// Fills `*out` with the frustum of the column-major view-projection matrix `m` (16 floats,
+/// `m[4·col + row]`, model space to clip space) whose clip depth range is `depth`
+/// (`PATCHVIS_DEPTH_NEGATIVE_ONE_TO_ONE` or `PATCHVIS_DEPTH_ZERO_TO_ONE`). Returns 0 or
+/// `PATCHVIS_ERR_ARGUMENT` (a null pointer or another `depth`).
+///
+/// # Safety
+/// `m` must be null or point to 16 readable floats; `out` null or valid for a write.
+// Not exported to WebAssembly: `wasm/patchvis.mjs` does not call it.
+#[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
+pub unsafe extern "C" fn patchvis_frustum_from_view_proj(
+    m: *const f32,
+    depth: i32,
+    out: *mut PatchvisFrustum,
+) -> i32 {
+    if m.is_null() || out.is_null() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    let depth = match depth {
+        PATCHVIS_DEPTH_NEGATIVE_ONE_TO_ONE => DepthRange::NegativeOneToOne,
+        PATCHVIS_DEPTH_ZERO_TO_ONE => DepthRange::ZeroToOne,
+        _ => return PATCHVIS_ERR_ARGUMENT,
+    };
+    // SAFETY: `m` is non-null and points to 16 readable floats (caller contract).
+    let matrix: [f32; 16] = core::array::from_fn(|i| unsafe { m.add(i).read() });
+    let planes = Frustum::from_view_projection(&matrix, depth).planes();
+    // SAFETY: `out` is non-null and valid for a write (caller contract).
+    unsafe { out.write(PatchvisFrustum { planes }) };
+    PATCHVIS_OK
+}
+
+/// As [`patchvis_query`], without the patches whose bounding spheres lie wholly outside
+/// `*frustum` (spec § Frustum culling): the set to draw, in `scratch`. Returns the same codes
+/// as `patchvis_query`, and `PATCHVIS_ERR_ARGUMENT` for a null `frustum`.
+///
+/// # Safety
+/// As for [`patchvis_query`]; `frustum` must be null or point to a readable
+/// `PatchvisFrustum`.
+// Not exported to WebAssembly: `wasm/patchvis.mjs` does not call it.
+#[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
+pub unsafe extern "C" fn patchvis_query_frustum(
+    file: *const PatchvisFile,
+    eye: *const f32,
+    frustum: *const PatchvisFrustum,
+    scratch: *mut u64,
+    scratch_words: usize,
+    out: *mut PatchvisVisible,
+) -> i32 {
+    // SAFETY: caller contract on `file`.
+    let pvis = match unsafe { handle(file) } {
+        Ok(pvis) => pvis,
+        Err(code) => return code,
+    };
+    if eye.is_null() || frustum.is_null() || scratch.is_null() || out.is_null() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    if scratch_words > isize::MAX as usize / size_of::<u64>() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    if scratch_words < pvis.scratch_words() {
+        return PATCHVIS_ERR_SCRATCH;
+    }
+    // SAFETY: `frustum` is non-null and readable (caller contract).
+    let frustum = unsafe { frustum.read() }.frustum();
+    // SAFETY: `eye` is non-null and points to 3 readable floats (caller contract).
+    let eye = unsafe { [eye.read(), eye.add(1).read(), eye.add(2).read()] };
+    // SAFETY: non-null, valid for `scratch_words` words of reads and writes, not overlapping
+    // the file (caller contract); the length fits a slice (checked above).
+    let scratch = unsafe { core::slice::from_raw_parts_mut(scratch, scratch_words) };
+    let visible = pvis.query_in_frustum(eye, &frustum, scratch);
+    // SAFETY: `out` is non-null and valid for a write (caller contract).
+    unsafe { out.write(PatchvisVisible::of(&visible)) };
+    PATCHVIS_OK
+}
+
+/// As [`patchvis_stream_query`], without the patches whose bounding spheres lie wholly outside
+/// `*frustum`; the answer is written to `bits` (at least `patchvis_scratch_words(file)` words,
+/// not the state's scratch), which `out->bits` then points to. Returns 0,
+/// `PATCHVIS_ERR_ARGUMENT`, `PATCHVIS_ERR_NOT_PARSED` or `PATCHVIS_ERR_RANGE` (`words` too
+/// small for a row).
+///
+/// # Safety
+/// As for [`patchvis_stream_query`]; `frustum` must be null or point to a readable
+/// `PatchvisFrustum`; `bits` null or valid for reads and writes of `words` words, overlapping
+/// neither the state's scratch nor the file's bytes.
+// Not exported to WebAssembly: `wasm/patchvis.mjs` does not call it.
+#[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
+pub unsafe extern "C" fn patchvis_stream_query_frustum(
+    stream: *mut PatchvisStream,
+    eye: *const f32,
+    frustum: *const PatchvisFrustum,
+    bits: *mut u64,
+    words: usize,
+    out: *mut PatchvisVisible,
+) -> i32 {
+    if stream.is_null() || eye.is_null() || frustum.is_null() || bits.is_null() || out.is_null() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    if words > isize::MAX as usize / size_of::<u64>() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    // SAFETY: non-null and points to a `PatchvisStream` (caller contract).
+    if unsafe { addr_of!((*stream).state).read() } != STATE_STREAMING {
+        return PATCHVIS_ERR_NOT_PARSED;
+    }
+    // SAFETY: the marker is written only after a `Streaming` was written to `storage`; its
+    // borrows are valid and exclusive for now (caller contract).
+    let state =
+        unsafe { &mut *addr_of_mut!((*stream).storage).cast::<Streaming<'static, 'static>>() };
+    if words < state.row_words() {
+        return PATCHVIS_ERR_RANGE;
+    }
+    // SAFETY: `frustum` is non-null and readable (caller contract).
+    let frustum = unsafe { frustum.read() }.frustum();
+    // SAFETY: `eye` is non-null and points to 3 readable floats (caller contract).
+    let eye = unsafe { [eye.read(), eye.add(1).read(), eye.add(2).read()] };
+    // SAFETY: non-null, valid for `words` words of reads and writes, overlapping nothing the
+    // state uses (caller contract); the length fits a slice (checked above).
+    let bits = unsafe { core::slice::from_raw_parts_mut(bits, words) };
+    let visible = state.query_in_frustum(eye, &frustum, bits);
     // SAFETY: `out` is non-null and valid for a write (caller contract).
     unsafe { out.write(PatchvisVisible::of(&visible)) };
     PATCHVIS_OK

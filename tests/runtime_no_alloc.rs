@@ -6,7 +6,7 @@
 
 use patchvis::format::{BakeContents, encode};
 use patchvis::heap;
-use patchvis::runtime::Pvis;
+use patchvis::runtime::{DepthRange, Frustum, Pvis};
 use patchvis::sampler::{SamplingParams, VisibilityMatrix};
 use patchvis::tiling::Patch;
 
@@ -50,7 +50,18 @@ fn parse_query_streaming_expanded_and_iteration_allocate_nothing() {
     let mut table = vec![0u64; probe.expanded_bound()];
     let mut row = vec![0u64; probe.row_words()];
 
+    let mut culled = vec![0u64; probe.row_words()];
+    // A frustum looking down −Z from z = 5 (90°, 0 ≤ z ≤ w), aimed so that its side cuts.
+    #[rustfmt::skip]
+    let view_proj: [f32; 16] = [
+        1.0, 0.0, 0.0, 0.0,
+        0.0, 1.0, 0.0, 0.0,
+        0.0, 0.0, -0.001, -1.0,
+        -0.5, 0.0, 0.001 * 5.0 + 0.01, 5.0,
+    ];
+
     let before = heap::allocations();
+    let frustum = Frustum::from_view_projection(&view_proj, DepthRange::ZeroToOne);
     let pvis = Pvis::parse(&bytes).unwrap();
     let mut seen = 0u32;
     let mut triangles = 0u32;
@@ -72,6 +83,17 @@ fn parse_query_streaming_expanded_and_iteration_allocate_nothing() {
         seen += e.count();
         triangles += 2 * e.count();
         assert!(e.patches().all(|p| !pvis.backfacing(p, eye) || p < 100));
+        let e = expanded.query_in_frustum(eye, &frustum);
+        seen += e.count();
+        triangles += e.count();
+        let s = streaming.query_in_frustum(eye, &frustum, &mut culled);
+        seen += s.count();
+        triangles += s.count();
+    }
+    for eye in [[0.0, 0.0, 5.0], [f32::NAN, 0.0, 0.0]] {
+        let vis = pvis.query_in_frustum(eye, &frustum, &mut scratch);
+        seen += vis.count();
+        triangles += pvis.ranges(&vis).map(|(_, count)| count).sum::<u32>();
     }
     let after = heap::allocations();
 

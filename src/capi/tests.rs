@@ -462,3 +462,128 @@ fn ranges_come_merged_in_one_call() {
         }
     }
 }
+
+#[test]
+fn frustum_queries_match_the_reader_and_refuse_misuse() {
+    let (code, file) = parsed(TREE);
+    assert_eq!(code, PATCHVIS_OK);
+    let pvis = Pvis::parse(TREE).unwrap();
+    let words = pvis.scratch_words();
+    let s = pvis.sampling();
+    // A camera at twice the sampling distance on +X, aimed beside the model: a translation
+    // along −X by the distance, a 90° frustum of its own making (x, y within ±w, 0 ≤ z ≤ w).
+    let d = 2.0 * s.distance;
+    let off = 0.5 * s.radius;
+    // Clip x = p.z − c.z − off, y = p.y − c.y, z = w = c.x + d − p.x (looking along −X).
+    #[rustfmt::skip]
+    let m: [f32; 16] = [
+        0.0, 0.0, -1.0, -1.0,
+        0.0, 1.0, 0.0, 0.0,
+        1.0, 0.0, 0.0, 0.0,
+        -s.center[2] - off, -s.center[1], s.center[0] + d, s.center[0] + d,
+    ];
+    let mut frustum = PatchvisFrustum::default();
+    // SAFETY: `m` has 16 floats and `frustum` is writable.
+    assert_eq!(
+        unsafe {
+            patchvis_frustum_from_view_proj(m.as_ptr(), PATCHVIS_DEPTH_ZERO_TO_ONE, &mut frustum)
+        },
+        PATCHVIS_OK
+    );
+    let rust = Frustum::from_view_projection(&m, DepthRange::ZeroToOne);
+    assert_eq!(frustum.planes, rust.planes());
+    // SAFETY: as above; 2 is no depth range, null pointers are refused.
+    unsafe {
+        assert_eq!(
+            patchvis_frustum_from_view_proj(m.as_ptr(), 2, &mut frustum),
+            PATCHVIS_ERR_ARGUMENT
+        );
+        assert_eq!(
+            patchvis_frustum_from_view_proj(core::ptr::null(), 0, &mut frustum),
+            PATCHVIS_ERR_ARGUMENT
+        );
+    }
+
+    let eye = [s.center[0] + d, s.center[1], s.center[2]];
+    let mut expected = vec![0u64; words];
+    let plain = pvis.query(eye, &mut expected).count();
+    let culled = pvis.query_in_frustum(eye, &rust, &mut expected).count();
+    assert!(culled > 0 && culled < plain, "{culled} of {plain}");
+
+    let mut scratch = vec![0u64; words];
+    let mut out = MaybeUninit::<PatchvisVisible>::uninit();
+    // SAFETY: every pointer is valid for what the call reads or writes.
+    let code = unsafe {
+        patchvis_query_frustum(
+            &file,
+            eye.as_ptr(),
+            &frustum,
+            scratch.as_mut_ptr(),
+            words,
+            out.as_mut_ptr(),
+        )
+    };
+    assert_eq!(code, PATCHVIS_OK);
+    // SAFETY: written by the successful call.
+    let out = unsafe { out.assume_init() };
+    assert_eq!((out.visible_count, out.bits), (culled, scratch.as_ptr()));
+    assert_eq!(scratch, expected);
+
+    let mut stream_scratch = vec![0u64; pvis.scratch_bound()];
+    let mut stream = MaybeUninit::<PatchvisStream>::uninit();
+    let mut bits = vec![0u64; words];
+    let mut answer = MaybeUninit::<PatchvisVisible>::uninit();
+    // SAFETY: as above; the stream's scratch and `bits` are separate buffers.
+    unsafe {
+        assert_eq!(
+            patchvis_stream_init(
+                &file,
+                stream_scratch.as_mut_ptr(),
+                stream_scratch.len(),
+                stream.as_mut_ptr()
+            ),
+            PATCHVIS_OK
+        );
+        let stream = stream.as_mut_ptr();
+        let q =
+            |f: *const PatchvisFrustum, n: usize, bits: &mut Vec<u64>, a: *mut PatchvisVisible| {
+                patchvis_stream_query_frustum(stream, eye.as_ptr(), f, bits.as_mut_ptr(), n, a)
+            };
+        assert_eq!(
+            q(&frustum, words, &mut bits, answer.as_mut_ptr()),
+            PATCHVIS_OK
+        );
+        assert_eq!(answer.assume_init().bits, bits.as_ptr());
+        assert_eq!(bits, expected);
+        assert_eq!(
+            q(&frustum, words - 1, &mut bits, answer.as_mut_ptr()),
+            PATCHVIS_ERR_RANGE
+        );
+        assert_eq!(
+            q(core::ptr::null(), words, &mut bits, answer.as_mut_ptr()),
+            PATCHVIS_ERR_ARGUMENT
+        );
+        assert_eq!(
+            patchvis_query_frustum(
+                &file,
+                eye.as_ptr(),
+                &frustum,
+                scratch.as_mut_ptr(),
+                words - 1,
+                answer.as_mut_ptr()
+            ),
+            PATCHVIS_ERR_SCRATCH
+        );
+        assert_eq!(
+            patchvis_query_frustum(
+                &file,
+                eye.as_ptr(),
+                core::ptr::null(),
+                scratch.as_mut_ptr(),
+                words,
+                answer.as_mut_ptr()
+            ),
+            PATCHVIS_ERR_ARGUMENT
+        );
+    }
+}

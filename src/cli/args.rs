@@ -335,9 +335,38 @@ pub struct QueryArgs {
     /// The .pvis file.
     pub file: PathBuf,
     /// Camera position in model space.
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true,
-          required_unless_present = "bench")]
+    #[arg(long, visible_alias = "eye", value_name = "X,Y,Z", value_parser = parse_point,
+          allow_hyphen_values = true, required_unless_present = "bench")]
     pub from: Option<[f32; 3]>,
+    /// Also drop the patches outside the view frustum of a camera at --eye looking at this
+    /// point (OpenGL-style look-at and perspective, world up +Y).
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true,
+          conflicts_with = "view_proj")]
+    pub look_at: Option<[f32; 3]>,
+    /// Vertical field of view of the --look-at camera, degrees.
+    #[arg(long, default_value_t = 45.0, value_name = "DEG", requires = "look_at")]
+    pub fov: f32,
+    /// Width over height of the --look-at camera's image.
+    #[arg(long, default_value_t = 1.0, value_name = "A", requires = "look_at")]
+    pub aspect: f32,
+    /// Near-plane distance of the --look-at camera [default: 1/1000 of the distance to the
+    /// point looked at].
+    #[arg(long, value_name = "N", requires = "look_at")]
+    pub near: Option<f32>,
+    /// Far-plane distance of the --look-at camera [default: none].
+    #[arg(long, value_name = "F", requires = "look_at")]
+    pub far: Option<f32>,
+    /// Also drop the patches outside the frustum of this view-projection matrix (model space
+    /// to clip space): 16 comma-separated numbers, column-major (element (row, col) at
+    /// 4·col + row, as OpenGL, WebGPU and glam store it).
+    #[arg(long, value_name = "M0,..,M15", value_parser = super::view::parse_matrix,
+          allow_hyphen_values = true)]
+    pub view_proj: Option<[f32; 16]>,
+    /// Clip-space depth range of --view-proj: gl (−w ≤ z ≤ w) or zero-to-one (0 ≤ z ≤ w:
+    /// Direct3D, Vulkan, Metal, wgpu).
+    #[arg(long, value_enum, default_value_t = DepthArg::Gl, value_name = "RANGE",
+          requires = "view_proj")]
+    pub depth: DepthArg,
     /// Instead of one query, time N queries per mode (expanded; streaming staying in a leaf;
     /// streaming along a smooth orbit, counting leaf changes) and print median nanoseconds.
     #[arg(long, value_name = "N")]
@@ -345,6 +374,15 @@ pub struct QueryArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `query --depth`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum DepthArg {
+    /// `−w ≤ z ≤ w` (OpenGL, WebGL).
+    Gl,
+    /// `0 ≤ z ≤ w` (Direct3D, Vulkan, Metal, wgpu).
+    ZeroToOne,
 }
 
 /// `patchvis eval`.
@@ -367,6 +405,16 @@ pub struct EvalArgs {
     /// Camera distance over the sampling distance (< 1 nearer, > 1 farther).
     #[arg(long, default_value_t = 1.0, value_name = "K")]
     pub distance_scale: f32,
+    /// Turn each camera's view direction by a seeded random angle of up to DEG degrees (from
+    /// the model's centre, or the path's target), so that parts of the model fall outside
+    /// the view and the frustum culls; 0 keeps the cameras as they are.
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "DEG",
+        conflicts_with = "sweep"
+    )]
+    pub look_jitter: f32,
     /// Render resolution [default: the file's sampling resolution; 512 with --sweep].
     #[arg(long, value_name = "PX")]
     pub resolution: Option<u32>,

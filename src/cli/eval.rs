@@ -94,6 +94,15 @@ pub fn run(args: EvalArgs) -> Result<()> {
             format!("--resolution {r}: expected 1 to {MAX_RESOLUTION} pixels")
         })?;
     }
+    usage(
+        !(args.look_jitter >= 0.0 && args.look_jitter <= 180.0),
+        || {
+            format!(
+                "--look-jitter {}: expected degrees from 0 to 180",
+                args.look_jitter
+            )
+        },
+    )?;
     if let Some(dir) = &args.png {
         check_output_dir(dir)?;
     }
@@ -175,6 +184,7 @@ pub fn run(args: EvalArgs) -> Result<()> {
             path_cameras(path, &sampling.center, sampling.fov_deg, resolution)?
         }
     };
+    let cameras = views::jitter_looks(&cameras, f64::from(args.look_jitter), args.seed);
     let metrics = stages.run("eval", || evaluator.evaluate(&pvis, &cameras, &bars));
     let summary = EvalSummary::of(&metrics);
     // After the CPU evaluation, never beside it: a software GPU shares its cores.
@@ -191,6 +201,11 @@ pub fn run(args: EvalArgs) -> Result<()> {
             "workers": evaluator.workers(resolution),
             "seconds": seconds,
             "peak_heap_bytes": stages.peak_heap_bytes(),
+            "look_jitter_deg": args.look_jitter,
+            "culling_rate_mean": summary.culling_rate.mean,
+            "frustum_culling_rate_mean": summary.frustum_culling_rate.mean,
+            "ideal_culling_rate_mean": summary.ideal_culling_rate.mean,
+            "views_losing_a_patch_to_the_frustum": summary.views_losing_a_patch_to_the_frustum,
             "stages": stages.records().iter().map(|r| json!({
                 "name": r.name, "seconds": r.seconds, "peak_heap_bytes": r.peak_heap_bytes,
             })).collect::<Vec<_>>(),
@@ -236,6 +251,7 @@ pub fn run(args: EvalArgs) -> Result<()> {
             "mode": mode,
             "seed": args.seed,
             "distance_scale": args.distance_scale,
+            "look_jitter_deg": args.look_jitter,
             "resolution": resolution,
             "patches": pvis.patch_count(),
             "triangles": mesh.triangle_count(),
@@ -386,6 +402,11 @@ fn summary_json(s: &EvalSummary) -> Value {
     summary_fields(&mut out, "triangles_drawn", &s.triangles_drawn);
     summary_fields(&mut out, "culling_rate", &s.culling_rate);
     summary_fields(&mut out, "ideal_culling_rate", &s.ideal_culling_rate);
+    summary_fields(&mut out, "frustum_culling_rate", &s.frustum_culling_rate);
+    out.insert(
+        "views_losing_a_patch_to_the_frustum".into(),
+        json!(s.views_losing_a_patch_to_the_frustum),
+    );
     if let Some(p) = &s.psnr_db_differing {
         summary_fields(&mut out, "psnr_db_differing", p);
     }
@@ -413,6 +434,10 @@ fn view_json(index: usize, m: &ViewMetrics) -> Value {
         "triangles_drawn": m.triangles_drawn,
         "culling_rate": m.culling_rate,
         "ideal_culling_rate": m.ideal_culling_rate,
+        "frustum_answer_patches": m.frustum_answer_patches,
+        "frustum_triangles_drawn": m.frustum_triangles_drawn,
+        "frustum_culling_rate": m.frustum_culling_rate,
+        "frustum_lost_patches": m.frustum_lost_patches,
         // Infinite (identical pictures) becomes null.
         "psnr_db": m.psnr_db,
         "full_ms": 1e3 * m.full_seconds,
@@ -457,6 +482,7 @@ fn print_summary(s: &EvalSummary, is_path: bool) -> Result<(), StdoutError> {
     row("triangles drawn", &s.triangles_drawn, false)?;
     row("culling rate", &s.culling_rate, true)?;
     row("ideal culling", &s.ideal_culling_rate, true)?;
+    row("culling + frustum", &s.frustum_culling_rate, true)?;
     outln!(
         "pixel-identical {unit}: {}/{} ({:.1}%); {unit} missing a visible patch: {}",
         s.identical_views,
@@ -464,6 +490,12 @@ fn print_summary(s: &EvalSummary, is_path: bool) -> Result<(), StdoutError> {
         100.0 * s.identical_views_fraction(),
         s.views_missing_a_patch
     )?;
+    if s.views_losing_a_patch_to_the_frustum > 0 {
+        outln!(
+            "{unit} where the frustum dropped a patch the answer draws: {} (a bug: please report)",
+            s.views_losing_a_patch_to_the_frustum
+        )?;
+    }
     if let Some(p) = &s.psnr_db_differing {
         outln!(
             "PSNR of the {unit} that differ: mean {:.1} dB, worst {:.1} dB",

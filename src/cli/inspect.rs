@@ -1,11 +1,13 @@
 //! `patchvis info` and `patchvis query`: read a `.pvis` through the runtime reader, and
 //! (`info --compare`, `query --bench`) measure its payload and its three query modes.
 
-use super::args::{InfoArgs, QueryArgs};
+use super::UsageError;
+use super::args::{DepthArg, InfoArgs, QueryArgs};
 use super::out::outln;
+use super::view::LookAt;
 use anyhow::{Context, Result, anyhow};
 use patchvis::format::PvisFile;
-use patchvis::runtime::Pvis;
+use patchvis::runtime::{DepthRange, Frustum, Pvis};
 use serde_json::json;
 use std::path::Path;
 use std::time::Instant;
@@ -176,9 +178,15 @@ pub fn query(args: &QueryArgs) -> Result<()> {
     let Some(from) = args.from else {
         return Err(anyhow!("query: --from X,Y,Z is required without --bench"));
     };
+    let frustum = query_frustum(args, from)?;
     let mut scratch = vec![0u64; pvis.scratch_words()];
-    let visible = pvis.query(from, &mut scratch);
+    let unculled = pvis.query(from, &mut scratch).count();
+    let visible = match &frustum {
+        Some(frustum) => pvis.query_in_frustum(from, frustum, &mut scratch),
+        None => pvis.query(from, &mut scratch),
+    };
     let patches: Vec<u32> = visible.patches().collect();
+    let outside = unculled - visible.count();
     // The reader merges neighbouring patches' ranges into one draw each.
     let ranges: Vec<[u32; 2]> = pvis
         .ranges(&visible)
@@ -186,17 +194,27 @@ pub fn query(args: &QueryArgs) -> Result<()> {
         .collect();
     let triangles: u64 = ranges.iter().map(|r| u64::from(r[1])).sum();
     if args.json {
-        let report = json!({
+        let mut report = json!({
             "patches": patches,
             "ranges": ranges,
             "inside_sphere": visible.inside_sphere,
             "triangles": triangles,
             "views": visible.leaf,
         });
+        if frustum.is_some() {
+            report["outside_frustum"] = json!(outside);
+        }
         outln!("{}", serde_json::to_string(&report)?)?;
     } else {
+        let what = if frustum.is_some() {
+            format!(
+                "visible and in the frustum ({unculled} visible, {outside} outside the frustum)"
+            )
+        } else {
+            "visible".into()
+        };
         outln!(
-            "{} of {} patches visible, {} of {} triangles in {} ranges (views {:?})",
+            "{} of {} patches {what}, {} of {} triangles in {} ranges (views {:?})",
             patches.len(),
             pvis.patch_count(),
             triangles,
@@ -209,6 +227,30 @@ pub fn query(args: &QueryArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The frustum of `query`'s camera flags (`--look-at` and its lens, or `--view-proj`), if any.
+fn query_frustum(args: &QueryArgs, eye: [f32; 3]) -> Result<Option<Frustum>, UsageError> {
+    if let Some(m) = args.view_proj {
+        let depth = match args.depth {
+            DepthArg::Gl => DepthRange::NegativeOneToOne,
+            DepthArg::ZeroToOne => DepthRange::ZeroToOne,
+        };
+        return Ok(Some(Frustum::from_view_projection(&m, depth)));
+    }
+    args.look_at
+        .map(|target| {
+            LookAt {
+                eye,
+                target,
+                fov_deg: args.fov,
+                aspect: args.aspect,
+                near: args.near,
+                far: args.far,
+            }
+            .frustum()
+        })
+        .transpose()
 }
 
 /// A seeded xorshift stream of floats in `[-1, 1)`, so benches query the same eyes every run.
@@ -274,6 +316,62 @@ fn bench(pvis: &Pvis<'_>, n: u32) -> Result<()> {
             t.elapsed().as_nanos() as f64 / BATCH as f64
         })
         .collect();
+
+    // Expanded with a frustum, alternated batch by batch with the plain query above so that
+    // both see the same machine: a camera looking at the model's centre (the frustum holds
+    // the whole model) and one aimed 1.5 radii off it, so the frustum's side cuts the model.
+    let aimed = |eye: [f32; 3], off: f32| {
+        let d = [0, 1, 2].map(|i| s.center[i] - eye[i]);
+        let side = [d[2], 0.0, -d[0]];
+        let len = (side[0] * side[0] + side[2] * side[2]).sqrt().max(1e-30);
+        let target = [0, 1, 2].map(|i| s.center[i] + side[i] / len * off * s.radius);
+        LookAt {
+            eye,
+            target,
+            fov_deg: s.fov_deg,
+            aspect: 1.0,
+            near: None,
+            far: None,
+        }
+        .view_projection()
+    };
+    let mut matrices = Vec::with_capacity(2 * eyes.len());
+    for &eye in &eyes {
+        matrices.push(aimed(eye, 0.0)?);
+        matrices.push(aimed(eye, 1.5)?);
+    }
+    let t = Instant::now();
+    let frusta: Vec<Frustum> = matrices
+        .iter()
+        .map(|m| Frustum::from_view_projection(m, DepthRange::NegativeOneToOne))
+        .collect();
+    let frustum_build_ns = t.elapsed().as_nanos() as f64 / frusta.len() as f64;
+    let (mut plain, mut centred, mut cut) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut kept, mut total) = (0u64, 0u64);
+    for b in 0..batches {
+        let range = b * BATCH..(b + 1) * BATCH;
+        let t = Instant::now();
+        for &eye in &eyes[range.clone()] {
+            sink = sink.wrapping_add(expanded.query(eye).bits()[0]);
+        }
+        plain.push(t.elapsed().as_nanos() as f64 / BATCH as f64);
+        for (k, times) in [(0, &mut centred), (1, &mut cut)] {
+            let t = Instant::now();
+            for i in range.clone() {
+                let v = expanded.query_in_frustum(eyes[i], &frusta[2 * i + k]);
+                sink = sink.wrapping_add(v.bits()[0]);
+            }
+            times.push(t.elapsed().as_nanos() as f64 / BATCH as f64);
+        }
+        for i in range {
+            total += u64::from(expanded.query(eyes[i]).count());
+            kept += u64::from(
+                expanded
+                    .query_in_frustum(eyes[i], &frusta[2 * i + 1])
+                    .count(),
+            );
+        }
+    }
 
     // Expanded along the smooth orbit below: mostly the same leaf, sometimes a neighbour.
     let orbit_eye = |i: u32| {
@@ -349,6 +447,24 @@ fn bench(pvis: &Pvis<'_>, n: u32) -> Result<()> {
         median(&mut exp),
         expand_ms,
         pvis.expanded_bound() * 8 / 1024
+    )?;
+    outln!(
+        "  expanded, same eyes (alternated below)   {:>10.0} ns",
+        median(&mut plain)
+    )?;
+    outln!(
+        "  expanded + frustum, model inside it      {:>10.0} ns   (looking at the centre, fov {})",
+        median(&mut centred),
+        s.fov_deg
+    )?;
+    outln!(
+        "  expanded + frustum, side cutting model   {:>10.0} ns   (aimed 1.5 radii off: {:.1}% of visible patches kept)",
+        median(&mut cut),
+        100.0 * kept as f64 / total.max(1) as f64
+    )?;
+    outln!(
+        "  Frustum::from_view_projection            {:>10.0} ns",
+        frustum_build_ns
     )?;
     outln!(
         "  expanded query, smooth orbit             {:>10.0} ns",

@@ -10,6 +10,7 @@ pub mod out;
 pub mod progress;
 pub mod shard;
 pub mod verify;
+pub mod view;
 
 /// An invocation that cannot run as given (exit code 2), e.g. `--patches 0`.
 #[derive(Debug)]

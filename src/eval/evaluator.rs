@@ -125,8 +125,21 @@ pub struct ViewMetrics {
     /// Fraction of the mesh's triangles not drawn.
     pub culling_rate: f64,
     /// Fraction of triangles in patches the full render does not show: the best any patch
-    /// visibility answer could cull at this view.
+    /// visibility answer could cull at this view (the full render shows only what is in the
+    /// view frustum, so this is also the ideal with the frustum).
     pub ideal_culling_rate: f64,
+    /// Patches of the answer inside the camera's frustum ([`super::camera_frustum`]): what
+    /// `query_in_frustum` returns for this camera.
+    pub frustum_answer_patches: u32,
+    /// Triangles of those patches.
+    pub frustum_triangles_drawn: u64,
+    /// Fraction of the mesh's triangles not drawn when the answer is also culled by the
+    /// frustum: `1 − |answer ∩ frustum| / triangles`, counted in triangles.
+    pub frustum_culling_rate: f64,
+    /// Patches the frustum drops from the answer although the answer's render shows them:
+    /// 0 unless the frustum test is wrong (it may drop only patches that draw no pixel, so the
+    /// missed pixels with the frustum are the missed pixels above).
+    pub frustum_lost_patches: u32,
     /// PSNR (dB) of the shaded reconstruction against the shaded full render; `+∞` when equal.
     pub psnr_db: f64,
     /// Seconds to render the whole mesh.
@@ -385,6 +398,16 @@ impl<'m> Evaluator<'m> {
         s.runs.clear();
         extend_runs(visible.bits(), &self.starts, &mut s.runs);
         let triangles_drawn: u64 = s.runs.iter().map(|r| u64::from(r.end - r.start)).sum();
+        // The answer culled by the camera's frustum, as `query_in_frustum` gives it.
+        s.in_frustum.copy_from_slice(&s.answer);
+        super::camera_frustum(camera).cull(pvis, &mut s.in_frustum);
+        let frustum_answer_patches = s.in_frustum.iter().map(|w| w.count_ones()).sum();
+        let frustum_triangles_drawn: u64 = crate::runtime::Patches::of_bits(&s.in_frustum)
+            .map(|p| {
+                let r = self.patch_range(p);
+                u64::from(r.end - r.start)
+            })
+            .sum();
 
         s.reconstruction.clear();
         let start = Instant::now();
@@ -398,11 +421,17 @@ impl<'m> Evaluator<'m> {
 
         // Compare, collect the truly visible patches, and sum the shaded error.
         s.seen.fill(0);
+        s.drawn.fill(0);
         let normal = |id: u32| face_normal(mesh, self.triangle_at(id));
         let shader = Shader::new(&normal, camera.forward());
         let (mut covered, mut missed, mut squared_error) = (0u64, 0u64, 0u64);
-        let mut previous = NO_PATCH;
+        let (mut previous, mut previous_drawn) = (NO_PATCH, NO_PATCH);
         for (&a, &b) in s.full.ids().iter().zip(s.reconstruction.ids()) {
+            if b != NO_PATCH && b != previous_drawn {
+                previous_drawn = b;
+                let p = self.patch_at(b);
+                s.drawn[p / 64] |= 1 << (p % 64);
+            }
             if a != NO_PATCH {
                 covered += 1;
                 if a != previous {
@@ -426,6 +455,12 @@ impl<'m> Evaluator<'m> {
             visible_patches += word.count_ones();
             missed_patches += (word & !answer[w]).count_ones();
         }
+        let frustum_lost_patches = s
+            .drawn
+            .iter()
+            .zip(&s.in_frustum)
+            .map(|(&drawn, &kept)| (drawn & !kept).count_ones())
+            .sum();
         let visible_triangles: u64 = crate::runtime::Patches::of_bits(&s.seen)
             .map(|p| {
                 let r = self.patch_range(p);
@@ -444,6 +479,10 @@ impl<'m> Evaluator<'m> {
             triangles_drawn,
             culling_rate: 1.0 - triangles_drawn as f64 / total,
             ideal_culling_rate: 1.0 - visible_triangles as f64 / total,
+            frustum_answer_patches,
+            frustum_triangles_drawn,
+            frustum_culling_rate: 1.0 - frustum_triangles_drawn as f64 / total,
+            frustum_lost_patches,
             psnr_db: metrics::psnr(squared_error as f64 / (pixels * 3.0)),
             full_seconds,
             culled_seconds,
@@ -534,6 +573,10 @@ struct Scratch {
     answer: Vec<u64>,
     /// The patches the full render shows, one row.
     seen: Vec<u64>,
+    /// The patches the answer's render shows, one row.
+    drawn: Vec<u64>,
+    /// The answer without the patches outside the camera's frustum, one row.
+    in_frustum: Vec<u64>,
     /// The answer's triangle positions, as runs.
     runs: Vec<Range<u32>>,
 }
@@ -547,6 +590,8 @@ impl Scratch {
             scratch: vec![0; pvis.scratch_words()],
             answer: vec![0; pvis.row_words()],
             seen: vec![0; pvis.row_words()],
+            drawn: vec![0; pvis.row_words()],
+            in_frustum: vec![0; pvis.row_words()],
             runs: Vec::new(),
         }
     }

@@ -18,6 +18,7 @@
 //! Cost: two renders per view (the full mesh and the culled set), views in parallel.
 
 mod evaluator;
+mod frustum;
 #[cfg(feature = "gpu")]
 mod gpu_frame;
 pub mod metrics;
@@ -31,6 +32,7 @@ pub use evaluator::{
     EvalError, EvalOptions, Evaluator, Pictures, ViewMetrics, sampling_params, visible_runs,
     worker_bytes,
 };
+pub use frustum::camera_frustum;
 #[cfg(feature = "gpu")]
 pub use gpu_frame::{
     FrameClock, GpuFrameCost, GpuFrameTimer, GpuViewCost, WARMUP_FRAMES, chunk_draws,

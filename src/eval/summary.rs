@@ -24,6 +24,11 @@ pub struct EvalSummary {
     pub culling_rate: Summary,
     /// Ideal culling rate (true visible set) per view.
     pub ideal_culling_rate: Summary,
+    /// Culling rate per view with the answer also culled by the view frustum.
+    pub frustum_culling_rate: Summary,
+    /// Views where the frustum dropped a patch the answer's render shows (0 unless the
+    /// frustum test is wrong).
+    pub views_losing_a_patch_to_the_frustum: u32,
     /// PSNR (dB) over the views whose shaded pictures differ (`None` if none do).
     pub psnr_db_differing: Option<Summary>,
     /// Frame cost of the full mesh and the culled set.
@@ -84,6 +89,8 @@ impl EvalSummary {
             triangles_drawn: summary(|v| v.triangles_drawn as f64),
             culling_rate: summary(|v| v.culling_rate),
             ideal_culling_rate: summary(|v| v.ideal_culling_rate),
+            frustum_culling_rate: summary(|v| v.frustum_culling_rate),
+            views_losing_a_patch_to_the_frustum: count(|v| v.frustum_lost_patches > 0),
             psnr_db_differing: (!differing.is_empty()).then(|| Summary::of(differing)),
             frame_cost: FrameCost::of(
                 views.iter().map(|v| v.full_seconds),
@@ -131,6 +138,10 @@ mod tests {
             triangles_drawn: drawn,
             culling_rate: 1.0 - drawn as f64 / 100.0,
             ideal_culling_rate: 0.5,
+            frustum_answer_patches: 11,
+            frustum_triangles_drawn: drawn - 1,
+            frustum_culling_rate: 1.0 - (drawn - 1) as f64 / 100.0,
+            frustum_lost_patches: 0,
             psnr_db: if missed_pixels == 0 {
                 f64::INFINITY
             } else {
@@ -156,6 +167,8 @@ mod tests {
         assert!((s.identical_views_fraction() - 2.0 / 3.0).abs() < 1e-12);
         assert_eq!(s.missed_pixels.max, 5.0);
         assert!((s.culling_rate.mean - 0.5).abs() < 1e-12);
+        assert!((s.frustum_culling_rate.mean - 0.51).abs() < 1e-12);
+        assert_eq!(s.views_losing_a_patch_to_the_frustum, 0);
         assert_eq!(s.psnr_db_differing.map(|p| p.mean), Some(30.0));
         assert!((s.frame_cost.full_ms_median - 20.0).abs() < 1e-9);
         assert!((s.frame_cost.speedup - 2.0).abs() < 1e-12);

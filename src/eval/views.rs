@@ -7,6 +7,11 @@
 
 pub use crate::splitmix::SplitMix64;
 
+use crate::sampler::{Camera, NEAR_FRACTION};
+
+/// Mixed into `--seed` for [`jitter_looks`], so that its stream differs from the views' own.
+const LOOK_JITTER_STREAM: u64 = 0x6A17_7E12_100C_0001;
+
 /// `count` unit directions drawn uniformly on the sphere from `seed`.
 pub fn random_directions(count: u32, seed: u64) -> Vec<[f32; 3]> {
     let mut rng = SplitMix64::new(seed);
@@ -20,6 +25,37 @@ pub fn random_directions(count: u32, seed: u64) -> Vec<[f32; 3]> {
                 (ring * libm::sin(azimuth)) as f32,
                 z as f32,
             ]
+        })
+        .collect()
+}
+
+/// `cameras` with each view direction turned by a seeded random angle of up to `max_deg`
+/// degrees, uniform over the spherical cap of that radius around it (`eval --look-jitter`):
+/// same eye, field of view, resolution and near plane. `max_deg = 0` gives the cameras back
+/// unchanged, bit for bit.
+pub fn jitter_looks(cameras: &[Camera], max_deg: f64, seed: u64) -> Vec<Camera> {
+    if max_deg <= 0.0 {
+        return cameras.to_vec();
+    }
+    let mut rng = SplitMix64::new(seed ^ LOOK_JITTER_STREAM);
+    let cos_max = libm::cos(max_deg.to_radians());
+    cameras
+        .iter()
+        .map(|c| {
+            let cos_t = 1.0 - rng.next_f64() * (1.0 - cos_max);
+            let sin_t = libm::sqrt((1.0 - cos_t * cos_t).max(0.0));
+            let phi = core::f64::consts::TAU * rng.next_f64();
+            let (f, r, u) = (c.forward(), c.right(), c.up());
+            let (a, b) = (sin_t * libm::cos(phi), sin_t * libm::sin(phi));
+            // The eye–target distance the camera was made with (its near plane is a fixed
+            // fraction of it), so the target stays as far away.
+            let distance = c.near() / NEAR_FRACTION;
+            let eye = c.eye();
+            let target: [f32; 3] = core::array::from_fn(|k| {
+                (eye[k] + distance * (cos_t * f[k] + a * r[k] + b * u[k])) as f32
+            });
+            let eye = eye.map(|v| v as f32);
+            Camera::look_at(eye, target, c.fov_deg() as f32, c.resolution()).with_near(c.near())
         })
         .collect()
 }

@@ -14,7 +14,7 @@
 
 use super::model::TreeCache;
 use super::query::{Eye, classify, everything, visible};
-use super::{Pvis, Visible};
+use super::{Frustum, Pvis, Visible};
 use crate::sphere::{Face, LatticePoint, MAX_LEVEL, children, cross, dot, root_face};
 
 /// Row slots the streaming state keeps: the answer, the root face's 3 corners, and the 3 edge
@@ -200,6 +200,40 @@ impl<'a, 's> Streaming<'a, 's> {
         }
         let views = self.path[level].face.views;
         visible(&pvis, inside_sphere, views, &self.rows[ANSWER..words])
+    }
+
+    /// `u64` words of one row of the file: what [`Streaming::query_in_frustum`]'s `out`
+    /// needs.
+    pub fn row_words(&self) -> usize {
+        self.pvis.row_words()
+    }
+
+    /// [`Streaming::query`]'s answer without the patches `frustum` drops (spec § Frustum
+    /// culling), written to `out` (at least [`Pvis::row_words`] words; the cached answer is
+    /// kept for the next query). Costs one record decode and sphere test per visible patch
+    /// more than `query`.
+    ///
+    /// # Panics
+    /// If `out.len() < pvis.row_words()`.
+    pub fn query_in_frustum<'o>(
+        &mut self,
+        eye: [f32; 3],
+        frustum: &Frustum,
+        out: &'o mut [u64],
+    ) -> Visible<'o> {
+        let pvis = self.pvis;
+        let words = pvis.row_words();
+        assert!(
+            out.len() >= words,
+            "out holds {} words, {words} needed (Pvis::row_words)",
+            out.len()
+        );
+        let out = &mut out[..words];
+        let v = self.query(eye);
+        let (inside_sphere, leaf) = (v.inside_sphere, v.leaf);
+        out.copy_from_slice(v.bits());
+        frustum.cull(&pvis, out);
+        visible(&pvis, inside_sphere, leaf, out)
     }
 
     /// Starts the path at root face `oct`, decoding its three level-0 corners.
