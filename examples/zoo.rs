@@ -10,9 +10,7 @@
 //! once per mode as `patchvis bake MESH -o FILE.pvis [--conservative]` does (the library's
 //! recipe, CPU backend, the command's defaults) and evaluated as `patchvis eval MESH FILE.pvis
 //! --views N --seed S --resolution R` does, at R = the bake's `--resolution` (512) and 2R: the
-//! same seeded random views on the sampling sphere for every model and mode. A conservative
-//! file records the resolution it sampled (2 × 512), so the evaluation takes R from the bake's
-//! settings, not from the file, to compare both modes at the same R.
+//! same seeded random views on the sampling sphere for every model and mode.
 //!
 //! One row per (model, mode, resolution): pixel-identical views, missed pixels per view
 //! (mean / p99 / max), the mean culling rate against the mean ideal one (the true visible
@@ -21,7 +19,7 @@
 //! generated meshes and the `.pvis` files go to a temporary directory, or to `--keep DIR`.
 //!
 //! Cost: per model and mode one bake (level 4 supersampled from level 5: 5,124 ID buffers at
-//! 512² by default, 4,098 at 1024² with `--conservative`) and 2 × 2 × N renders (full and
+//! 512², and with `--conservative` the probe pass over each) and 2 × 2 × N renders (full and
 //! culled, at 1× and 2×). On 2 cores the full default run takes about 5 minutes, two thirds
 //! of it baking; `--views 30 --models bunny,ant` takes about 2.
 

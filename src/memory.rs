@@ -16,6 +16,7 @@
 //! | sampling | whole; the patch-ordered mesh copy ¼ | the copy is memory-mapped past ¼ |
 //! | GPU upload | ¼, at most 256 MiB | host staging of one vertex and index buffer pair |
 //! | `--dilate` patch graph | whole | refused with a clear error when it cannot fit |
+//! | `--conservative` solids | ½ (beside the mesh copy) | refused with a clear error when they cannot fit |
 //! | encoding | whole | the rows, a few counts and the file (kilobytes to megabytes) |
 //! | eval | whole | per-triangle maps bounded by a check, pixels per worker |
 //!
@@ -39,6 +40,11 @@ const MAX_GPU_STAGING: u64 = 256 << 20;
 /// Bytes the `--dilate` patch graph takes while it is built, per triangle: three sorted
 /// edge entries of 16 bytes (the neighbour lists after them are smaller).
 pub const PATCH_GRAPH_BYTES_PER_TRIANGLE: u64 = 48;
+
+/// Bytes `--conservative`'s solids (`sampler/solid.rs`) take while they are built, per
+/// triangle: three directed edges of 16 bytes sorted, the union-find, the weld and the
+/// per-triangle component and orientation that stay.
+pub const SOLIDS_BYTES_PER_TRIANGLE: u64 = 60;
 
 /// Heap of the sampler per triangle of the batch of its patch-ordered mesh being built
 /// (whole patches, at most `MAPPED_BATCH_TRIANGLES`, 2^19 triangles, when the copy is
@@ -111,6 +117,8 @@ pub struct StageBudgets {
     pub gpu_staging: u64,
     /// The `--dilate` patch graph.
     pub patch_graph: u64,
+    /// `--conservative`'s solids, built before sampling and kept through it.
+    pub solids: u64,
     /// Numbering and encoding.
     pub encoding: u64,
     /// `patchvis eval`.
@@ -160,6 +168,7 @@ impl MemoryBudget {
             sampling_mesh: quarter,
             gpu_staging: quarter.min(MAX_GPU_STAGING),
             patch_graph: self.total,
+            solids: self.total / 2,
             encoding: self.total,
             eval: self.total,
         }
@@ -170,6 +179,11 @@ impl MemoryBudget {
     pub fn minimum(needs: &FixedNeeds) -> u64 {
         let bytes = needs.sampling().max(MIN_FIXED_BYTES);
         bytes.div_ceil(1 << 20).saturating_mul(1 << 20)
+    }
+
+    /// Whether `--conservative`'s solids of `triangles` triangles fit.
+    pub fn fits_solids(&self, triangles: u32) -> bool {
+        u64::from(triangles) * SOLIDS_BYTES_PER_TRIANGLE <= self.split().solids
     }
 
     /// Whether the `--dilate` patch graph of `triangles` triangles fits.

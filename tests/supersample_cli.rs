@@ -1,9 +1,9 @@
 //! `patchvis bake --view-supersample` end to end on the bundled bunny at small settings: the
 //! file keeps the stored level's views, each row contains the plain bake's row of that view,
 //! the rows are exactly the fold of a plain bake at the finer level (with `--fold-min-pixels`:
-//! of a thresholded one into the plain stored rows), the defaults and `--conservative` are the
-//! flag combinations they are documented as, the stats record it, and out-of-range values are
-//! usage errors.
+//! of a thresholded one into the plain stored rows), the default is the flag combination it is
+//! documented as, `--conservative`'s rows hold the default's, the stats record it, and
+//! out-of-range values are usage errors.
 
 mod common;
 
@@ -143,14 +143,26 @@ fn defaults_and_conservative_are_the_documented_flag_combinations() {
     let default = bake(&["--level", "1"]);
     let spelled = bake(&folded_level_1("0", "all"));
     assert_eq!(default.bytes(), spelled.bytes());
-    // --conservative at 32 px: the default with ID buffers of 64 px.
-    let conservative = bake(&["--level", "1", "--conservative", "--resolution", "32"]);
-    let conservative = conservative.bytes();
-    assert_eq!(conservative, spelled.bytes());
+    // --conservative: the default plus the probe pass, at the same resolution. Every row
+    // holds the default's, and the probe finds more on the bunny.
+    let conservative = bake(&["--level", "1", "--conservative"]);
     assert_eq!(
-        Pvis::parse(&conservative).unwrap().sampling().resolution,
+        Pvis::parse(&conservative.bytes())
+            .unwrap()
+            .sampling()
+            .resolution,
         64
     );
+    let ((level, probed), (_, plain)) = (rows(&conservative), rows(&default));
+    assert_eq!(level, 1);
+    for (a, b) in probed.words().iter().zip(plain.words()) {
+        assert_eq!(
+            a & b,
+            *b,
+            "a conservative row lacks a patch the default has"
+        );
+    }
+    assert!(probed.count_ones() > plain.count_ones());
 }
 
 #[test]

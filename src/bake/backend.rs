@@ -32,8 +32,14 @@ pub enum Backend {
 }
 
 /// The first option the GPU backend does not implement, if any.
-pub(crate) fn cpu_only_option(conservative_raster: bool, resume: bool) -> Option<&'static str> {
-    if conservative_raster {
+pub(crate) fn cpu_only_option(
+    conservative: bool,
+    conservative_raster: bool,
+    resume: bool,
+) -> Option<&'static str> {
+    if conservative {
+        Some("--conservative")
+    } else if conservative_raster {
         Some("--conservative-raster")
     } else if resume {
         Some("--resume")
@@ -48,13 +54,14 @@ impl Backend {
     /// software rasterizer such as lavapipe is slower than the CPU backend).
     pub fn open(
         choice: BackendChoice,
+        conservative: bool,
         conservative_raster: bool,
         resume: bool,
     ) -> Result<(Backend, Option<String>), BakeError> {
         match choice {
             BackendChoice::Cpu => Ok((Backend::Cpu, None)),
             BackendChoice::Gpu => {
-                if let Some(option) = cpu_only_option(conservative_raster, resume) {
+                if let Some(option) = cpu_only_option(conservative, conservative_raster, resume) {
                     return Err(BakeError::Settings(format!(
                         "--backend gpu: {option} needs the CPU backend (--backend cpu or auto)"
                     )));
@@ -71,7 +78,9 @@ impl Backend {
                 ))
             }
             BackendChoice::Auto => {
-                let why_cpu = if let Some(option) = cpu_only_option(conservative_raster, resume) {
+                let why_cpu = if let Some(option) =
+                    cpu_only_option(conservative, conservative_raster, resume)
+                {
                     format!("{option} needs it")
                 } else {
                     #[cfg(feature = "gpu")]

@@ -261,7 +261,7 @@ fn recipe_of(part: &Part) -> Result<Recipe, String> {
         min_pixels: s.min_pixels,
         dilate: s.dilate,
         always_visible: s.always_visible.clone(),
-        conservative: false,
+        conservative: s.probe.is_some(),
         conservative_raster: s.conservative_raster,
         view_supersample: Some(s.extra_levels),
         fold_min_pixels: Some(s.fold_min_pixels),

@@ -53,7 +53,7 @@ pub use part::{Part, PartSettings, PassRows};
 pub use recipe::{Baked, Outputs, Recipe};
 pub use rows::SampledRows;
 pub use settings::{
-    BakeSettings, CONSERVATIVE_RESOLUTION_SCALE, DEFAULT_FOLD_CORNERS, DEFAULT_FOLD_MIN_PIXELS,
+    BakeSettings, CONSERVATIVE_PROBE_PIXELS, DEFAULT_FOLD_CORNERS, DEFAULT_FOLD_MIN_PIXELS,
     DEFAULT_VIEW_SUPERSAMPLE, MIN_RESOLUTION, PatchOrder, SettingsError, Supersample,
     WARN_RESOLUTION,
 };

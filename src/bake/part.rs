@@ -21,7 +21,8 @@
 //!
 //! The settings block holds what decides the rows and the encoding: level, sampled resolution,
 //! fov bits, `min_pixels`, `dilate`, `conservative_raster`, extra levels, fold threshold,
-//! fold corners, patch order, encoding, and the always-visible ids. The camera and patch
+//! fold corners, patch order, encoding, the probe pass (0, or its radius + 1) and the
+//! always-visible ids. The camera and patch
 //! records are the original mesh's (a mesh baked in a working frame gets them as
 //! `Recipe::run` computes them). As the sampler's checkpoint does (`sampler/checkpoint.rs`),
 //! the version is bumped whenever the rows change for the same inputs, and the CRC-32C
@@ -40,7 +41,7 @@ use xxhash_rust::xxh64::xxh64;
 
 const MAGIC: &[u8; 8] = b"PVISPART";
 /// The layout's version; bumped with the sampler checkpoint's whenever the rows change.
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 const CRC_BYTES: usize = 4;
 /// What a refused part's message tells the user to do.
 const BAKE_AGAIN: &str = "bake this shard again";
@@ -60,6 +61,8 @@ pub struct PartSettings {
     pub dilate: bool,
     /// `--conservative-raster`.
     pub conservative_raster: bool,
+    /// The probe pass's occluder shrink (`--conservative`), or `None`.
+    pub probe: Option<u32>,
     /// Always-visible patches (the tiling's numbering).
     pub always_visible: Vec<u32>,
     /// Extra levels sampled and folded.
@@ -103,6 +106,7 @@ impl PartSettings {
             VisibilityEncoding::Hierarchical => 1,
             VisibilityEncoding::Tree => 2,
         });
+        b.put_u32(self.probe.map_or(0, |r| r + 1));
         b.put_u32(self.always_visible.len() as u32);
         for &p in &self.always_visible {
             b.put_u32(p);
@@ -142,6 +146,7 @@ impl PartSettings {
                 2 => VisibilityEncoding::Tree,
                 _ => return None,
             },
+            probe: f.u32()?.checked_sub(1),
             always_visible: {
                 let n = f.u32()?;
                 (0..n).map(|_| f.u32()).collect::<Option<Vec<_>>>()?
@@ -387,6 +392,7 @@ pub(crate) mod tests {
             min_pixels: 0,
             dilate: false,
             conservative_raster: false,
+            probe: None,
             always_visible: vec![3],
             extra_levels: 1,
             fold_min_pixels: 4,

@@ -25,8 +25,10 @@ use std::path::{Path, PathBuf};
 pub struct Recipe {
     /// The settings as given.
     pub settings: BakeSettings,
-    /// The ID-buffer side sampled (`resolution`, scaled by `--conservative`).
+    /// The ID-buffer side sampled.
     pub resolution: u32,
+    /// The probe pass's occluder shrink in pixels (`--conservative`), or `None`.
+    pub probe: Option<u32>,
     /// Supersampling and folding.
     pub supersample: Supersample,
     /// Checkpoint of the stored level's plain pass when the fold has a threshold.
@@ -132,8 +134,8 @@ impl Recipe {
         Ok(Mesh::open_with(path, &self.open_options())?)
     }
 
-    /// Checks what depends on the mesh before any work: the `--dilate` patch graph against
-    /// the budget, that some triangle has an area, and that the budget is at least what the
+    /// Checks what depends on the mesh before any work: the `--dilate` patch graph and the
+    /// `--conservative` solids against the budget, that some triangle has an area, and that the budget is at least what the
     /// stages need whatever it is ([`MemoryBudget::minimum`]).
     pub fn check_mesh(&self, mesh: &Mesh) -> Result<(), BakeError> {
         let settings = &self.settings;
@@ -142,6 +144,15 @@ impl Recipe {
                 "--dilate builds a patch graph of about {} MiB for {} triangles, more than --memory {} MiB",
                 (u64::from(mesh.triangle_count()) * crate::memory::PATCH_GRAPH_BYTES_PER_TRIANGLE)
                     >> 20,
+                mesh.triangle_count(),
+                self.memory().total() >> 20
+            )));
+        }
+        if self.probe.is_some() && !self.memory().fits_solids(mesh.triangle_count()) {
+            return Err(BakeError::Budget(format!(
+                "--conservative finds the mesh's solids in about {} MiB for {} triangles, \
+                 more than half of --memory {} MiB; raise --memory",
+                (u64::from(mesh.triangle_count()) * crate::memory::SOLIDS_BYTES_PER_TRIANGLE) >> 20,
                 mesh.triangle_count(),
                 self.memory().total() >> 20
             )));
@@ -230,6 +241,7 @@ impl Recipe {
             resume: s.resume,
             memory_budget: Some(self.memory().split().sampling),
             views,
+            probe: self.probe,
         }
     }
 

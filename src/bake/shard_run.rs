@@ -44,6 +44,7 @@ impl Recipe {
             min_pixels: s.min_pixels,
             dilate: s.dilate,
             conservative_raster: s.conservative_raster,
+            probe: self.probe,
             always_visible: s.always_visible.clone(),
             extra_levels: self.supersample.extra_levels,
             fold_min_pixels: self.supersample.fold_min_pixels,

@@ -88,8 +88,13 @@ pub fn run(args: BakeArgs) -> Result<()> {
         BackendArg::Gpu => BackendChoice::Gpu,
         BackendArg::Auto => BackendChoice::Auto,
     };
-    let (backend, why_cpu) = Backend::open(choice, args.conservative_raster, args.resume)
-        .map_err(|e| report(&args.input, e))?;
+    let (backend, why_cpu) = Backend::open(
+        choice,
+        args.conservative,
+        args.conservative_raster,
+        args.resume,
+    )
+    .map_err(|e| report(&args.input, e))?;
     if let Some(why) = why_cpu {
         eprintln!("--backend auto: sampling on the CPU ({why})");
     }
@@ -165,6 +170,7 @@ impl Summary<'_> {
                 "sampling_mesh_on_heap_up_to": split.sampling_mesh,
                 "gpu_staging": split.gpu_staging,
                 "patch_graph": split.patch_graph,
+                "solids": split.solids,
                 "encoding": split.encoding,
             },
             "patches": b.tiling.patches.len(),

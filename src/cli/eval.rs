@@ -428,6 +428,7 @@ fn view_json(index: usize, m: &ViewMetrics) -> Value {
         "inside_sphere": m.inside_sphere,
         "covered_pixels": m.covered_pixels,
         "missed_pixels": m.missed_pixels,
+        "tied_pixels": m.tied_pixels,
         "visible_patches": m.visible_patches,
         "answer_patches": m.answer_patches,
         "missed_patches": m.missed_patches,

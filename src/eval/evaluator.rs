@@ -27,6 +27,19 @@ use std::collections::{HashMap, VecDeque};
 use std::ops::Range;
 use std::time::Instant;
 
+/// What the full render shows at a pixel, given the reconstruction's fragment there: the
+/// full render's triangle `a`, unless the reconstruction's `b` lies at exactly the same depth
+/// (a depth tie, won by `a` only through drawing order, as at the rim where a front face and
+/// the back face folded under it meet). Either is then a true picture of the mesh there,
+/// so the pixel counts as showing `b`: a tie is not a visible part culled.
+fn tie_resolved(a: u32, b: u32, a_depth: f32, b_depth: f32) -> u32 {
+    if a != b && a != NO_PATCH && b != NO_PATCH && a_depth == b_depth {
+        b
+    } else {
+        a
+    }
+}
+
 /// Why a `.pvis` cannot be evaluated against a mesh.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum EvalError {
@@ -112,8 +125,12 @@ pub struct ViewMetrics {
     pub inside_sphere: bool,
     /// Pixels the full render covers.
     pub covered_pixels: u64,
-    /// Pixels whose triangle differs between the full render and the reconstruction.
+    /// Pixels whose triangle differs between the full render and the reconstruction, not
+    /// counting depth ties (`tied_pixels`).
     pub missed_pixels: u64,
+    /// Pixels where the reconstruction shows another triangle at exactly the full render's
+    /// depth: the full render's won the tie only by drawing order, so they count as equal.
+    pub tied_pixels: u64,
     /// Patches the full render shows.
     pub visible_patches: u32,
     /// Patches the query returns.
@@ -360,6 +377,11 @@ impl<'m> Evaluator<'m> {
         let shader = Shader::new(&normal, camera.forward());
         let resolution = camera.resolution();
         let (full, rec) = (scratch.full.ids(), scratch.reconstruction.ids());
+        let (full_depth, rec_depth) = (scratch.full.depth(), scratch.reconstruction.depth());
+        let full: Vec<u32> = (0..full.len())
+            .map(|i| tie_resolved(full[i], rec[i], full_depth[i], rec_depth[i]))
+            .collect();
+        let full = full.as_slice();
         Pictures {
             full: shader.image(full, resolution),
             reconstruction: shader.image(rec, resolution),
@@ -424,14 +446,18 @@ impl<'m> Evaluator<'m> {
         s.drawn.fill(0);
         let normal = |id: u32| face_normal(mesh, self.triangle_at(id));
         let shader = Shader::new(&normal, camera.forward());
-        let (mut covered, mut missed, mut squared_error) = (0u64, 0u64, 0u64);
+        let (mut covered, mut missed, mut squared_error, mut tied) = (0u64, 0u64, 0u64, 0u64);
         let (mut previous, mut previous_drawn) = (NO_PATCH, NO_PATCH);
-        for (&a, &b) in s.full.ids().iter().zip(s.reconstruction.ids()) {
+        let (full_depth, rec_depth) = (s.full.depth(), s.reconstruction.depth());
+        for (i, (&a, &b)) in s.full.ids().iter().zip(s.reconstruction.ids()).enumerate() {
             if b != NO_PATCH && b != previous_drawn {
                 previous_drawn = b;
                 let p = self.patch_at(b);
                 s.drawn[p / 64] |= 1 << (p % 64);
             }
+            let shown = tie_resolved(a, b, full_depth[i], rec_depth[i]);
+            tied += u64::from(shown != a);
+            let a = shown;
             if a != NO_PATCH {
                 covered += 1;
                 if a != previous {
@@ -473,6 +499,7 @@ impl<'m> Evaluator<'m> {
             inside_sphere,
             covered_pixels: covered,
             missed_pixels: missed,
+            tied_pixels: tied,
             visible_patches,
             answer_patches,
             missed_patches,

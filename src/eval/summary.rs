@@ -132,6 +132,7 @@ mod tests {
             inside_sphere: false,
             covered_pixels: 100,
             missed_pixels,
+            tied_pixels: 0,
             visible_patches: 10,
             answer_patches: 12,
             missed_patches,

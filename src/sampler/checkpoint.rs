@@ -25,8 +25,8 @@ const MAGIC: &[u8; 8] = b"PVISCKPT";
 /// older build wrote is refused instead of mixed with rows of this one: 2 since vertices
 /// snap through the binary32 transform (`raster::snap32`), 3 since a depth tie goes to the
 /// smaller patch id instead of the smaller input triangle, 4 since the file ends in a
-/// CRC-32C.
-const VERSION: u32 = 4;
+/// CRC-32C, 5 since it hashes the probe pass.
+const VERSION: u32 = 5;
 const HEADER_BYTES: usize = 8 + 4 + 4 + 8 + 4 + 4;
 const CRC_BYTES: usize = 4;
 /// What a refused checkpoint's message tells the user to do.
@@ -64,6 +64,7 @@ pub(crate) fn input_hash(
     for &p in &options.always_visible {
         h.word(u64::from(p));
     }
+    h.word(options.probe.map_or(0, |r| u64::from(r) + 1));
     if let Some(views) = &options.views {
         h.word(views.len() as u64 | 1 << 63);
         for &v in views {

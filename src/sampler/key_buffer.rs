@@ -90,6 +90,46 @@ impl KeyBuffer {
         *stored = (*stored).max(key);
     }
 
+    /// Makes this buffer the occluders of `source` shrunk by `radius` pixels: every pixel
+    /// takes the farthest depth of `source` within the `(2 · radius + 1)`² square around it
+    /// (an empty pixel there empties it), then the tiles are rebuilt. A fragment nearer than
+    /// a pixel of the shrunk buffer may show from a camera that moves the occluders by up
+    /// to `radius` pixels.
+    pub(crate) fn shrink_from(&mut self, source: &KeyBuffer, radius: usize, rows: &mut Vec<u32>) {
+        let n = self.resolution;
+        debug_assert_eq!(n, source.resolution);
+        rows.clear();
+        rows.resize(n * n, 0);
+        for (out, row) in rows.chunks_exact_mut(n).zip(source.keys.chunks_exact(n)) {
+            for (x, o) in out.iter_mut().enumerate() {
+                let (a, b) = (x.saturating_sub(radius), (x + radius).min(n - 1));
+                *o = row[a..=b]
+                    .iter()
+                    .map(|&k| (k >> 32) as u32)
+                    .min()
+                    .unwrap_or(0);
+            }
+        }
+        for y in 0..n {
+            let (a, b) = (y.saturating_sub(radius), (y + radius).min(n - 1));
+            for x in 0..n {
+                let far = (a..=b).map(|yy| rows[yy * n + x]).min().unwrap_or(0);
+                self.keys[y * n + x] = if far == 0 {
+                    0
+                } else {
+                    (u64::from(far) << 32) | 1
+                };
+            }
+        }
+        self.build_tiles();
+    }
+
+    /// The depth bits of pixel `index` (0: empty).
+    #[inline(always)]
+    pub(crate) fn depth_bits(&self, index: usize) -> u32 {
+        (self.keys[index] >> 32) as u32
+    }
+
     /// Recomputes the farthest depth of every tile from the current keys: each band of
     /// [`TILE`] rows is folded into per-column minima first, a loop over whole rows that the
     /// compiler turns into SIMD (minima across eight keys of one tile took twelve instructions

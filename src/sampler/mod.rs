@@ -20,6 +20,7 @@ mod patch_box;
 mod patch_graph;
 mod patch_mesh;
 mod raster;
+mod solid;
 mod supersample;
 #[cfg(test)]
 mod tests;

@@ -92,6 +92,11 @@ pub struct SamplingOptions {
     /// the other rows stay empty. `None`: every view. A sharded bake (`bake::Shard`) renders
     /// its share this way.
     pub views: Option<Vec<u32>>,
+    /// The probe pass (`tiled/probe.rs`): after each view, every patch it did not show is
+    /// drawn again with conservative rasterization against the view's occluders shrunk by
+    /// this many pixels, skipping the triangles no camera near the view can see the visible
+    /// side of (`solid.rs`); a patch with a fragment in front is added. `None`: no probe.
+    pub probe: Option<u32>,
 }
 
 /// Why tiled sampling failed: only its checkpoint file can.
@@ -183,6 +188,9 @@ pub fn sample_tiled(
         options,
         marks,
         back_winding: back_winding(mesh),
+        probe: options
+            .probe
+            .map(|radius| probe::Probe::new(radius, params, mesh, tiling)),
     };
     let words_per_row = matrix.words_per_row();
     for level in first_level..=params.level {
@@ -196,7 +204,7 @@ pub fn sample_tiled(
             .par_chunks_mut(words_per_row)
             .enumerate()
             .for_each_init(
-                || WorkerScratch::new(params.resolution, patch_count),
+                || WorkerScratch::new(params.resolution, patch_count, options.probe.is_some()),
                 |scratch, (i, row)| {
                     let view = first_view + i as u32;
                     if rendered.as_ref().is_some_and(|r| !r[view as usize]) {
@@ -301,6 +309,8 @@ struct ViewContext<'a> {
     boxes: Vec<PatchBox>,
     /// [`back_winding`] of the mesh.
     back_winding: i64,
+    /// The probe pass, if any.
+    probe: Option<probe::Probe>,
 }
 
 /// One view's buffers.
@@ -336,10 +346,11 @@ struct WorkerScratch {
     view: ViewScratch,
     draw: DrawScratch,
     resolve: ResolveScratch,
+    probe: Option<probe::ProbeScratch>,
 }
 
 impl WorkerScratch {
-    fn new(resolution: u32, patch_count: u32) -> WorkerScratch {
+    fn new(resolution: u32, patch_count: u32, probe: bool) -> WorkerScratch {
         let words = (patch_count as usize).div_ceil(64);
         WorkerScratch {
             view: ViewScratch {
@@ -357,6 +368,7 @@ impl WorkerScratch {
                 hit: vec![0; patch_count as usize + 1],
                 seen: vec![0; words],
             },
+            probe: probe.then(|| probe::ProbeScratch::new(resolution)),
         }
     }
 }
@@ -481,11 +493,7 @@ impl ViewContext<'_> {
                 (1u64 << (patch_count % 64)) - 1
             }
         };
-        let WorkerScratch {
-            view,
-            draw,
-            resolve,
-        } = scratch;
+        let WorkerScratch { view, draw, .. } = scratch;
         view.deferred.clear();
         // A hinted patch that wholly faces away makes a poor occluder and is often hidden: it
         // is left to the tested pass. Always-visible patches are always drawn first.
@@ -526,8 +534,10 @@ impl ViewContext<'_> {
                 }
             }
         }
+        self.probe_prepare(scratch);
         // Resolving empties the key buffer for the worker's next view.
-        self.resolve(&camera, &mut view.keys, resolve, row);
+        self.resolve(&camera, &mut scratch.view.keys, &mut scratch.resolve, row);
+        self.probe_row(&camera, scratch, row);
     }
 
     /// Draws the triangles of patch `p` into `view`'s key buffer: in the first pass all but
@@ -707,5 +717,6 @@ impl ViewContext<'_> {
     }
 }
 
+mod probe;
 #[cfg(test)]
 mod tests;

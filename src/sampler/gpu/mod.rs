@@ -123,6 +123,9 @@ impl GpuSampler {
         if options.conservative {
             return Err(GpuError::Unsupported("conservative rasterization"));
         }
+        if options.probe.is_some() {
+            return Err(GpuError::Unsupported("the probe pass (--conservative)"));
+        }
         if options.resume {
             return Err(GpuError::Unsupported("resuming from a checkpoint"));
         }

@@ -353,6 +353,10 @@ fn tiled_output_is_identical_for_one_and_two_threads() {
             dilate: true,
             ..SamplingOptions::default()
         },
+        SamplingOptions {
+            probe: Some(1),
+            ..SamplingOptions::default()
+        },
     ] {
         let run = |threads| {
             rayon::ThreadPoolBuilder::new()
@@ -362,6 +366,37 @@ fn tiled_output_is_identical_for_one_and_two_threads() {
                 .install(|| tiled(&mesh, &tiling, &p, &options))
         };
         assert_same(&run(1), &run(2));
+    }
+}
+
+#[test]
+fn the_probe_pass_keeps_every_row_and_finds_more() {
+    // The bunny at 64 px: thin ears, and surfaces turning away at the silhouettes.
+    let mesh = bunny();
+    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
+    let p = params_for(&mesh, 2, 64);
+    let plain = tiled(&mesh, &tiling, &p, &SamplingOptions::default());
+    for radius in [0, 1] {
+        let probed = tiled(
+            &mesh,
+            &tiling,
+            &p,
+            &SamplingOptions {
+                probe: Some(radius),
+                ..SamplingOptions::default()
+            },
+        );
+        for (a, b) in probed.words().iter().zip(plain.words()) {
+            assert_eq!(a & b, *b, "radius {radius}: a probed row lost a patch");
+        }
+        assert!(probed.count_ones() > plain.count_ones(), "radius {radius}");
+        // Back faces behind the silhouettes are left out: far from every patch in every row.
+        let all = u64::from(crate::sphere::view_count(p.level)) * 200;
+        assert!(
+            probed.count_ones() < all * 3 / 4,
+            "radius {radius}: {}",
+            probed.count_ones()
+        );
     }
 }
 

@@ -1,0 +1,213 @@
+//! The probe pass of `--conservative`: after a view is rendered, every patch it did not show
+//! is drawn again, with conservative rasterization, against the view's occluders shrunk by
+//! `radius` pixels (each pixel takes the farthest depth within `radius`), and added when a
+//! fragment of it lies in front. It finds what point sampling misses: parts thinner than a
+//! pixel, and parts about to come out from behind an occluder's edge as the camera moves
+//! within the sphere faces whose queries use this view's row.
+//!
+//! Shrinking occluders also uncovers the back faces behind every silhouette, which would cost
+//! most of the culling; so a triangle is drawn only if some camera of the view's cell (a ball
+//! around the eye, [`CELL_PER_EDGE`]) may see its visible side: its outward side, or its back
+//! through an opening of its component (`sampler/solid.rs`). Whole patches that face away
+//! from the cell and lie behind no opening are passed over by their normal cone.
+
+use super::{ViewContext, WorkerScratch, hidden};
+use crate::runtime::Patches;
+use crate::sampler::camera::Camera;
+use crate::sampler::conservative::scan_triangle_conservative;
+use crate::sampler::key_buffer::KeyBuffer;
+use crate::sampler::raster::{SUBPIXEL_BITS, sphere_needs_no_clip};
+use crate::sampler::solid::{Openings, Solids};
+use crate::sphere::{direction, parents, view_count};
+use crate::visibility::SamplingParams;
+
+/// How the probe pass runs.
+pub(super) struct Probe {
+    /// Pixels the occluders are shrunk by.
+    radius: usize,
+    /// Radius of the ball around the eye holding every camera whose query may use this
+    /// view's row, in world units, for the facing tests.
+    cell: f64,
+    /// The mesh's solids, for the facing test.
+    solids: Solids,
+    /// Per patch: [`crate::sampler::solid::Solids::patch_components`].
+    patch_component: Vec<u32>,
+}
+
+/// One worker's probe buffers.
+pub(super) struct ProbeScratch {
+    guard: KeyBuffer,
+    rows: Vec<u32>,
+    openings: Openings,
+}
+
+impl ProbeScratch {
+    pub(super) fn new(resolution: u32) -> ProbeScratch {
+        ProbeScratch {
+            guard: KeyBuffer::new(resolution),
+            rows: Vec::new(),
+            openings: Default::default(),
+        }
+    }
+}
+
+/// The cell's radius in edges of the sampled level. A query from a sphere face joins the
+/// rows of its corners, and every point of a face lies within its circumradius, `1/√3 ≈
+/// 0.577` of an edge, of some corner; 0.6 leaves a margin.
+const CELL_PER_EDGE: f64 = 0.6;
+
+/// Largest angle between a view of `level` and a parent of it (half an edge of `level − 1`).
+fn max_parent_angle(level: u32) -> f64 {
+    if level == 0 {
+        return std::f64::consts::FRAC_PI_2;
+    }
+    let mut max = 0f64;
+    for v in view_count(level - 1)..view_count(level) {
+        let d = direction(v).map(f64::from);
+        for p in parents(v).into_iter().flatten() {
+            let e = direction(p).map(f64::from);
+            let dot = (d[0] * e[0] + d[1] * e[1] + d[2] * e[2]).clamp(-1.0, 1.0);
+            max = max.max(dot.acos());
+        }
+    }
+    max
+}
+
+impl Probe {
+    /// The probe of a pass sampling `params` with occluders shrunk by `radius` pixels.
+    pub(super) fn new(
+        radius: u32,
+        params: &SamplingParams,
+        mesh: &crate::ooc::Mesh,
+        tiling: &crate::tiling::Tiling,
+    ) -> Probe {
+        let solids = Solids::new(mesh);
+        let patch_component = solids.patch_components(tiling);
+        Probe {
+            radius: radius as usize,
+            cell: CELL_PER_EDGE * f64::from(params.distance()) * max_parent_angle(params.level),
+            solids,
+            patch_component,
+        }
+    }
+}
+
+impl ViewContext<'_> {
+    /// Builds the shrunk occluders of the view just rendered (before resolving empties it).
+    pub(super) fn probe_prepare(&self, scratch: &mut WorkerScratch) {
+        if let (Some(probe), Some(ps)) = (&self.probe, &mut scratch.probe) {
+            ps.guard
+                .shrink_from(&scratch.view.keys, probe.radius, &mut ps.rows);
+        }
+    }
+
+    /// Adds to `row` the patches the probe finds.
+    pub(super) fn probe_row(&self, camera: &Camera, scratch: &mut WorkerScratch, row: &mut [u64]) {
+        let (Some(probe), Some(ps)) = (&self.probe, &mut scratch.probe) else {
+            return;
+        };
+        {
+            let cell = probe.cell;
+            probe
+                .solids
+                .openings(camera, cell, probe.radius + 1, &mut ps.openings);
+        }
+        let guard = &ps.guard;
+        let screen = &mut scratch.draw.screen;
+        let patch_count = self.mesh.patch_count();
+        let eye = camera.eye();
+        let resolution = camera.resolution();
+        let last = resolution as i32 - 1;
+        let unseen: Vec<u64> = row
+            .iter()
+            .enumerate()
+            .map(|(w, r)| {
+                let valid = if (w + 1) * 64 <= patch_count {
+                    u64::MAX
+                } else {
+                    (1u64 << (patch_count % 64)) - 1
+                };
+                !r & valid
+            })
+            .collect();
+        for p in Patches::of_bits(&unseen) {
+            let p = p as usize;
+            let patch = &self.tiling.patches[p];
+            {
+                let cell = probe.cell;
+                let rect = match camera.sphere_bounds(patch.center, patch.radius) {
+                    crate::sampler::camera::SphereBounds::Rect { rect, .. } => Some(rect),
+                    _ => None,
+                };
+                if probe.solids.patch_hidden_side(
+                    probe.patch_component[p],
+                    patch.center,
+                    patch.radius,
+                    patch.cone_axis,
+                    patch.cone_cos,
+                    rect,
+                    eye,
+                    cell,
+                    &ps.openings,
+                ) {
+                    continue;
+                }
+            }
+            if hidden(camera.sphere_bounds(patch.center, patch.radius), guard)
+                || hidden(camera.hull_bounds(&self.boxes[p].corners()), guard)
+            {
+                continue;
+            }
+            let found = if !sphere_needs_no_clip(camera, patch.center, patch.radius) {
+                true
+            } else {
+                let mut found = false;
+                let mut k = patch.first as usize;
+                'sections: for section in self.mesh.sections(p) {
+                    let end = section.vertices.len();
+                    screen.project_from(camera, section.vertices.blocks(), 0, end);
+                    for &tri in section.triangles {
+                        let t = self.tiling.order[k];
+                        k += 1;
+                        let world = tri.map(|i| section.vertices.get(usize::from(i)));
+                        let st = screen.triangle(tri);
+                        {
+                            let cell = probe.cell;
+                            let px = |f: fn(i32, i32) -> i32, v: [i32; 3]| {
+                                (f(f(v[0], v[1]), v[2]) >> SUBPIXEL_BITS).clamp(0, last) as usize
+                            };
+                            let (xs, ys) = (st.map(|v| v.x), st.map(|v| v.y));
+                            let pixels = [
+                                px(i32::min, xs),
+                                px(i32::min, ys),
+                                px(i32::max, xs),
+                                px(i32::max, ys),
+                            ];
+                            if !probe
+                                .solids
+                                .may_show(t, world, pixels, eye, cell, &ps.openings)
+                            {
+                                continue;
+                            }
+                        }
+                        if guard.triangle_hidden(st, true) {
+                            continue;
+                        }
+                        let mut hit = false;
+                        scan_triangle_conservative(st, resolution, |index, q, _| {
+                            hit |= q.to_bits() > guard.depth_bits(index);
+                        });
+                        if hit {
+                            found = true;
+                            break 'sections;
+                        }
+                    }
+                }
+                found
+            };
+            if found {
+                row[p / 64] |= 1 << (p % 64);
+            }
+        }
+    }
+}
