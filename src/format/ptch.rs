@@ -339,9 +339,17 @@ fn cone(q: &Quantisation, axis: [f32; 3], cos: f32) -> ([u32; 2], u32) {
                 v.clamp(-f64::from(m), f64::from(m)),
             );
             let stored = [(u as i32 + m) as u32, (v as i32 + m) as u32];
+            // The axis a reader decodes (binary32), and its angle to the true one by atan2:
+            // `acos` of a dot product near 1 would turn the axis's rounding into an error of
+            // 1e-4 radians at small angles.
             let d = unit_axis(q.axis(stored[0], stored[1])).map(f64::from);
-            let dot = (d[0] * n[0] + d[1] * n[1] + d[2] * n[2]).clamp(-1.0, 1.0);
-            let angle = dot.acos();
+            let cross = [
+                d[1] * n[2] - d[2] * n[1],
+                d[2] * n[0] - d[0] * n[2],
+                d[0] * n[1] - d[1] * n[0],
+            ];
+            let sin = (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt();
+            let angle = sin.atan2(d[0] * n[0] + d[1] * n[1] + d[2] * n[2]);
             if angle < best.1 {
                 best = (stored, angle);
             }
