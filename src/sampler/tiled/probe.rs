@@ -13,7 +13,7 @@
 
 use super::{ViewContext, WorkerScratch, hidden};
 use crate::runtime::Patches;
-use crate::sampler::camera::Camera;
+use crate::sampler::camera::{Camera, SphereBounds};
 use crate::sampler::conservative::scan_triangle_conservative;
 use crate::sampler::key_buffer::KeyBuffer;
 use crate::sampler::raster::{SUBPIXEL_BITS, sphere_needs_no_clip};
@@ -106,18 +106,17 @@ impl ViewContext<'_> {
         let (Some(probe), Some(ps)) = (&self.probe, &mut scratch.probe) else {
             return;
         };
-        {
-            let cell = probe.cell;
-            probe
-                .solids
-                .openings(camera, cell, probe.radius + 1, &mut ps.openings);
-        }
+        let cell = probe.cell;
+        probe
+            .solids
+            .openings(camera, cell, probe.radius + 1, &mut ps.openings);
         let guard = &ps.guard;
         let screen = &mut scratch.draw.screen;
         let patch_count = self.mesh.patch_count();
         let eye = camera.eye();
         let resolution = camera.resolution();
         let last = resolution as i32 - 1;
+        // Per view, small next to the render: one word per 64 patches.
         let unseen: Vec<u64> = row
             .iter()
             .enumerate()
@@ -133,27 +132,22 @@ impl ViewContext<'_> {
         for p in Patches::of_bits(&unseen) {
             let p = p as usize;
             let patch = &self.tiling.patches[p];
-            {
-                let cell = probe.cell;
-                let rect = match camera.sphere_bounds(patch.center, patch.radius) {
-                    crate::sampler::camera::SphereBounds::Rect { rect, .. } => Some(rect),
-                    _ => None,
-                };
-                if probe.solids.patch_hidden_side(
-                    probe.patch_component[p],
-                    patch.center,
-                    patch.radius,
-                    patch.cone_axis,
-                    patch.cone_cos,
-                    rect,
-                    eye,
-                    cell,
-                    &ps.openings,
-                ) {
-                    continue;
-                }
-            }
-            if hidden(camera.sphere_bounds(patch.center, patch.radius), guard)
+            let bounds = camera.sphere_bounds(patch.center, patch.radius);
+            let rect = match bounds {
+                SphereBounds::Rect { rect, .. } => Some(rect),
+                _ => None,
+            };
+            if probe.solids.patch_hidden_side(
+                probe.patch_component[p],
+                patch.center,
+                patch.radius,
+                patch.cone_axis,
+                patch.cone_cos,
+                rect,
+                eye,
+                cell,
+                &ps.openings,
+            ) || hidden(bounds, guard)
                 || hidden(camera.hull_bounds(&self.boxes[p].corners()), guard)
             {
                 continue;
@@ -171,24 +165,22 @@ impl ViewContext<'_> {
                         k += 1;
                         let world = tri.map(|i| section.vertices.get(usize::from(i)));
                         let st = screen.triangle(tri);
+                        // The pixels the triangle touches, for the openings' rectangles.
+                        let px = |f: fn(i32, i32) -> i32, v: [i32; 3]| {
+                            (f(f(v[0], v[1]), v[2]) >> SUBPIXEL_BITS).clamp(0, last) as usize
+                        };
+                        let (xs, ys) = (st.map(|v| v.x), st.map(|v| v.y));
+                        let pixels = [
+                            px(i32::min, xs),
+                            px(i32::min, ys),
+                            px(i32::max, xs),
+                            px(i32::max, ys),
+                        ];
+                        if !probe
+                            .solids
+                            .may_show(t, world, pixels, eye, cell, &ps.openings)
                         {
-                            let cell = probe.cell;
-                            let px = |f: fn(i32, i32) -> i32, v: [i32; 3]| {
-                                (f(f(v[0], v[1]), v[2]) >> SUBPIXEL_BITS).clamp(0, last) as usize
-                            };
-                            let (xs, ys) = (st.map(|v| v.x), st.map(|v| v.y));
-                            let pixels = [
-                                px(i32::min, xs),
-                                px(i32::min, ys),
-                                px(i32::max, xs),
-                                px(i32::max, ys),
-                            ];
-                            if !probe
-                                .solids
-                                .may_show(t, world, pixels, eye, cell, &ps.openings)
-                            {
-                                continue;
-                            }
+                            continue;
                         }
                         if guard.triangle_hidden(st, true) {
                             continue;
