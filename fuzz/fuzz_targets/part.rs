@@ -53,6 +53,7 @@ fuzz_target!(|data: &[u8]| {
         min_pixels: 0,
         dilate: threshold & 1 == 1,
         conservative_raster: false,
+        probe: (threshold >> 5 & 1 == 1).then_some(1),
         always_visible: Vec::new(),
         extra_levels: u32::from(threshold >> 1 & 1),
         fold_min_pixels: u32::from(threshold >> 2 & 7),
