@@ -330,13 +330,13 @@ impl<'a> Pvis<'a> {
         if info.cone_cos <= 0.0 {
             return false;
         }
-        let cutoff = libm::sqrtf(1.0 - info.cone_cos * info.cone_cos);
+        let cutoff = crate::sphere::sqrtf(1.0 - info.cone_cos * info.cone_cos);
         let v = [
             info.center[0] - eye[0],
             info.center[1] - eye[1],
             info.center[2] - eye[2],
         ];
-        let len = libm::sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        let len = crate::sphere::sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
         let d = v[0] * info.cone_axis[0] + v[1] * info.cone_axis[1] + v[2] * info.cone_axis[2];
         d > cutoff * len + info.radius
     }

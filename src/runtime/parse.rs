@@ -21,9 +21,9 @@ pub(super) fn parse(data: &[u8]) -> Result<Pvis<'_>, Error> {
     let len = have as u64;
 
     // § Header. The signature is compared on whatever prefix exists, so a short file of the
-    // wrong kind reads as "not a .pvis file" rather than "truncated".
-    let prefix = data.len().min(MAGIC.len());
-    if data[..prefix] != MAGIC[..prefix] {
+    // wrong kind reads as "not a .pvis file" rather than "truncated". Byte by byte rather than
+    // as slices, so that the embedded reader links no `memcmp`.
+    if MAGIC.iter().zip(data).any(|(m, d)| m != d) {
         return Err(Error::BadMagic);
     }
     if len < HEADER_LEN + TRAILER_LEN {

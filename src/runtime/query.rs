@@ -169,10 +169,11 @@ pub(super) fn classify(pvis: &Pvis<'_>, eye: [f32; 3]) -> Eye {
 
 /// Sets every patch's bit in `out` (one row), leaving the padding bits zero.
 pub(super) fn fill_all(out: &mut [u64], patch_count: u32) {
-    out.fill(!0);
-    let tail = patch_count % 64;
-    if let (Some(last), true) = (out.last_mut(), tail != 0) {
-        *last = (1u64 << tail) - 1;
+    // Word by word (the bits of the patches below `patch_count`) rather than a fill and a fix
+    // of the last word: one loop, and no `memset` in the embedded reader.
+    for (i, word) in out.iter_mut().enumerate() {
+        let left = patch_count.saturating_sub(64 * i as u32);
+        *word = if left >= 64 { !0 } else { (1u64 << left) - 1 };
     }
 }
 

@@ -2,8 +2,9 @@
 //! vertices), its stable vertex numbering, the face hierarchy and point location.
 //!
 //! Follows Meruvia 2002, §3.2.1 (sampling positions) and §3.3.1 (finding the face under a
-//! viewing ray in at most 4 tests per level). Needs only `core` (and `libm` for a correctly
-//! rounded square root): the reader uses it to find the face under a view direction.
+//! viewing ray in at most 4 tests per level). Needs only `core` (and `libm`'s correctly
+//! rounded square root where that is a hardware instruction, `sqrt.rs`): the reader uses it
+//! to find the face under a view direction.
 //! The convention is normative; see `spec/FORMAT.md`, section "Sampling sphere".
 //!
 //! Cost: numbering a vertex is O(2^level) integer steps at most (a ring walk, ≤ 128 at
@@ -11,9 +12,11 @@
 
 mod locate;
 mod numbering;
+mod sqrt;
 
 pub use locate::{Face, children, locate, root_face, root_faces};
 pub use numbering::{LatticePoint, direction, lattice_point, level_of, parents, view_index};
+pub use sqrt::{sqrtf, sqrtf_digits};
 
 /// Index of a sampling view (a vertex of the subdivided octahedron). Level `l`'s views are
 /// `0..view_count(l)`, a prefix of level `l + 1`'s.
@@ -36,7 +39,7 @@ pub const fn face_count(level: u32) -> u32 {
 /// with a correctly rounded square root, then each component divided by `len`. Every
 /// implementation that follows these steps gets bit-identical directions.
 pub fn normalize(v: [f32; 3]) -> [f32; 3] {
-    let len = libm::sqrtf((v[0] * v[0] + v[1] * v[1]) + v[2] * v[2]);
+    let len = sqrtf((v[0] * v[0] + v[1] * v[1]) + v[2] * v[2]);
     [v[0] / len, v[1] / len, v[2] / len]
 }
 

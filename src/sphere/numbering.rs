@@ -60,7 +60,9 @@ pub fn view_index(p: LatticePoint) -> ViewIndex {
         1 << p.level
     );
     if p.level == 0 {
-        return LEVEL0.iter().position(|&c| c == p.coords).unwrap_or(0) as ViewIndex;
+        // LEVEL0's order: axis t's positive end is 2t, its negative end 2t + 1.
+        let t = p.coords.iter().position(|&c| c != 0).unwrap_or(0);
+        return (2 * t + usize::from(p.coords[t] < 0)) as ViewIndex;
     }
     let n = 1i32 << p.level;
     // Exactly one coordinate is even (the sum of |c| is even and not all are even).
