@@ -89,16 +89,16 @@ pub struct BakeArgs {
     /// Conservative mode: the default bake plus a probe pass. After each sampled view (the
     /// stored level and the folded finer one), every patch the view did not show is drawn
     /// again with conservative rasterization (any part of a pixel, not only its centre)
-    /// against the view's depths shrunk by 1 pixel, and added if a fragment lies in front.
+    /// against the view's depths shrunk by 2 pixels, and added if a fragment lies in front.
     /// Only triangles whose visible side may face a camera within 0.6 of a sphere-face edge of
     /// the view are drawn: the outside of their solid, or its inside through an opening.
     /// What it guarantees: every patch that touches a pixel of a sampled view, or lies within
-    /// a pixel of coming out from behind an occluder's edge there, is in the answer for every
+    /// 2 pixels of coming out from behind an occluder's edge there, is in the answer for every
     /// direction of the sphere faces around that view, at the sampling distance or farther.
-    /// What it does not: a part that comes out by more than a pixel between two sampled views.
+    /// What it does not: a part that comes out by more than 2 pixels between sampled views.
     /// Measured residual (300 random views at the sampling distance, at --resolution and
-    /// twice it): ≥ 98.7 % of views pixel-identical on every model of the zoo; BENCHMARKS.md,
-    /// "Quality on the model zoo". About 2× the default's bake time, CPU backend only, and
+    /// twice it): ≥ 99 % of views pixel-identical on every model of the zoo; BENCHMARKS.md,
+    /// "Quality on the model zoo". 1.5–3× the default's bake time, CPU backend only, and
     /// about 60 bytes a triangle of heap while sampling.
     #[arg(long)]
     pub conservative: bool,

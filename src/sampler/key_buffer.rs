@@ -98,27 +98,36 @@ impl KeyBuffer {
     pub(crate) fn shrink_from(&mut self, source: &KeyBuffer, radius: usize, rows: &mut Vec<u32>) {
         let n = self.resolution;
         debug_assert_eq!(n, source.resolution);
+        // Depths (0: empty), then the minimum over each row's window, then over each column's:
+        // whole-row loops over contiguous slices, which the compiler turns into SIMD.
         rows.clear();
-        rows.resize(n * n, 0);
-        for (out, row) in rows.chunks_exact_mut(n).zip(source.keys.chunks_exact(n)) {
-            for (x, o) in out.iter_mut().enumerate() {
-                let (a, b) = (x.saturating_sub(radius), (x + radius).min(n - 1));
-                *o = row[a..=b]
-                    .iter()
-                    .map(|&k| (k >> 32) as u32)
-                    .min()
-                    .unwrap_or(0);
+        rows.extend(source.keys.iter().map(|&k| (k >> 32) as u32));
+        let radius = radius.min(n.saturating_sub(1));
+        for row in rows.chunks_exact_mut(n) {
+            // Widen by one pixel at a time: after d steps, each pixel holds its window of d.
+            for _ in 0..radius {
+                let mut left = row[0];
+                for x in 0..n - 1 {
+                    let (here, right) = (row[x], row[x + 1]);
+                    row[x] = here.min(left).min(right);
+                    left = here;
+                }
+                row[n - 1] = row[n - 1].min(left);
             }
         }
-        for y in 0..n {
+        for (y, out) in self.keys.chunks_exact_mut(n).enumerate() {
             let (a, b) = (y.saturating_sub(radius), (y + radius).min(n - 1));
-            for x in 0..n {
-                let far = (a..=b).map(|yy| rows[yy * n + x]).min().unwrap_or(0);
-                self.keys[y * n + x] = if far == 0 {
-                    0
-                } else {
-                    (u64::from(far) << 32) | 1
-                };
+            let first = &rows[a * n..(a + 1) * n];
+            for (x, o) in out.iter_mut().enumerate() {
+                *o = u64::from(first[x]);
+            }
+            for yy in a + 1..=b {
+                for (o, &d) in out.iter_mut().zip(&rows[yy * n..(yy + 1) * n]) {
+                    *o = (*o).min(u64::from(d));
+                }
+            }
+            for o in out.iter_mut() {
+                *o = if *o == 0 { 0 } else { (*o << 32) | 1 };
             }
         }
         self.build_tiles();
@@ -303,6 +312,40 @@ pub(crate) fn patch_slot(key: u64, patch_count: u32) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn shrinking_takes_the_farthest_depth_of_each_square() {
+        let n = 23;
+        let mut rng = crate::test_kit::rng::Rng::new(5);
+        let mut source = KeyBuffer::new(n as u32);
+        for i in 0..n * n {
+            // A few empty pixels among depths of few distinct values.
+            if !rng.next_u64().is_multiple_of(9) {
+                let q = 0.1 + (rng.next_u64() % 50) as f32 * 0.01;
+                source.plot(i, q, 1, true);
+            }
+        }
+        let mut shrunk = KeyBuffer::new(n as u32);
+        let mut rows = Vec::new();
+        for radius in [0, 1, 2, 5, 40] {
+            shrunk.shrink_from(&source, radius, &mut rows);
+            for y in 0..n {
+                for x in 0..n {
+                    let window = |c: usize| c.saturating_sub(radius)..=(c + radius).min(n - 1);
+                    let source = &source;
+                    let far = window(y)
+                        .flat_map(|yy| window(x).map(move |xx| source.depth_bits(yy * n + xx)))
+                        .min()
+                        .unwrap();
+                    assert_eq!(
+                        shrunk.depth_bits(y * n + x),
+                        far,
+                        "radius {radius} at {x}, {y}"
+                    );
+                }
+            }
+        }
+    }
 
     #[test]
     fn nearer_wins_and_equal_depth_keeps_the_smaller_patch() {
