@@ -3,6 +3,8 @@
 //! spheres lie outside the camera's frustum, judged here independently in binary64; and
 //! `patchvis eval --look-jitter` reports the culling with the frustum while the frustum drops
 //! no patch the answer draws.
+//! The expanded reader's shortcuts are checked against the per-patch rule on many seeded frusta
+//! whose planes cut the bunny.
 
 mod common;
 
@@ -320,4 +322,112 @@ fn eval_with_look_jitter_culls_more_with_the_frustum_and_loses_no_pixel() {
     );
     let out = patchvis(&["eval", BUNNY, pvis, "--look-jitter", "-1"]);
     assert_eq!(out.status.code(), Some(2));
+}
+
+/// The six planes `[a, b, c, d]` (inside `≥ 0`) of a camera at `eye` looking at `target`
+/// with a vertical and horizontal half-angle of `half_deg` and near and far distances.
+fn planes(eye: [f64; 3], target: [f64; 3], half_deg: f64, near: f64, far: f64) -> [[f32; 4]; 6] {
+    let f = unit(sub(target, eye));
+    let s = unit(cross(f, [0.0, 1.0, 0.0]));
+    let u = cross(s, f);
+    let (sin, cos) = half_deg.to_radians().sin_cos();
+    // A side plane's inward normal leans from the side axis towards the view direction.
+    let side = |axis: [f64; 3], sign: f64| {
+        let n: [f64; 3] = std::array::from_fn(|i| sign * cos * axis[i] + sin * f[i]);
+        [n[0], n[1], n[2], -dot(n, eye)]
+    };
+    let along = |sign: f64, at: f64| {
+        let n = f.map(|v| sign * v);
+        [n[0], n[1], n[2], -dot(n, eye) - sign * at]
+    };
+    [
+        side(s, 1.0),
+        side(s, -1.0),
+        side(u, 1.0),
+        side(u, -1.0),
+        along(1.0, near),
+        along(-1.0, far),
+    ]
+    .map(|p| p.map(|v| v as f32))
+}
+
+/// Many seeded frusta whose sides, near and far planes cut the 1000-patch bunny: the
+/// expanded query (its spatial hierarchy of patch bounds) returns exactly the stateless
+/// query's bits, which are the plain answer less the patches `Frustum::keeps_patch` drops.
+#[test]
+fn expanded_frustum_query_matches_stateless_on_frusta_cutting_the_bunny() {
+    use patchvis::runtime::Frustum;
+    let baked = bake(&[
+        "--patches",
+        "1000",
+        "--level",
+        "2",
+        "--resolution",
+        "128",
+        "-q",
+    ]);
+    let bytes = baked.bytes();
+    let pvis = Pvis::parse(&bytes).unwrap();
+    let s = pvis.sampling();
+    let (c, r, dist) = (
+        s.center.map(f64::from),
+        f64::from(s.radius),
+        f64::from(s.distance),
+    );
+    let mut scratch = vec![0u64; pvis.scratch_words()];
+    let mut table = vec![0u64; pvis.expanded_bound()];
+    let mut expanded = pvis.expand(&mut table);
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let (mut cut, mut settled_in) = (0, 0);
+    for i in 0..3000 {
+        let dir = unit([next() - 0.5, next() - 0.5, next() - 0.5]);
+        // Outside the sampling sphere mostly, sometimes inside the model's bounding sphere.
+        let at = if i % 10 == 0 {
+            0.5 * r
+        } else {
+            dist * (0.6 + 2.0 * next())
+        };
+        let eye: [f64; 3] = std::array::from_fn(|k| c[k] + dir[k] * at);
+        let target: [f64; 3] = std::array::from_fn(|k| c[k] + (next() - 0.5) * 3.0 * r);
+        let to_centre = dot(sub(c, eye), sub(c, eye)).sqrt();
+        let near = if i % 3 == 0 {
+            (to_centre - r * next()).max(1e-3)
+        } else {
+            1e-3
+        };
+        let far = if i % 5 == 0 {
+            to_centre + r * (next() - 0.5)
+        } else {
+            1e3 * dist
+        };
+        let frustum = Frustum::from_planes(planes(eye, target, 5.0 + 40.0 * next(), near, far));
+        let eye = eye.map(|v| v as f32);
+        let mut reference = pvis.query(eye, &mut scratch).bits().to_vec();
+        let before: u32 = reference.iter().map(|w| w.count_ones()).sum();
+        for p in 0..pvis.patch_count() {
+            if !frustum.keeps_patch(&pvis.patch(p)) {
+                reference[p as usize / 64] &= !(1 << (p % 64));
+            }
+        }
+        let after: u32 = reference.iter().map(|w| w.count_ones()).sum();
+        cut += usize::from(after > 0 && after < before);
+        settled_in += usize::from(after == before);
+        let stateless = pvis
+            .query_in_frustum(eye, &frustum, &mut scratch)
+            .bits()
+            .to_vec();
+        assert_eq!(stateless, reference, "frustum {i}");
+        let bits = expanded.query_in_frustum(eye, &frustum).bits().to_vec();
+        assert_eq!(bits, reference, "frustum {i}");
+    }
+    assert!(
+        cut > 1000 && settled_in > 100,
+        "{cut} cut, {settled_in} kept whole"
+    );
 }
