@@ -25,10 +25,6 @@ use std::path::{Path, PathBuf};
 pub struct Recipe {
     /// The settings as given.
     pub settings: BakeSettings,
-    /// The ID-buffer side sampled.
-    pub resolution: u32,
-    /// The probe pass's occluder shrink in pixels (`--conservative`), or `None`.
-    pub probe: Option<u32>,
     /// Supersampling and folding.
     pub supersample: Supersample,
     /// Checkpoint of the stored level's plain pass when the fold has a threshold.
@@ -98,6 +94,18 @@ impl Outputs {
 }
 
 impl Recipe {
+    /// The ID-buffer side sampled (`--resolution`).
+    pub fn resolution(&self) -> u32 {
+        self.settings.resolution
+    }
+
+    /// The probe pass's occluder shrink in pixels (`--conservative`), or `None`.
+    pub fn probe(&self) -> Option<u32> {
+        self.settings
+            .conservative
+            .then_some(super::settings::CONSERVATIVE_PROBE_PIXELS)
+    }
+
     /// The heap budget.
     pub fn memory(&self) -> MemoryBudget {
         self.settings.memory
@@ -124,7 +132,7 @@ impl Recipe {
         SamplingParams::for_mesh(
             mesh,
             self.settings.level,
-            self.resolution,
+            self.resolution(),
             self.settings.fov_deg,
         )
     }
@@ -148,7 +156,7 @@ impl Recipe {
                 self.memory().total() >> 20
             )));
         }
-        if self.probe.is_some() && !self.memory().fits_solids(mesh.triangle_count()) {
+        if self.probe().is_some() && !self.memory().fits_solids(mesh.triangle_count()) {
             return Err(BakeError::Budget(format!(
                 "--conservative finds the mesh's solids in about {} MiB for {} triangles, \
                  more than half of --memory {} MiB; raise --memory",
@@ -171,7 +179,7 @@ impl Recipe {
         let patches = u64::from(settings.patches.min(mesh.triangle_count()));
         let needs = FixedNeeds {
             triangles: mesh.triangle_count(),
-            resolution: self.resolution,
+            resolution: self.resolution(),
             workers: rayon::current_num_threads(),
             row_bytes: u64::from(crate::sphere::view_count(level)) * patches.div_ceil(64) * 8,
         };
@@ -184,7 +192,7 @@ impl Recipe {
                 size_text(self.memory().total()),
                 minimum >> 20,
                 mesh.triangle_count(),
-                self.resolution,
+                self.resolution(),
                 needs.workers,
                 crate::sphere::view_count(level),
                 patches,
@@ -197,7 +205,7 @@ impl Recipe {
     /// The warning for ID buffers coarse enough to miss many patches (below
     /// [`WARN_RESOLUTION`](super::settings::WARN_RESOLUTION) pixels), or `None`.
     pub fn resolution_warning(&self) -> Option<String> {
-        (self.resolution < super::settings::WARN_RESOLUTION).then(|| {
+        (self.resolution() < super::settings::WARN_RESOLUTION).then(|| {
             format!(
                 "--resolution {}: ID buffers this coarse miss many patches (the bunny's views \
                  see 7 % of its patches at 16 px, 22 % at 32, 44 % at 256); use {} px or more",
@@ -241,7 +249,7 @@ impl Recipe {
             resume: s.resume,
             memory_budget: Some(self.memory().split().sampling),
             views,
-            probe: self.probe,
+            probe: self.probe(),
         }
     }
 

@@ -170,7 +170,6 @@ impl BakeSettings {
                 self.resolution
             ));
         }
-        let resolution = self.resolution;
         if !(self.fov_deg.is_finite() && self.fov_deg > 0.0 && self.fov_deg < 180.0) {
             return fail(format!(
                 "--fov {}: expected degrees between 0 and 180, exclusive",
@@ -218,8 +217,6 @@ impl BakeSettings {
             None
         };
         Ok(Recipe {
-            resolution,
-            probe,
             supersample: Supersample {
                 extra_levels,
                 fold_min_pixels: if thresholded { fold_min_pixels } else { 0 },
@@ -249,7 +246,7 @@ mod tests {
     fn supersampling_defaults_follow_the_level_and_conservative() {
         let c = check(|_| {}).unwrap();
         assert_eq!(
-            (c.supersample, c.resolution),
+            (c.supersample, c.resolution()),
             (
                 Supersample {
                     extra_levels: DEFAULT_VIEW_SUPERSAMPLE,
@@ -287,16 +284,16 @@ mod tests {
             (
                 c.supersample.extra_levels,
                 c.supersample.fold_min_pixels,
-                c.resolution
+                c.resolution()
             ),
             (DEFAULT_VIEW_SUPERSAMPLE, 0, 512)
         );
-        assert_eq!(c.probe, Some(CONSERVATIVE_PROBE_PIXELS));
+        assert_eq!(c.probe(), Some(CONSERVATIVE_PROBE_PIXELS));
         let suffix = format!(".p{CONSERVATIVE_PROBE_PIXELS}.vs1.ckpt");
         assert_eq!(c.fine_checkpoint, Some(format!("out.pvis{suffix}").into()));
         assert!(!c.settings.conservative_raster);
         assert_eq!(c.supersample.fold_corners, FoldCorners::All);
-        assert_eq!(check(|_| {}).unwrap().probe, None);
+        assert_eq!(check(|_| {}).unwrap().probe(), None);
         // A threshold at or below --min-pixels changes nothing: no extra plain pass.
         let c = check(|s| {
             s.min_pixels = 4;

@@ -39,12 +39,12 @@ impl Recipe {
         let s = &self.settings;
         PartSettings {
             level: s.level,
-            resolution: self.resolution,
+            resolution: self.resolution(),
             fov_deg: s.fov_deg,
             min_pixels: s.min_pixels,
             dilate: s.dilate,
             conservative_raster: s.conservative_raster,
-            probe: self.probe,
+            probe: self.probe(),
             always_visible: s.always_visible.clone(),
             extra_levels: self.supersample.extra_levels,
             fold_min_pixels: self.supersample.fold_min_pixels,

@@ -486,13 +486,7 @@ impl ViewContext<'_> {
     ) {
         let patch_count = self.mesh.patch_count();
         let camera = Camera::sampling_view(self.params, index);
-        let valid = |w: usize| {
-            if (w + 1) * 64 <= patch_count {
-                u64::MAX
-            } else {
-                (1u64 << (patch_count % 64)) - 1
-            }
-        };
+        let valid = |w: usize| valid_bits(w, patch_count);
         let WorkerScratch { view, draw, .. } = scratch;
         view.deferred.clear();
         // A hinted patch that wholly faces away makes a poor occluder and is often hidden: it
@@ -714,6 +708,15 @@ impl ViewContext<'_> {
         }
         row.copy_from_slice(seen);
         self.marks.apply(self.tiling, camera.eye(), seen, row);
+    }
+}
+
+/// The bits of row word `w` that stand for patches (all but the last word's tail).
+fn valid_bits(w: usize, patch_count: usize) -> u64 {
+    if (w + 1) * 64 <= patch_count {
+        u64::MAX
+    } else {
+        (1u64 << (patch_count % 64)) - 1
     }
 }
 

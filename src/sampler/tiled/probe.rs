@@ -11,7 +11,7 @@
 //! through an opening of its component (`sampler/solid.rs`). Whole patches that face away
 //! from the cell and lie behind no opening are passed over by their normal cone.
 
-use super::{ViewContext, WorkerScratch, hidden};
+use super::{ViewContext, WorkerScratch, hidden, valid_bits};
 use crate::runtime::Patches;
 use crate::sampler::camera::{Camera, SphereBounds};
 use crate::sampler::conservative::scan_triangle_conservative;
@@ -39,6 +39,8 @@ pub(super) struct ProbeScratch {
     guard: KeyBuffer,
     rows: Vec<u32>,
     openings: Openings,
+    /// The patches the view did not show, one bit each.
+    unseen: Vec<u64>,
 }
 
 impl ProbeScratch {
@@ -47,6 +49,7 @@ impl ProbeScratch {
             guard: KeyBuffer::new(resolution),
             rows: Vec::new(),
             openings: Default::default(),
+            unseen: Vec::new(),
         }
     }
 }
@@ -116,20 +119,13 @@ impl ViewContext<'_> {
         let eye = camera.eye();
         let resolution = camera.resolution();
         let last = resolution as i32 - 1;
-        // Per view, small next to the render: one word per 64 patches.
-        let unseen: Vec<u64> = row
-            .iter()
-            .enumerate()
-            .map(|(w, r)| {
-                let valid = if (w + 1) * 64 <= patch_count {
-                    u64::MAX
-                } else {
-                    (1u64 << (patch_count % 64)) - 1
-                };
-                !r & valid
-            })
-            .collect();
-        for p in Patches::of_bits(&unseen) {
+        ps.unseen.clear();
+        ps.unseen.extend(
+            row.iter()
+                .enumerate()
+                .map(|(w, r)| !r & valid_bits(w, patch_count)),
+        );
+        for p in Patches::of_bits(&ps.unseen) {
             let p = p as usize;
             let patch = &self.tiling.patches[p];
             let bounds = camera.sphere_bounds(patch.center, patch.radius);
