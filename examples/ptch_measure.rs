@@ -80,6 +80,7 @@ fn main() {
         triangle_count: pvis.triangle_count(),
         patches: &patches,
         visibility: &matrix,
+        shells: &[],
     };
     let full = encode_as(&contents, VisibilityEncoding::Tree, PatchTableLayout::Full);
     let compact = encode_as(

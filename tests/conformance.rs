@@ -456,6 +456,7 @@ fn build_valid(spec: &ValidSpec) -> Vec<u8> {
         triangle_count: first as u64,
         patches: &patches,
         visibility: &matrix,
+        shells: &[],
     };
     let bytes = encode_as(&contents, spec.encoding, spec.layout);
     if !spec.unknown_section {

@@ -43,6 +43,7 @@ fn parse_query_streaming_expanded_and_iteration_allocate_nothing() {
         triangle_count: 100,
         patches: &patches,
         visibility: &matrix,
+        shells: &[],
     });
     let mut scratch = vec![0u64; 2];
     let probe = Pvis::parse(&bytes).unwrap();

@@ -92,6 +92,7 @@ fuzz_target!(|input: Contents| {
         triangle_count: u64::from(first),
         patches: &patches,
         visibility: &matrix,
+        shells: &[],
     });
     let pvis = Pvis::parse(&bytes).expect("the reader accepts the writer's output");
     let s = pvis.sampling();
@@ -151,6 +152,7 @@ fuzz_target!(|input: Contents| {
         triangle_count: u64::from(first),
         patches: &patches,
         visibility: &matrix,
+        shells: &[],
     });
     assert_eq!(bytes, again);
 });

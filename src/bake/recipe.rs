@@ -250,6 +250,7 @@ impl Recipe {
             memory_budget: Some(self.memory().split().sampling),
             views,
             probe: self.probe(),
+            shell: None,
         }
     }
 
@@ -376,6 +377,7 @@ impl Recipe {
                 triangle_count: u64::from(triangle_count),
                 patches,
                 visibility,
+                shells: &[],
             },
             self.settings.encoding,
         )

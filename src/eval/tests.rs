@@ -71,6 +71,7 @@ fn bake_numbered(mesh: &Mesh, patches: u32, level: u32, covisibility: bool) -> V
         triangle_count: u64::from(mesh.triangle_count()),
         patches: &tiling.patches,
         visibility: &visibility,
+        shells: &[],
     })
 }
 
@@ -219,6 +220,7 @@ fn a_mesh_in_the_files_patch_order_evaluates_without_tiling_and_like_the_origina
         triangle_count: u64::from(mesh.triangle_count()),
         patches: &tiling.patches,
         visibility: &rows.with_patch_order(&order),
+        shells: &[],
     });
     let pvis = Pvis::parse(&bytes).unwrap();
     let positions = (0..mesh.vertex_count()).map(|v| mesh.position(v)).collect();

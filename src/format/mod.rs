@@ -43,6 +43,20 @@ pub struct BakeContents<'a> {
     pub patches: &'a [Patch],
     /// Which patches each view sees: `view_count(level)` rows of `patches.len()` bits.
     pub visibility: &'a VisibilityMatrix,
+    /// The sampling shells (spec § SHEL), outermost first; empty for a file without them.
+    pub shells: &'a [ShellRows<'a>],
+}
+
+/// The rows of one sampling shell: near views on a sphere of radius `distance` around the
+/// sampling centre, each recording every patch visible from its eye in any direction.
+#[derive(Clone, Copy, Debug)]
+pub struct ShellRows<'a> {
+    /// Camera distance from the centre: below the sampling distance and the next shell out's,
+    /// at least the bounding radius.
+    pub distance: f32,
+    /// Which patches each view of the shell sees: `view_count(level)` rows of
+    /// `patches.len()` bits, `level` being the matrix's own.
+    pub visibility: &'a VisibilityMatrix,
 }
 
 /// The sections this writer emits, in file order.

@@ -69,6 +69,7 @@ fn round_trip_with(
                 triangle_count: counts.iter().map(|&c| c as u64).sum(),
                 patches: &patches(counts),
                 visibility: matrix,
+                shells: &[],
             },
             encoding
         ),
@@ -94,6 +95,7 @@ fn round_trip_as(
         triangle_count,
         patches: &patches,
         visibility: matrix,
+        shells: &[],
     };
     let bytes = encode_as(&contents, encoding, layout);
     if (encoding, layout) == (VisibilityEncoding::Tree, PatchTableLayout::Compact) {
@@ -197,6 +199,7 @@ fn encode_patches(patches: &[Patch]) -> Vec<u8> {
         triangle_count: patches.iter().map(|p| u64::from(p.count)).sum(),
         patches,
         visibility: &matrix,
+        shells: &[],
     })
 }
 
@@ -270,6 +273,7 @@ proptest! {
             triangle_count,
             patches: &patches,
             visibility: &matrix,
+            shells: &[],
         };
         let bytes = encode(&contents);
         let pvis = Pvis::parse(&bytes).expect("the writer's output parses");
@@ -434,6 +438,7 @@ fn encode_refuses_non_contiguous_ranges() {
         triangle_count: 3,
         patches: &patches,
         visibility: &matrix,
+        shells: &[],
     });
 }
 

@@ -717,6 +717,7 @@ mod tests {
             triangle_count: u64::from(count),
             patches: &patches,
             visibility: &matrix,
+            shells: &[],
         });
         let pvis = Pvis::parse(&bytes).unwrap();
         let words = pvis.row_words();

@@ -67,7 +67,7 @@ use std::path::PathBuf;
 
 /// What a sampling run marks besides the point-sampled visible patches, and where it keeps
 /// its checkpoint.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct SamplingOptions {
     /// A patch counts as seen from a view only if it covers at least this many pixels (0 and
     /// 1 both mean any pixel): the seed paper's aggressive mode.
@@ -97,6 +97,12 @@ pub struct SamplingOptions {
     /// this many pixels, skipping the triangles no camera near the view can see the visible
     /// side of (`solid.rs`); a patch with a fragment in front is added. `None`: no probe.
     pub probe: Option<u32>,
+    /// A near pass: the views' eyes lie on a sphere of this radius around `params.center`
+    /// (below the sampling distance, at least the bounding radius) instead of at the sampling
+    /// distance, and each view records every patch visible from its eye in any direction,
+    /// rendering as many frustums as cover the bounding sphere from there (spec § SHEL).
+    /// `None`: the sampling sphere's views.
+    pub shell: Option<f32>,
 }
 
 /// Why tiled sampling failed: only its checkpoint file can.
