@@ -251,6 +251,7 @@ impl Recipe {
             views,
             probe: self.probe(),
             shell: None,
+            band: None,
         }
     }
 

@@ -103,6 +103,10 @@ pub struct SamplingOptions {
     /// rendering as many frustums as cover the bounding sphere from there (spec § SHEL).
     /// `None`: the sampling sphere's views.
     pub shell: Option<f32>,
+    /// The camera distances `[nearest, farthest]` (from `params.center`) whose queries the
+    /// rows of this pass answer, with the views of the neighbouring shells (spec § Query):
+    /// the probe's cells span them. `None`: the pass's own camera distance.
+    pub band: Option<[f32; 2]>,
 }
 
 /// Why tiled sampling failed: only its checkpoint file can.
