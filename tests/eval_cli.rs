@@ -1,10 +1,11 @@
 //! `patchvis eval` end to end on the bundled bunny at small settings: the JSON report's fields
 //! and ranges, determinism for a seed, zero missed pixels at the sampling positions, pictures,
-//! paths, the sweep, and refusal of a file baked from another mesh.
+//! paths, the sweep, distance bands (a row each, equal to single runs; near eyes) and refusal
+//! of a file baked from another mesh or of bad flags.
 
 mod common;
 
-use common::{BUNNY, SMALL_QUIET, bake, json, number, patchvis, stderr};
+use common::{BUNNY, SMALL_QUIET, bake, json, number, patchvis, stderr, stdout};
 
 const CUBE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/ply/cube.ply");
 
@@ -221,5 +222,234 @@ fn files_from_another_mesh_and_bad_flags_are_refused() {
     ] {
         let out = patchvis(&args);
         assert_eq!(out.status.code(), Some(2), "{args:?}");
+    }
+}
+
+/// A report's figures without what varies from run to run (timings) or names the run
+/// (pictures, the distance list).
+fn figures(report: &serde_json::Value) -> serde_json::Value {
+    let mut v = report.clone();
+    let o = v.as_object_mut().unwrap();
+    for key in [
+        "per_view",
+        "frame_cost",
+        "seconds",
+        "pictures",
+        "mesh",
+        "file",
+        "mode",
+        "seed",
+        "look_jitter_deg",
+        "resolution",
+        "patches",
+        "triangles",
+        "level",
+        "sampling_views",
+        "file_bytes",
+        "frame_backend",
+        "frame_backend_reason",
+        "frame_cost_gpu",
+    ] {
+        o.remove(key);
+    }
+    o.insert(
+        "per_view".into(),
+        serde_json::Value::Array(views_without_timings(report)),
+    );
+    v
+}
+
+#[test]
+fn distance_bands_give_a_row_each_equal_to_single_runs() {
+    let baked = bake(&SMALL_QUIET);
+    let pvis = baked.pvis_arg();
+    let common = [
+        "eval",
+        BUNNY,
+        pvis,
+        "--views",
+        "5",
+        "--seed",
+        "3",
+        "--look-jitter",
+        "25",
+        "-q",
+    ];
+    let run = |extra: &[&str]| patchvis(&[&common[..], extra].concat());
+    let scales = ["0.45", "1.5", "0.8"];
+    let banded = json(&run(&["--distance-scale", "0.45,1.5,0.8", "--json"]));
+    let bands = banded["bands"].as_array().unwrap();
+    assert_eq!(bands.len(), 3);
+    assert_eq!(banded["views_per_band"], 5);
+    let radius = 33.54217529296875f64;
+    for (band, scale) in bands.iter().zip(scales) {
+        let scale: f64 = scale.parse().unwrap();
+        // In the order given, each with its distance in sampling distances and radii.
+        assert!((number(band, "distance_scale") - scale).abs() < 1e-6);
+        let radii = number(band, "distance") / radius;
+        assert!((number(band, "distance_radii") - radii).abs() < 1e-9);
+        assert!((radii - scale / (22.5f64).to_radians().sin()).abs() < 1e-4);
+        let per_view = band["per_view"].as_array().unwrap();
+        assert_eq!(per_view.len(), 5);
+        let answered = per_view
+            .iter()
+            .filter(|v| v["inside_sphere"] == false)
+            .count();
+        assert_eq!(number(band, "answered_views"), answered as f64);
+        // A version-4 file flags every eye inside its sampling sphere; at 1.5 none.
+        assert_eq!(answered, if scale < 1.0 { 0 } else { 5 }, "x{scale}");
+        for v in per_view {
+            assert_eq!(v["frustum_lost_patches"], 0);
+            // The ideal in all directions sees at least what the camera's own render shows.
+            assert!(
+                number(v, "ideal_culling_rate_all_directions")
+                    <= number(v, "ideal_culling_rate") + 1e-12
+            );
+            assert!(number(v, "visible_patches_all_directions") >= number(v, "visible_patches"));
+        }
+        for key in [
+            "identical_views_fraction",
+            "missed_pixels_mean",
+            "missed_pixels_p99",
+            "missed_pixels_max",
+            "culling_rate_mean",
+            "frustum_culling_rate_mean",
+            "ideal_culling_rate_mean",
+            "ideal_culling_rate_all_directions_mean",
+        ] {
+            assert!(band[key].is_number(), "{key}");
+        }
+        // Each band is the single-distance run at its scale, figure for figure.
+        let single = json(&run(&["--distance-scale", &scale.to_string(), "--json"]));
+        assert_eq!(figures(band), figures(&single), "x{scale}");
+    }
+    // At 0.45 the eye is 1.18 radii from the centre: the 45° camera sees part of the bunny,
+    // the eye sees much more of it.
+    let near = &bands[0];
+    assert!(
+        number(near, "ideal_culling_rate_all_directions_mean")
+            < number(near, "ideal_culling_rate_mean") - 0.1
+    );
+
+    // The table: a row per distance, in order, and what the columns compare.
+    let text = stdout(&run(&["--distance-scale", "0.45,1.5,0.8"]));
+    let rows: Vec<&str> = text.lines().filter(|l| l.starts_with("| x")).collect();
+    assert_eq!(rows.len(), 3, "{text}");
+    for (row, (scale, answered)) in rows.iter().zip([
+        ("0.45", "0/5 (5 flagged)"),
+        ("1.5", "5/5"),
+        ("0.8", "0/5 (5 flagged)"),
+    ]) {
+        assert!(row.starts_with(&format!("| x{scale} | ")), "{row}");
+        assert!(row.contains(&format!(" | {answered} | ")), "{row}");
+    }
+    assert!(text.contains("ideal, all directions") && text.contains("ideal in frustum"));
+}
+
+#[test]
+fn distance_bands_write_their_pictures_and_stats() {
+    let baked = bake(&SMALL_QUIET);
+    let pvis = baked.pvis_arg();
+    let pics = baked.file("bands");
+    let stats = baked.file("stats.json");
+    let report = json(&patchvis(&[
+        "eval",
+        BUNNY,
+        pvis,
+        "--views",
+        "3",
+        "--distance-scale",
+        "0.6,1",
+        "--png",
+        pics.to_str().unwrap(),
+        "--worst",
+        "1",
+        "--stats",
+        stats.to_str().unwrap(),
+        "--json",
+        "-q",
+    ]));
+    let bands = report["bands"].as_array().unwrap();
+    for (band, scale) in bands.iter().zip(["0.6", "1"]) {
+        let pictures = band["pictures"].as_array().unwrap();
+        assert_eq!(pictures.len(), 1);
+        let name = pictures[0].as_str().unwrap();
+        assert!(name.contains(&format!("view-x{scale}-")), "{name}");
+        assert!(std::fs::read(name).unwrap().starts_with(b"\x89PNG"));
+    }
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let rows = stats["bands"].as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    for (row, band) in rows.iter().zip(bands) {
+        for key in [
+            "distance_scale",
+            "answered_views",
+            "culling_rate_mean",
+            "frustum_culling_rate_mean",
+            "ideal_culling_rate_mean",
+            "ideal_culling_rate_all_directions_mean",
+        ] {
+            assert_eq!(row[key], band[key], "{key}");
+        }
+    }
+}
+
+#[test]
+fn an_eye_inside_a_patch_bound_evaluates() {
+    // The eye at the centre of patch 0's bounding sphere, looking at the model's centre:
+    // parts of the mesh are right at the eye, behind it and beside it.
+    let baked = bake(&SMALL_QUIET);
+    let bytes = baked.bytes();
+    let file = patchvis::runtime::Pvis::parse(&bytes).unwrap();
+    let [x, y, z] = file.patch(0).center;
+    let [cx, cy, cz] = file.sampling().center;
+    let cams = baked.file("inside.txt");
+    std::fs::write(&cams, format!("{x} {y} {z} {cx} {cy} {cz}\n")).unwrap();
+    let report = json(&patchvis(&[
+        "eval",
+        BUNNY,
+        baked.pvis_arg(),
+        "--path",
+        cams.to_str().unwrap(),
+        "--json",
+        "-q",
+    ]));
+    let view = &report["per_view"][0];
+    assert_eq!(view["inside_sphere"], true);
+    assert_eq!(view["frustum_lost_patches"], 0);
+    assert!(number(view, "covered_pixels") > 0.0);
+    // Every direction around an eye inside the model's bound shows more than one view does.
+    assert!(number(view, "visible_patches_all_directions") > number(view, "visible_patches"));
+}
+
+#[test]
+fn bad_distance_lists_are_usage_errors() {
+    let baked = bake(&SMALL_QUIET);
+    let pvis = baked.pvis_arg();
+    for (list, says) in [
+        ("", "an empty item"),
+        ("0.45,", "an empty item"),
+        ("0,1", "0 is not a positive number"),
+        ("-1", "-1 is not a positive number"),
+        ("0.5,NaN", "NaN is not a positive number"),
+        ("inf", "inf is not a positive number"),
+        ("0.6,x", "x is not a positive number"),
+        ("1,0.6,1", "1 is listed twice"),
+    ] {
+        let out = patchvis(&["eval", BUNNY, pvis, "--distance-scale", list]);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{list}: {err}");
+        assert!(
+            err.contains("--distance-scale") && err.contains(says),
+            "{list}: {err}"
+        );
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    }
+    for mode in [&["--path", "orbit:4"][..], &["--sweep"]] {
+        let out = patchvis(&[&["eval", BUNNY, pvis, "--distance-scale", "0.5,1"], mode].concat());
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{mode:?}");
+        assert!(err.contains("not supported with"), "{err}");
     }
 }

@@ -408,9 +408,16 @@ pub struct EvalArgs {
     /// Seed of the random camera positions.
     #[arg(long, default_value_t = 1, value_name = "S")]
     pub seed: u64,
-    /// Camera distance over the sampling distance (< 1 nearer, > 1 farther).
-    #[arg(long, default_value_t = 1.0, value_name = "K")]
-    pub distance_scale: f32,
+    /// Camera distance over the sampling distance (< 1 nearer, > 1 farther). A list
+    /// (e.g. 0.45,0.6,0.8,1) evaluates the same cameras at each distance and prints one row a
+    /// distance; not with --path or --sweep.
+    #[arg(
+        long,
+        default_value = "1",
+        value_name = "K[,K..]",
+        allow_hyphen_values = true
+    )]
+    pub distance_scale: String,
     /// Turn each camera's view direction by a seeded random angle of up to DEG degrees (from
     /// the model's centre, or the path's target), so that parts of the model fall outside
     /// the view and the frustum culls; 0 keeps the cameras as they are.

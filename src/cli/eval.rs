@@ -1,10 +1,12 @@
 //! `patchvis eval`: checked settings, then the library's evaluation (`patchvis::eval`) over
-//! random views, sampling views or a path, or a sweep of bakes; a text or JSON report, PNGs of
-//! the worst views and SVG plots.
+//! random views, sampling views or a path, at one distance or a band per distance
+//! (`eval_bands.rs`), or a sweep of bakes; a text or JSON report, PNGs of the worst views and
+//! SVG plots.
 
 use super::UsageError;
 use super::args::{EvalArgs, SweepModeArg, memory_budget};
-use super::eval_frame::{FrameBackend, frame_json, print_frame};
+use super::eval_bands::{Band, parse_distance_scales, print_bands};
+use super::eval_frame::{FrameBackend, frame_json, gpu_json, print_frame};
 use super::out::{StdoutError, outln};
 use super::progress::Bars;
 use anyhow::{Context, Result, anyhow};
@@ -80,15 +82,7 @@ fn usage(condition: bool, message: impl FnOnce() -> String) -> Result<(), UsageE
 
 /// Runs `patchvis eval`.
 pub fn run(args: EvalArgs) -> Result<()> {
-    usage(
-        !(args.distance_scale.is_finite() && args.distance_scale > 0.0),
-        || {
-            format!(
-                "--distance-scale {}: expected a positive number",
-                args.distance_scale
-            )
-        },
-    )?;
+    let scales = parse_distance_scales(&args.distance_scale)?;
     if let Some(r) = args.resolution {
         usage(r == 0 || r > MAX_RESOLUTION, || {
             format!("--resolution {r}: expected 1 to {MAX_RESOLUTION} pixels")
@@ -103,11 +97,25 @@ pub fn run(args: EvalArgs) -> Result<()> {
             )
         },
     )?;
+    let listed = |mode: &str| {
+        usage(scales.len() > 1, || {
+            format!(
+                "--distance-scale {}: a list of distances is not supported with {mode}; give one distance",
+                args.distance_scale
+            )
+        })
+    };
+    if args.sweep {
+        listed("--sweep")?;
+    }
+    if args.path.is_some() {
+        listed("--path")?;
+    }
     if let Some(dir) = &args.png {
         check_output_dir(dir)?;
     }
     if args.sweep {
-        return run_sweep(&args);
+        return run_sweep(&args, scales[0]);
     }
     let views = match (&args.path, args.sampling_level) {
         (Some(spec), _) => parse_path(spec)?,
@@ -159,57 +167,85 @@ pub fn run(args: EvalArgs) -> Result<()> {
     let frame_backend = FrameBackend::open(args.frame_backend)?;
     let sampling = pvis.sampling();
     let resolution = args.resolution.unwrap_or(sampling.resolution);
-    let params = sampling_params(&pvis, resolution, args.distance_scale);
-    let cameras: Vec<Camera> = match &views {
-        Views::Random { count, seed } => views::random_directions(*count, *seed)
-            .into_iter()
-            .map(|d| Camera::sampling(&params, d))
-            .collect(),
-        Views::Sampling { level } => {
-            usage(*level > sampling.level, || {
-                format!(
-                    "--sampling-level {level}: expected at most the file's level {}",
-                    sampling.level
-                )
-            })?;
-            (0..view_count(*level))
-                .map(|v| Camera::sampling_view(&params, v))
-                .collect()
-        }
-        Views::Orbit { frames } => views::orbit_directions(*frames)
-            .into_iter()
-            .map(|d| Camera::sampling(&params, d))
-            .collect(),
-        Views::PathFile(path) => {
-            path_cameras(path, &sampling.center, sampling.fov_deg, resolution)?
-        }
-    };
-    let cameras = views::jitter_looks(&cameras, f64::from(args.look_jitter), args.seed);
-    let metrics = stages.run("eval", || evaluator.evaluate(&pvis, &cameras, &bars));
-    let summary = EvalSummary::of(&metrics);
-    // After the CPU evaluation, never beside it: a software GPU shares its cores.
-    let gpu = frame_backend.measure(&evaluator, &pvis, &cameras, &bars)?;
-    let seconds = start.elapsed().as_secs_f64();
+    if let Views::Sampling { level } = views {
+        usage(level > sampling.level, || {
+            format!(
+                "--sampling-level {level}: expected at most the file's level {}",
+                sampling.level
+            )
+        })?;
+    }
     let is_path = matches!(views, Views::Orbit { .. } | Views::PathFile(_));
+    let banded = scales.len() > 1;
+    let mut bands = Vec::with_capacity(scales.len());
+    for &scale in &scales {
+        let params = sampling_params(&pvis, resolution, scale);
+        let cameras: Vec<Camera> = match &views {
+            Views::Random { count, seed } => views::random_directions(*count, *seed)
+                .into_iter()
+                .map(|d| Camera::sampling(&params, d))
+                .collect(),
+            Views::Sampling { level } => (0..view_count(*level))
+                .map(|v| Camera::sampling_view(&params, v))
+                .collect(),
+            Views::Orbit { frames } => views::orbit_directions(*frames)
+                .into_iter()
+                .map(|d| Camera::sampling(&params, d))
+                .collect(),
+            Views::PathFile(path) => {
+                path_cameras(path, &sampling.center, sampling.fov_deg, resolution)?
+            }
+        };
+        // The same seed in every band: the same turn for the same camera.
+        let cameras = views::jitter_looks(&cameras, f64::from(args.look_jitter), args.seed);
+        let metrics = stages.run("eval", || evaluator.evaluate(&pvis, &cameras, &bars));
+        let summary = EvalSummary::of(&metrics);
+        // After the CPU evaluation, never beside it: a software GPU shares its cores.
+        let gpu = frame_backend.measure(&evaluator, &pvis, &cameras, &bars)?;
+        bands.push(Band {
+            scale,
+            distance: params.distance(),
+            cameras,
+            metrics,
+            summary,
+            gpu,
+            pictures: Vec::new(),
+        });
+    }
+    let seconds = start.elapsed().as_secs_f64();
     if let Some(path) = &args.stats {
-        let report = json!({
+        let mut report = json!({
             "mesh": args.mesh.display().to_string(),
             "file": file.display().to_string(),
             "triangles": mesh.triangle_count(),
             "patches_from": if evaluator.order().is_some() { "tiling" } else { "mesh order" },
             "memory_budget_bytes": options.memory.total(),
-            "workers": evaluator.workers(resolution),
+            "workers": evaluator.workers(&bands[0].cameras[0]),
             "seconds": seconds,
             "peak_heap_bytes": stages.peak_heap_bytes(),
             "look_jitter_deg": args.look_jitter,
-            "culling_rate_mean": summary.culling_rate.mean,
-            "frustum_culling_rate_mean": summary.frustum_culling_rate.mean,
-            "ideal_culling_rate_mean": summary.ideal_culling_rate.mean,
-            "views_losing_a_patch_to_the_frustum": summary.views_losing_a_patch_to_the_frustum,
-            "stages": stages.records().iter().map(|r| json!({
-                "name": r.name, "seconds": r.seconds, "peak_heap_bytes": r.peak_heap_bytes,
-            })).collect::<Vec<_>>(),
         });
+        if banded {
+            let rows = bands
+                .iter()
+                .map(|b| {
+                    let mut row = json!({"distance_scale": b.scale});
+                    merge(&mut row, stats_culling_json(&b.summary));
+                    row
+                })
+                .collect::<Vec<_>>();
+            merge(&mut report, json!({ "bands": rows }));
+        } else {
+            merge(&mut report, stats_culling_json(&bands[0].summary));
+        }
+        merge(
+            &mut report,
+            json!({
+                "stages": stages.records().iter().map(|r| json!({
+                    "name": r.name, "seconds": r.seconds, "peak_heap_bytes": r.peak_heap_bytes,
+                })).collect::<Vec<_>>(),
+            }),
+        );
         let text = serde_json::to_string_pretty(&report)? + "\n";
         write_atomic(path, text.as_bytes())
             .with_context(|| format!("{}: cannot write", path.display()))?;
@@ -218,20 +254,28 @@ pub fn run(args: EvalArgs) -> Result<()> {
     let mut written = Vec::new();
     if let Some(dir) = &args.png {
         let prefix = if is_path { "frame" } else { "view" };
-        for index in worst(&metrics, args.worst) {
-            let pictures = evaluator.pictures(&pvis, &cameras[index]);
-            let image = RgbImage::side_by_side(&[
-                &pictures.full,
-                &pictures.reconstruction,
-                &pictures.difference,
-            ]);
-            let path = dir.join(format!("{prefix}-{index:04}.png"));
-            write_png(&path, &image)?;
-            written.push(path);
+        for band in &mut bands {
+            for index in worst(&band.metrics, args.worst) {
+                let pictures = evaluator.pictures(&pvis, &band.cameras[index]);
+                let image = RgbImage::side_by_side(&[
+                    &pictures.full,
+                    &pictures.reconstruction,
+                    &pictures.difference,
+                ]);
+                let name = if banded {
+                    format!("{prefix}-x{}-{index:04}.png", band.scale)
+                } else {
+                    format!("{prefix}-{index:04}.png")
+                };
+                let path = dir.join(name);
+                write_png(&path, &image)?;
+                band.pictures.push(path.clone());
+                written.push(path);
+            }
         }
         if is_path {
             let path = dir.join("path.svg");
-            write_atomic(&path, path_plot(&metrics).as_bytes())
+            write_atomic(&path, path_plot(&bands[0].metrics).as_bytes())
                 .with_context(|| format!("{}: cannot write", path.display()))?;
             written.push(path);
         }
@@ -244,13 +288,34 @@ pub fn run(args: EvalArgs) -> Result<()> {
         Views::PathFile(p) => format!("path {}", p.display()),
     };
     if args.json {
-        let mut report = summary_json(&summary);
+        let mut report = if banded {
+            json!({})
+        } else {
+            summary_json(&bands[0].summary)
+        };
         let extra = json!({
             "mesh": args.mesh.display().to_string(),
             "file": file.display().to_string(),
             "mode": mode,
             "seed": args.seed,
-            "distance_scale": args.distance_scale,
+        });
+        merge(&mut report, extra);
+        if banded {
+            merge(
+                &mut report,
+                json!({"distance_scales": scales, "views_per_band": bands[0].summary.views}),
+            );
+        } else {
+            merge(
+                &mut report,
+                json!({
+                    "distance_scale": bands[0].scale,
+                    "distance": bands[0].distance,
+                    "distance_radii": bands[0].radii(&pvis),
+                }),
+            );
+        }
+        let extra = json!({
             "look_jitter_deg": args.look_jitter,
             "resolution": resolution,
             "patches": pvis.patch_count(),
@@ -260,45 +325,117 @@ pub fn run(args: EvalArgs) -> Result<()> {
             "file_bytes": pvis.total_bytes(),
             "seconds": seconds,
             "pictures": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
-            "per_view": metrics.iter().enumerate().map(|(i, m)| {
-                let mut view = view_json(i, m);
-                if let Some(g) = &gpu {
-                    let (full, culled) = g.per_view_ms[i];
-                    merge(&mut view, json!({"gpu_full_ms": full, "gpu_culled_ms": culled}));
-                }
-                view
-            }).collect::<Vec<_>>(),
         });
         merge(&mut report, extra);
-        merge(&mut report, frame_json(&frame_backend, gpu.as_ref()));
-        outln!("{}", serde_json::to_string_pretty(&report)?)?;
-    } else {
-        outln!(
-            "{} with {}: {} patches over {} triangles, level {} ({} views), {} bytes",
-            args.mesh.display(),
-            file.display(),
-            pvis.patch_count(),
-            mesh.triangle_count(),
-            sampling.level,
-            sampling.views,
-            pvis.total_bytes()
-        )?;
-        outln!(
-            "eval: {} views ({mode}{}) at {resolution}x{resolution} px, distance x{} ({seconds:.1} s)",
-            summary.views,
-            match views {
-                Views::Random { seed, .. } => format!(", seed {seed}"),
-                _ => String::new(),
-            },
-            args.distance_scale
-        )?;
-        print_summary(&summary, is_path)?;
-        print_frame(&frame_backend, gpu.as_ref())?;
-        for path in &written {
-            outln!("wrote {}", path.display())?;
+        if banded {
+            merge(&mut report, frame_json(&frame_backend, None));
+            let rows = bands
+                .iter()
+                .map(|b| {
+                    let mut row = json!({
+                        "distance_scale": b.scale,
+                        "distance": b.distance,
+                        "distance_radii": b.radii(&pvis),
+                    });
+                    merge(&mut row, summary_json(&b.summary));
+                    merge(
+                        &mut row,
+                        json!({
+                            "pictures": b.pictures.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+                            "per_view": per_view_json(b),
+                        }),
+                    );
+                    merge(&mut row, gpu_json(b.gpu.as_ref()));
+                    row
+                })
+                .collect::<Vec<_>>();
+            merge(&mut report, json!({ "bands": rows }));
+        } else {
+            merge(&mut report, json!({ "per_view": per_view_json(&bands[0]) }));
+            merge(
+                &mut report,
+                frame_json(&frame_backend, bands[0].gpu.as_ref()),
+            );
         }
+        outln!("{}", serde_json::to_string_pretty(&report)?)?;
+        return Ok(());
+    }
+    outln!(
+        "{} with {}: {} patches over {} triangles, level {} ({} views), {} bytes",
+        args.mesh.display(),
+        file.display(),
+        pvis.patch_count(),
+        mesh.triangle_count(),
+        sampling.level,
+        sampling.views,
+        pvis.total_bytes()
+    )?;
+    let seeded = match views {
+        Views::Random { seed, .. } => format!(", seed {seed}"),
+        _ => String::new(),
+    };
+    if banded {
+        outln!(
+            "eval: {} views ({mode}{seeded}) at {resolution}x{resolution} px at each of {} distances ({seconds:.1} s)",
+            bands[0].summary.views,
+            bands.len(),
+        )?;
+        print_bands(&bands, &pvis)?;
+        for band in &bands {
+            if band.gpu.is_some() {
+                outln!("distance x{}:", band.scale)?;
+            }
+            print_frame(&frame_backend, band.gpu.as_ref())?;
+            if band.gpu.is_none() {
+                // The same reason for every band.
+                break;
+            }
+        }
+    } else {
+        let band = &bands[0];
+        outln!(
+            "eval: {} views ({mode}{seeded}) at {resolution}x{resolution} px, distance x{} ({seconds:.1} s)",
+            band.summary.views,
+            band.scale
+        )?;
+        print_summary(&band.summary, is_path)?;
+        print_frame(&frame_backend, band.gpu.as_ref())?;
+    }
+    for path in &written {
+        outln!("wrote {}", path.display())?;
     }
     Ok(())
+}
+
+/// The culling fields of `--stats`.
+fn stats_culling_json(s: &EvalSummary) -> Value {
+    json!({
+        "answered_views": s.answered_views,
+        "culling_rate_mean": s.culling_rate.mean,
+        "frustum_culling_rate_mean": s.frustum_culling_rate.mean,
+        "ideal_culling_rate_mean": s.ideal_culling_rate.mean,
+        "ideal_culling_rate_all_directions_mean": s.ideal_culling_rate_all_directions.mean,
+        "views_losing_a_patch_to_the_frustum": s.views_losing_a_patch_to_the_frustum,
+    })
+}
+
+/// The `per_view` entries of a band, with the GPU's timings where measured.
+fn per_view_json(band: &Band) -> Vec<Value> {
+    band.metrics
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            let mut view = view_json(i, m);
+            if let Some(g) = &band.gpu {
+                let (full, culled) = g.per_view_ms[i];
+                merge(
+                    &mut view,
+                    json!({"gpu_full_ms": full, "gpu_culled_ms": culled}),
+                );
+            }
+            view
+        })
+        .collect()
 }
 
 /// Opens MESH within the input's share of `memory`.
@@ -388,6 +525,7 @@ fn summary_fields(out: &mut serde_json::Map<String, Value>, name: &str, s: &Summ
 fn summary_json(s: &EvalSummary) -> Value {
     let mut out = serde_json::Map::new();
     out.insert("views".into(), json!(s.views));
+    out.insert("answered_views".into(), json!(s.answered_views));
     out.insert("identical_views".into(), json!(s.identical_views));
     out.insert(
         "identical_views_fraction".into(),
@@ -402,6 +540,11 @@ fn summary_json(s: &EvalSummary) -> Value {
     summary_fields(&mut out, "triangles_drawn", &s.triangles_drawn);
     summary_fields(&mut out, "culling_rate", &s.culling_rate);
     summary_fields(&mut out, "ideal_culling_rate", &s.ideal_culling_rate);
+    summary_fields(
+        &mut out,
+        "ideal_culling_rate_all_directions",
+        &s.ideal_culling_rate_all_directions,
+    );
     summary_fields(&mut out, "frustum_culling_rate", &s.frustum_culling_rate);
     out.insert(
         "views_losing_a_patch_to_the_frustum".into(),
@@ -435,6 +578,8 @@ fn view_json(index: usize, m: &ViewMetrics) -> Value {
         "triangles_drawn": m.triangles_drawn,
         "culling_rate": m.culling_rate,
         "ideal_culling_rate": m.ideal_culling_rate,
+        "visible_patches_all_directions": m.visible_patches_all_directions,
+        "ideal_culling_rate_all_directions": m.ideal_culling_rate_all_directions,
         "frustum_answer_patches": m.frustum_answer_patches,
         "frustum_triangles_drawn": m.frustum_triangles_drawn,
         "frustum_culling_rate": m.frustum_culling_rate,
@@ -568,7 +713,7 @@ fn path_plot(metrics: &[ViewMetrics]) -> String {
     plot::svg(&[popping, quality])
 }
 
-fn run_sweep(args: &EvalArgs) -> Result<()> {
+fn run_sweep(args: &EvalArgs, distance_scale: f32) -> Result<()> {
     usage(args.views == 0, || "--views 0: expected at least 1".into())?;
     usage(args.sweep_patches.contains(&0), || {
         "--sweep-patches: expected patch counts of at least 1".into()
@@ -607,7 +752,7 @@ fn run_sweep(args: &EvalArgs) -> Result<()> {
         },
         views: args.views,
         seed: args.seed,
-        distance_scale: args.distance_scale,
+        distance_scale,
     };
     let mode_name = match args.sweep_mode {
         SweepModeArg::Plain => "plain".to_string(),

@@ -162,6 +162,15 @@ pub fn frame_json(backend: &FrameBackend, gpu: Option<&GpuReport>) -> Value {
         "frame_backend": backend.name(),
         "frame_backend_reason": backend.why(),
     });
+    if let (Value::Object(o), Value::Object(cost)) = (&mut out, gpu_json(gpu)) {
+        o.extend(cost);
+    }
+    out
+}
+
+/// The `frame_cost_gpu` field of a GPU report (an empty object without one).
+pub fn gpu_json(gpu: Option<&GpuReport>) -> Value {
+    let mut out = json!({});
     if let (Some(g), Value::Object(o)) = (gpu, &mut out) {
         o.insert(
             "frame_cost_gpu".into(),

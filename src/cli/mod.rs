@@ -3,6 +3,7 @@
 pub mod args;
 pub mod bake;
 pub mod eval;
+pub mod eval_bands;
 pub mod eval_frame;
 pub mod generate;
 pub mod inspect;

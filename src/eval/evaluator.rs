@@ -121,7 +121,10 @@ pub struct EvalOptions {
 pub struct ViewMetrics {
     /// Eye position (model space) the query was asked for.
     pub eye: [f32; 3],
-    /// Whether the query found the eye inside the sampling sphere.
+    /// Whether the query flagged the eye `inside_sphere` (inside the sampling sphere of a
+    /// version-4 file, which an eye at exactly the sampling distance is about half the time
+    /// by rounding; inside the innermost sampling shell of a version-5 one). A renderer may
+    /// then draw every patch; the figures here are still those of the query's answer.
     pub inside_sphere: bool,
     /// Pixels the full render covers.
     pub covered_pixels: u64,
@@ -142,9 +145,18 @@ pub struct ViewMetrics {
     /// Fraction of the mesh's triangles not drawn.
     pub culling_rate: f64,
     /// Fraction of triangles in patches the full render does not show: the best any patch
-    /// visibility answer could cull at this view (the full render shows only what is in the
-    /// view frustum, so this is also the ideal with the frustum).
+    /// visibility answer culled by this camera's frustum could cull (the full render shows
+    /// only what is in the frustum): the ideal *with* the frustum, for
+    /// `frustum_culling_rate`.
     pub ideal_culling_rate: f64,
+    /// Patches visible from the eye in some direction: those the full render shows, and
+    /// those renders covering every direction of the model from the eye show
+    /// ([`super::surround_cameras`]; not drawn when the camera's image holds the whole mesh).
+    pub visible_patches_all_directions: u32,
+    /// Fraction of triangles in patches not visible from the eye in any direction: the best
+    /// a direction-independent answer (what a query returns) could cull: the ideal *without*
+    /// the frustum, for `culling_rate`. At most `ideal_culling_rate`.
+    pub ideal_culling_rate_all_directions: f64,
     /// Patches of the answer inside the camera's frustum ([`super::camera_frustum`]): what
     /// `query_in_frustum` returns for this camera.
     pub frustum_answer_patches: u32,
@@ -308,22 +320,58 @@ impl<'m> Evaluator<'m> {
         self.budget
     }
 
-    /// Views rendered at once at `resolution`: as many workers as the budget holds besides
-    /// the triangle order (when it is on the heap), at least one, at most the thread count.
-    pub fn workers(&self, resolution: u32) -> usize {
+    /// Views rendered at once with cameras like `camera`: as many workers as the budget holds
+    /// besides the triangle order (when it is on the heap), at least one, at most the thread
+    /// count.
+    pub fn workers(&self, camera: &Camera) -> usize {
         let fixed = self
             .order
             .as_ref()
             .filter(|o| !o.is_mapped())
             .map_or(0, |o| o.len() as u64 * 4)
             + self.starts.len() as u64 * 4;
-        (self.budget.saturating_sub(fixed) / worker_bytes(self.mesh, resolution).max(1))
+        (self.budget.saturating_sub(fixed) / worker_bytes(self.mesh, camera).max(1))
             .clamp(1, rayon::current_num_threads() as u64) as usize
     }
 
     /// The patch holding position `i`.
     fn patch_at(&self, i: u32) -> usize {
         self.starts.partition_point(|&s| s <= i) - 1
+    }
+
+    /// Triangles of the patches whose bits are set in `row`.
+    fn triangles_of(&self, row: &[u64]) -> u64 {
+        crate::runtime::Patches::of_bits(row)
+            .map(|p| {
+                let r = self.patch_range(p);
+                u64::from(r.end - r.start)
+            })
+            .sum()
+    }
+
+    /// Renders the whole mesh with `camera` into the surround buffer and sets in
+    /// `s.seen_all` the patches it shows.
+    fn mark_shown(&self, camera: &Camera, s: &mut Scratch) {
+        if s.surround.resolution() != camera.resolution() {
+            s.surround = IdBuffer::new(camera.resolution());
+        }
+        s.surround.clear();
+        let everything = 0..self.mesh.triangle_count();
+        s.rasterizer.render_runs(
+            self.mesh,
+            self.order.as_deref(),
+            std::slice::from_ref(&everything),
+            camera,
+            &mut s.surround,
+        );
+        let mut previous = NO_PATCH;
+        for &id in s.surround.ids() {
+            if id != NO_PATCH && id != previous {
+                previous = id;
+                let p = self.patch_at(id);
+                s.seen_all[p / 64] |= 1 << (p % 64);
+            }
+        }
     }
 
     /// The mesh triangle at position `i`.
@@ -347,7 +395,7 @@ impl<'m> Evaluator<'m> {
             "the file and the evaluator differ in patch count"
         );
         progress.start("eval", cameras.len() as u64);
-        let workers = cameras.first().map_or(1, |c| self.workers(c.resolution()));
+        let workers = cameras.first().map_or(1, |c| self.workers(c));
         let run = || {
             cameras
                 .par_iter()
@@ -424,12 +472,7 @@ impl<'m> Evaluator<'m> {
         s.in_frustum.copy_from_slice(&s.answer);
         super::camera_frustum(camera).cull(pvis, &mut s.in_frustum);
         let frustum_answer_patches = s.in_frustum.iter().map(|w| w.count_ones()).sum();
-        let frustum_triangles_drawn: u64 = crate::runtime::Patches::of_bits(&s.in_frustum)
-            .map(|p| {
-                let r = self.patch_range(p);
-                u64::from(r.end - r.start)
-            })
-            .sum();
+        let frustum_triangles_drawn = self.triangles_of(&s.in_frustum);
 
         s.reconstruction.clear();
         let start = Instant::now();
@@ -487,12 +530,17 @@ impl<'m> Evaluator<'m> {
             .zip(&s.in_frustum)
             .map(|(&drawn, &kept)| (drawn & !kept).count_ones())
             .sum();
-        let visible_triangles: u64 = crate::runtime::Patches::of_bits(&s.seen)
-            .map(|p| {
-                let r = self.patch_range(p);
-                u64::from(r.end - r.start)
-            })
-            .sum();
+        let visible_triangles = self.triangles_of(&s.seen);
+        // The ideal without the frustum: what the eye sees in any direction.
+        s.seen_all.copy_from_slice(&s.seen);
+        if !super::frames_whole_mesh(camera, mesh) {
+            let sampling = pvis.sampling();
+            for around in super::surround_cameras(camera, sampling.center, sampling.radius) {
+                self.mark_shown(&around, s);
+            }
+        }
+        let visible_patches_all_directions = s.seen_all.iter().map(|w| w.count_ones()).sum();
+        let visible_triangles_all_directions = self.triangles_of(&s.seen_all);
         let total = f64::from(mesh.triangle_count());
         ViewMetrics {
             eye,
@@ -506,6 +554,9 @@ impl<'m> Evaluator<'m> {
             triangles_drawn,
             culling_rate: 1.0 - triangles_drawn as f64 / total,
             ideal_culling_rate: 1.0 - visible_triangles as f64 / total,
+            visible_patches_all_directions,
+            ideal_culling_rate_all_directions: 1.0
+                - visible_triangles_all_directions as f64 / total,
             frustum_answer_patches,
             frustum_triangles_drawn,
             frustum_culling_rate: 1.0 - frustum_triangles_drawn as f64 / total,
@@ -540,11 +591,13 @@ fn extend_runs(bits: &[u64], starts: &[u32], runs: &mut Vec<Range<u32>>) {
     }
 }
 
-/// Heap bytes one evaluation worker holds at `resolution`: two ID buffers (an id and a depth
-/// per pixel) and the projected vertices with their stamps.
-pub fn worker_bytes(mesh: &Mesh, resolution: u32) -> u64 {
-    let pixels = u64::from(resolution) * u64::from(resolution);
-    2 * pixels * 8 + u64::from(mesh.vertex_count()) * 20
+/// Heap bytes one evaluation worker holds for `camera`: two ID buffers (an id and a depth
+/// per pixel) at its resolution, one at the largest resolution of the renders around its eye
+/// ([`super::surround_resolution`]), and the projected vertices with their stamps.
+pub fn worker_bytes(mesh: &Mesh, camera: &Camera) -> u64 {
+    let square = |r: u32| u64::from(r) * u64::from(r);
+    let pixels = 2 * square(camera.resolution()) + square(super::surround_resolution(camera));
+    pixels * 8 + u64::from(mesh.vertex_count()) * 20
 }
 
 /// Where each patch of `pvis` starts, and the triangle count after the last.
@@ -604,6 +657,10 @@ struct Scratch {
     drawn: Vec<u64>,
     /// The answer without the patches outside the camera's frustum, one row.
     in_frustum: Vec<u64>,
+    /// The renders around the eye, for the ideal without the frustum.
+    surround: IdBuffer,
+    /// The patches those renders or the full render show, one row.
+    seen_all: Vec<u64>,
     /// The answer's triangle positions, as runs.
     runs: Vec<Range<u32>>,
 }
@@ -619,6 +676,8 @@ impl Scratch {
             seen: vec![0; pvis.row_words()],
             drawn: vec![0; pvis.row_words()],
             in_frustum: vec![0; pvis.row_words()],
+            surround: IdBuffer::new(1),
+            seen_all: vec![0; pvis.row_words()],
             runs: Vec::new(),
         }
     }

@@ -14,7 +14,7 @@ use crate::sampler::Camera;
 
 /// How far (pixels) each side plane lies outside the image: far more than rounding, far less
 /// than a pixel, so the figures are the frustum's and not the margin's.
-const MARGIN_PX: f64 = 0.25;
+pub(super) const MARGIN_PX: f64 = 0.25;
 
 /// The frustum of everything `camera` can draw, slightly widened (see the module
 /// documentation); a plane `[0, 0, 0, 1]` stands for the absent far plane.

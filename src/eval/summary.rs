@@ -10,6 +10,9 @@ use super::metrics::Summary;
 pub struct EvalSummary {
     /// Number of views.
     pub views: u32,
+    /// Views the query answered: not flagged `inside_sphere` (a renderer may draw the others
+    /// whole; their figures are still those of the query's answer).
+    pub answered_views: u32,
     /// Views whose reconstruction is pixel-identical to the full render.
     pub identical_views: u32,
     /// Views where the query misses a patch the full render shows.
@@ -22,8 +25,12 @@ pub struct EvalSummary {
     pub triangles_drawn: Summary,
     /// Culling rate per view.
     pub culling_rate: Summary,
-    /// Ideal culling rate (true visible set) per view.
+    /// Ideal culling rate with the frustum (patches the view's full render does not show)
+    /// per view.
     pub ideal_culling_rate: Summary,
+    /// Ideal culling rate without the frustum (patches no direction from the eye shows) per
+    /// view.
+    pub ideal_culling_rate_all_directions: Summary,
     /// Culling rate per view with the answer also culled by the view frustum.
     pub frustum_culling_rate: Summary,
     /// Views where the frustum dropped a patch the answer's render shows (0 unless the
@@ -82,6 +89,7 @@ impl EvalSummary {
             .collect();
         EvalSummary {
             views: views.len() as u32,
+            answered_views: count(|v| !v.inside_sphere),
             identical_views: count(|v| v.missed_pixels == 0),
             views_missing_a_patch: count(|v| v.missed_patches > 0),
             missed_pixels: summary(|v| v.missed_pixels as f64),
@@ -89,6 +97,7 @@ impl EvalSummary {
             triangles_drawn: summary(|v| v.triangles_drawn as f64),
             culling_rate: summary(|v| v.culling_rate),
             ideal_culling_rate: summary(|v| v.ideal_culling_rate),
+            ideal_culling_rate_all_directions: summary(|v| v.ideal_culling_rate_all_directions),
             frustum_culling_rate: summary(|v| v.frustum_culling_rate),
             views_losing_a_patch_to_the_frustum: count(|v| v.frustum_lost_patches > 0),
             psnr_db_differing: (!differing.is_empty()).then(|| Summary::of(differing)),
@@ -139,6 +148,8 @@ mod tests {
             triangles_drawn: drawn,
             culling_rate: 1.0 - drawn as f64 / 100.0,
             ideal_culling_rate: 0.5,
+            visible_patches_all_directions: 11,
+            ideal_culling_rate_all_directions: 0.4,
             frustum_answer_patches: 11,
             frustum_triangles_drawn: drawn - 1,
             frustum_culling_rate: 1.0 - (drawn - 1) as f64 / 100.0,
@@ -165,6 +176,8 @@ mod tests {
             (s.views, s.identical_views, s.views_missing_a_patch),
             (3, 2, 1)
         );
+        assert_eq!(s.answered_views, 3);
+        assert!((s.ideal_culling_rate_all_directions.mean - 0.4).abs() < 1e-12);
         assert!((s.identical_views_fraction() - 2.0 / 3.0).abs() < 1e-12);
         assert_eq!(s.missed_pixels.max, 5.0);
         assert!((s.culling_rate.mean - 0.5).abs() < 1e-12);

@@ -246,7 +246,7 @@ fn a_mesh_in_the_files_patch_order_evaluates_without_tiling_and_like_the_origina
         ..options()
     };
     let one_at_a_time = Evaluator::new(&reordered, &pvis, &tight).unwrap();
-    assert_eq!(one_at_a_time.workers(RESOLUTION), 1);
+    assert_eq!(one_at_a_time.workers(&cameras[0]), 1);
     assert_eq!(metrics(&one_at_a_time), metrics(&in_order));
 }
 
@@ -258,4 +258,42 @@ fn visible_runs_merge_consecutive_patches_and_skip_empty_ones() {
     // Patch 2 is empty, so 1 and 3 are adjacent.
     assert_eq!(visible_runs(&[0b01010], &starts).first(), Some(&(3..9)));
     assert_eq!(visible_runs(&[0b00100], &starts), []);
+}
+
+#[test]
+fn near_views_are_flagged_and_the_ideal_without_the_frustum_looks_around() {
+    let mesh = lattice(0.0);
+    let bytes = bake(&mesh, 80, 1);
+    let pvis = Pvis::parse(&bytes).unwrap();
+    let evaluator = Evaluator::new(&mesh, &pvis, &options()).unwrap();
+    let at = |scale: f32| -> Vec<ViewMetrics> {
+        let params = sampling_params(&pvis, RESOLUTION, scale);
+        let cameras: Vec<Camera> = random_directions(6, 4)
+            .into_iter()
+            .map(|d| Camera::sampling(&params, d))
+            .collect();
+        untimed(&evaluator, &pvis, &cameras)
+    };
+    let far = at(1.2);
+    // At 0.45 of the sampling distance the eye is 1.18 bounding radii from the centre: inside
+    // the sampling sphere of this version-4 file, so flagged.
+    let near = at(0.45);
+    for (f, n) in far.iter().zip(&near) {
+        // The camera frames the whole lattice: its full render is the reference.
+        assert!(!f.inside_sphere);
+        assert_eq!(f.ideal_culling_rate_all_directions, f.ideal_culling_rate);
+        assert_eq!(f.visible_patches_all_directions, f.visible_patches);
+        assert!(n.inside_sphere);
+        assert_eq!(n.frustum_lost_patches, 0);
+        // The 45° camera sees part of the lattice; around the eye there is more.
+        assert!(n.covered_pixels > 0 && n.frustum_culling_rate > n.culling_rate);
+        assert!(
+            n.visible_patches_all_directions > n.visible_patches,
+            "{n:?}"
+        );
+        assert!(n.ideal_culling_rate_all_directions < n.ideal_culling_rate);
+        assert!(n.ideal_culling_rate_all_directions >= 0.0);
+    }
+    assert_eq!(EvalSummary::of(&near).answered_views, 0);
+    assert_eq!(EvalSummary::of(&far).answered_views, 6);
 }
