@@ -103,11 +103,36 @@ typedef struct PatchvisVisible {
      * (bits[p / 64] >> (p % 64)) & 1. Bits past the last patch are zero. */
     const uint64_t *bits;
     size_t words;            /* words at bits: ceil(patch_count / 64) */
-    uint32_t leaf[3];        /* the three views whose rows were combined */
+    uint32_t leaf[3];        /* the three views of shell shells[0] whose rows were combined */
     uint32_t visible_count;  /* number of visible patches */
-    uint32_t inside_sphere;  /* 1 if the eye is inside the camera sphere: the answer is then
-                                approximate and a renderer may prefer to draw everything */
+    uint32_t inside_sphere;  /* 1 if the eye is inside the innermost shell (the sampling sphere
+                                for a file without shells): the answer is then approximate and
+                                a renderer may prefer to draw everything */
+    uint32_t band;           /* how many shells the eye is strictly inside, the sampling sphere
+                                counted as shell 0: 0 at or beyond the sampling sphere, 1..K
+                                between shells band - 1 and band, K + 1 inside shell K */
+    uint32_t shells[2];      /* the shells whose rows were combined, outer first; the same
+                                shell twice where one answered */
+    uint32_t inner_leaf[3];  /* the three views of shell shells[1] whose rows were combined */
 } PatchvisVisible;
+
+/* One sampling shell (spec/FORMAT.md, section SHEL): shell 0 is the sampling sphere, shells
+ * 1..K the file's SHEL records, nearer and nearer the model. */
+typedef struct PatchvisShell {
+    float distance;          /* camera distance from the centre */
+    uint32_t level;          /* sphere subdivision level of the shell's views */
+    uint32_t views;          /* number of views, 4 * 4^level + 2 */
+    uint32_t encoding;       /* VISB encoding of the shell's rows */
+    uint64_t bytes;          /* bytes of the shell's rows */
+} PatchvisShell;
+
+/* K: the file's sampling shells besides the sampling sphere (0 for a file without SHEL, every
+ * file of version 1-4); 0 for a NULL or unparsed file. */
+uint32_t patchvis_shell_count(const PatchvisFile *file);
+
+/* Describes shell s (0 = the sampling sphere, 1..K) in *out. Returns PATCHVIS_OK,
+ * PATCHVIS_ERR_ARGUMENT (out NULL), PATCHVIS_ERR_NOT_PARSED or PATCHVIS_ERR_RANGE (s > K). */
+int32_t patchvis_shell(const PatchvisFile *file, uint32_t s, PatchvisShell *out);
 
 /* sizeof(PatchvisFile) as the library was built; compare to catch a mismatched header. */
 size_t patchvis_file_size(void);

@@ -191,8 +191,18 @@ pub struct PatchvisVisible {
     pub leaf: [u32; 3],
     /// Number of visible patches.
     pub visible_count: u32,
-    /// 1 if the eye is inside the camera sphere (the answer is then approximate), else 0.
+    /// 1 if the eye is inside the innermost shell (the sampling sphere for a file without
+    /// shells): the answer is then approximate, and a renderer may prefer to draw everything.
     pub inside_sphere: u32,
+    /// How many shells the eye is strictly inside, the sampling sphere counted as shell 0:
+    /// `0..=K + 1` (`runtime::Visible::band`).
+    pub band: u32,
+    /// The shells whose rows were combined, outer first; the same shell twice where one
+    /// answered (`runtime::Visible::shells`).
+    pub shells: [u32; 2],
+    /// The three views of shell `shells[1]` whose rows were combined; `leaf` is of
+    /// `shells[0]`.
+    pub inner_leaf: [u32; 3],
 }
 
 impl PatchvisVisible {
@@ -204,6 +214,9 @@ impl PatchvisVisible {
             leaf: visible.leaf,
             visible_count: visible.count(),
             inside_sphere: u32::from(visible.inside_sphere),
+            band: visible.band,
+            shells: visible.shells,
+            inner_leaf: visible.inner_leaf,
         }
     }
 }
@@ -426,6 +439,70 @@ pub unsafe extern "C" fn patchvis_info(file: *const PatchvisFile, out: *mut Patc
         resolution: s.resolution,
         total_bytes: pvis.total_bytes(),
         scratch_words: pvis.scratch_words(),
+    };
+    // SAFETY: `out` is non-null and valid for a write (caller contract).
+    unsafe { out.write(info) };
+    PATCHVIS_OK
+}
+
+/// One sampling shell of a file (spec § SHEL; `runtime::Shell`): shell 0 is the sampling
+/// sphere, shells `1..=K` the SHEL records.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PatchvisShell {
+    /// Camera distance from the centre.
+    pub distance: f32,
+    /// Sphere subdivision level of the shell's views.
+    pub level: u32,
+    /// Number of views, `4·4^level + 2`.
+    pub views: u32,
+    /// The VISB encoding of the shell's rows.
+    pub encoding: u32,
+    /// Bytes of the shell's rows.
+    pub bytes: u64,
+}
+
+/// `K`, the file's sampling shells besides the sampling sphere (0 without SHEL); 0 for a null
+/// or unparsed `file`.
+///
+/// # Safety
+/// `file` as for every call.
+#[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
+pub unsafe extern "C" fn patchvis_shell_count(file: *const PatchvisFile) -> u32 {
+    // SAFETY: caller contract on `file`.
+    unsafe { handle(file) }.map_or(0, |pvis| pvis.shell_count())
+}
+
+/// Describes shell `s` (0 = the sampling sphere, `1..=K`) in `*out`. Returns 0,
+/// `PATCHVIS_ERR_ARGUMENT` (`out` null), `PATCHVIS_ERR_NOT_PARSED` or `PATCHVIS_ERR_RANGE`
+/// (`s > K`).
+///
+/// # Safety
+/// `file` as for every call; `out` null or valid for a write of a `PatchvisShell`.
+#[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
+pub unsafe extern "C" fn patchvis_shell(
+    file: *const PatchvisFile,
+    s: u32,
+    out: *mut PatchvisShell,
+) -> i32 {
+    // SAFETY: caller contract on `file`.
+    let pvis = match unsafe { handle(file) } {
+        Ok(pvis) => pvis,
+        Err(code) => return code,
+    };
+    if out.is_null() {
+        return PATCHVIS_ERR_ARGUMENT;
+    }
+    if s > pvis.shell_count() {
+        return PATCHVIS_ERR_RANGE;
+    }
+    let shell = pvis.shell(s);
+    let info = PatchvisShell {
+        distance: shell.distance,
+        level: shell.level,
+        views: shell.views,
+        encoding: shell.encoding,
+        bytes: shell.bytes,
     };
     // SAFETY: `out` is non-null and valid for a write (caller contract).
     unsafe { out.write(info) };

@@ -17,14 +17,14 @@
 //! PATCHVIS_REGENERATE=1 cargo test --test conformance   # rewrite vectors and expectations
 //! ```
 //!
-//! Cost: 58 small vectors; each valid one is parsed once per prefix length (a few thousand
+//! Cost: 98 small vectors; each valid one is parsed once per prefix length (a few thousand
 //! parses, each stopping at the length check), well under a second.
 #![cfg(feature = "bake")]
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use patchvis::format::{BakeContents, PatchTableLayout, VisibilityEncoding, encode_as};
+use patchvis::format::{BakeContents, PatchTableLayout, ShellRows, VisibilityEncoding, encode_as};
 use patchvis::runtime::consts::{HEADER_LEN, MAGIC, SECTION_ALIGN, SECTION_ENTRY_LEN, TRAILER_LEN};
 use patchvis::runtime::crc32c::crc32c;
 use patchvis::runtime::{Error, Pvis};
@@ -156,10 +156,21 @@ fn dump(pvis: &Pvis<'_>) -> String {
             info.cone_cos
         );
     }
+    let k = pvis.shell_count();
+    if k > 0 {
+        let _ = writeln!(out, "shells: {k}");
+        for shell in 1..=k {
+            let sh = pvis.shell(shell);
+            let _ = writeln!(
+                out,
+                "shell {shell}: distance {} level {} views {} encoding {} bytes {}",
+                sh.distance, sh.level, sh.views, sh.encoding, sh.bytes
+            );
+        }
+    }
     let mut row = vec![0u64; pvis.row_words()];
-    for view in 0..s.views {
-        pvis.view_row(view, &mut row);
-        let bits: String = (0..pvis.patch_count())
+    let bits = |row: &[u64]| -> String {
+        (0..pvis.patch_count())
             .map(|p| {
                 if row[p as usize / 64] >> (p % 64) & 1 == 1 {
                     '1'
@@ -167,27 +178,73 @@ fn dump(pvis: &Pvis<'_>) -> String {
                     '0'
                 }
             })
-            .collect();
-        let _ = writeln!(out, "view {view}: {bits}");
+            .collect()
+    };
+    for view in 0..s.views {
+        pvis.view_row(view, &mut row);
+        let _ = writeln!(out, "view {view}: {}", bits(&row));
+    }
+    for shell in 1..=k {
+        for view in 0..pvis.shell(shell).views {
+            pvis.shell_view_row(shell, view, &mut row);
+            let _ = writeln!(out, "shell {shell} view {view}: {}", bits(&row));
+        }
     }
     let mut scratch = vec![0u64; pvis.scratch_words()];
-    for eye in query_positions() {
+    let mut positions = query_positions();
+    if k > 0 {
+        positions.extend(shell_positions());
+    }
+    for eye in positions {
         let visible = pvis.query(eye, &mut scratch);
         let patches: Vec<String> = visible.patches().map(|p| p.to_string()).collect();
+        let list = |v: &[u32]| {
+            let v: Vec<String> = v.iter().map(|x| x.to_string()).collect();
+            v.join(",")
+        };
+        // Files with shells also say which band and shells answered (README).
+        let (band, inner) = if k > 0 {
+            (
+                format!(" band {} shells [{}]", visible.band, list(&visible.shells)),
+                format!(" inner [{}]", list(&visible.inner_leaf)),
+            )
+        } else {
+            (String::new(), String::new())
+        };
         let _ = writeln!(
             out,
-            "query {},{},{} -> inside {} views [{},{},{}] patches [{}]",
+            "query {},{},{} -> inside {}{band} views [{}]{inner} patches [{}]",
             eye[0],
             eye[1],
             eye[2],
             visible.inside_sphere,
-            visible.leaf[0],
-            visible.leaf[1],
-            visible.leaf[2],
+            list(&visible.leaf),
             patches.join(",")
         );
     }
     out
+}
+
+/// The extra eye positions of a file with shells (vectors 017 on, centred at the origin, with
+/// the sampling sphere at distance 3): in every band, exactly on the spheres of distance 3,
+/// 2.5, 2.25, 2 and 1.75 (on an axis, so `|d|²` is the square exactly: the eye is not inside
+/// that sphere), between them and inside the innermost shell.
+fn shell_positions() -> Vec<[f32; 3]> {
+    vec![
+        [3.0, 0.0, 0.0],
+        [2.9, 0.0, 0.0],
+        [-1.5, 1.5, 1.5],
+        [0.0, 2.5, 0.0],
+        [0.0, -2.4, 0.0],
+        [0.0, -0.0, 2.25],
+        [0.0, 2.2, 0.0],
+        [0.0, 0.0, -2.0],
+        [-1.0, -1.0, -1.2],
+        [1.2, 1.0, 0.9],
+        [0.0, 0.0, 1.75],
+        [1.0, 0.5, -0.5],
+        [0.01, -0.02, 0.03],
+    ]
 }
 
 fn point(p: [f32; 3]) -> String {
@@ -244,6 +301,8 @@ struct ValidSpec {
     /// Give patches spread cone axes and let views see the patches facing them (plus a little
     /// noise), so the rows have the structure real bakes have and encoding 2 grows a real tree.
     facing: bool,
+    /// Sampling shells (version 5): `(distance, level)` each, outermost first.
+    shells: Vec<(f32, u32)>,
 }
 
 fn valid_specs() -> Vec<ValidSpec> {
@@ -260,6 +319,14 @@ fn valid_specs() -> Vec<ValidSpec> {
         encoding: VisibilityEncoding::Tree,
         layout: PatchTableLayout::Full,
         facing: false,
+        shells: Vec::new(),
+    };
+    // Version 5: sampling shells, around the origin with the sampling sphere at distance 3.
+    let v5 = |name, level, counts: Vec<u32>, seed, shells| ValidSpec {
+        center: [0.0; 3],
+        layout: PatchTableLayout::Compact,
+        shells,
+        ..base(name, level, counts, seed)
     };
     vec![
         ValidSpec {
@@ -378,6 +445,43 @@ fn valid_specs() -> Vec<ValidSpec> {
                 11,
             )
         },
+        v5(
+            "017-v5-level2-one-shell",
+            2,
+            (1..=65).map(|i| i % 3 + 1).collect(),
+            17,
+            vec![(2.0, 2)],
+        ),
+        ValidSpec {
+            facing: true,
+            ..v5(
+                "018-v5-level3-300-patches-three-shells-mixed-levels",
+                3,
+                (1..=300).map(|i| i % 4 + 1).collect(),
+                18,
+                vec![(2.5, 2), (2.0, 3), (1.75, 1)],
+            )
+        },
+        ValidSpec {
+            encoding: VisibilityEncoding::Raw,
+            ..v5(
+                "019-v5-level1-three-shells-raw",
+                1,
+                vec![3, 1, 4, 1, 5, 9, 2],
+                19,
+                vec![(2.5, 1), (2.25, 0), (1.75, 2)],
+            )
+        },
+        ValidSpec {
+            encoding: VisibilityEncoding::Hierarchical,
+            ..v5(
+                "020-v5-level2-two-shells-table",
+                2,
+                (1..=65).map(|i| i % 3 + 1).collect(),
+                20,
+                vec![(2.5, 2), (2.0, 3)],
+            )
+        },
     ]
 }
 
@@ -428,35 +532,55 @@ fn build_valid(spec: &ValidSpec) -> Vec<u8> {
             patch
         })
         .collect();
-    let views = sphere::view_count(spec.level);
     let patch_count = spec.counts.len() as u32;
-    let mut matrix = VisibilityMatrix::new(views, patch_count);
-    for view in 0..views {
-        for patch in 0..patch_count {
-            // View 0 sees everything and view 1 nothing, so both extremes are covered;
-            // the rest see about a third of the patches.
-            let noise = mix(spec.seed << 40 ^ (view as u64) << 20 ^ patch as u64);
-            let seen = if spec.facing {
-                let (a, d) = (patches[patch as usize].cone_axis, sphere::direction(view));
-                (a[0] * d[0] + a[1] * d[1] + a[2] * d[2] > -0.2) != noise.is_multiple_of(20)
-            } else {
-                match view {
-                    0 => true,
-                    1 => false,
-                    _ => noise.is_multiple_of(3),
+    // Shell `s` (0 = the sampling sphere) of `level`: nearer shells see more.
+    let rows = |s: u64, level: u32| {
+        let views = sphere::view_count(level);
+        let mut matrix = VisibilityMatrix::new(views, patch_count);
+        for view in 0..views {
+            for patch in 0..patch_count {
+                // View 0 sees everything and view 1 nothing, so both extremes are covered;
+                // the rest see about a third of the patches.
+                let noise = mix((spec.seed + 1000 * s) << 40 ^ (view as u64) << 20 ^ patch as u64);
+                let seen = if spec.facing {
+                    let (a, d) = (patches[patch as usize].cone_axis, sphere::direction(view));
+                    let near = 0.2 * s as f32;
+                    (a[0] * d[0] + a[1] * d[1] + a[2] * d[2] > -0.2 - near)
+                        != noise.is_multiple_of(20)
+                } else {
+                    match view {
+                        0 => true,
+                        1 => false,
+                        _ => noise.is_multiple_of(3 - s.min(1)),
+                    }
+                };
+                if seen {
+                    matrix.set(view, patch);
                 }
-            };
-            if seen {
-                matrix.set(view, patch);
             }
         }
-    }
+        matrix
+    };
+    let matrix = rows(0, spec.level);
+    let shell_rows: Vec<VisibilityMatrix> = (1..)
+        .zip(&spec.shells)
+        .map(|(s, &(_, level))| rows(s, level))
+        .collect();
+    let shells: Vec<ShellRows> = spec
+        .shells
+        .iter()
+        .zip(&shell_rows)
+        .map(|(&(distance, _), visibility)| ShellRows {
+            distance,
+            visibility,
+        })
+        .collect();
     let contents = BakeContents {
         sampling: &params,
         triangle_count: first as u64,
         patches: &patches,
         visibility: &matrix,
-        shells: &[],
+        shells: &shells,
     };
     let bytes = encode_as(&contents, spec.encoding, spec.layout);
     if !spec.unknown_section {
@@ -939,6 +1063,119 @@ fn invalid_v4_specs() -> Vec<(&'static str, Corruption)> {
     ]
 }
 
+/// The invalid vectors of the SHEL section (version 5): each corrupts valid 018 (three shells,
+/// encoding 2) or, for a rule of raw rows, 019 in one targeted way.
+fn invalid_v5_specs() -> Vec<(&'static str, Corruption)> {
+    /// Mutates the SHEL body at `shel` (its offset), then fixes the CRC.
+    fn in_shel(mut bytes: Vec<u8>, mutate: impl FnOnce(&mut Vec<u8>, usize)) -> Option<Vec<u8>> {
+        let (_, shel, _) = find(&bytes, b"SHEL");
+        mutate(&mut bytes, shel);
+        fix_crc(&mut bytes);
+        Some(bytes)
+    }
+    /// Replaces the SHEL body with `f(body)` and lays the file out again.
+    fn rebuilt(bytes: Vec<u8>, f: impl Fn(Vec<u8>) -> Vec<([u8; 4], Vec<u8>)>) -> Vec<u8> {
+        let sections: Vec<_> = sections_of(&bytes)
+            .into_iter()
+            .flat_map(|(tag, body)| {
+                if &tag == b"SHEL" {
+                    f(body)
+                } else {
+                    vec![(tag, body)]
+                }
+            })
+            .collect();
+        assemble(u32_at(&bytes, 8), &sections)
+    }
+    /// Offset of shell `k`'s record (from 1) in a SHEL body at `shel`.
+    fn record(shel: usize, k: usize) -> usize {
+        shel + 8 + 16 * (k - 1)
+    }
+    /// Offset of shell `k`'s payload in a SHEL body at `shel`.
+    fn payload(bytes: &[u8], shel: usize, k: usize) -> usize {
+        let count = u32_at(bytes, shel) as usize;
+        let before: u64 = (1..k).map(|j| u64_at(bytes, record(shel, j) + 8)).sum();
+        shel + 8 + 16 * count + before as usize
+    }
+    vec![
+        ("170-v5-shell-count-0", |b| {
+            in_shel(b, |b, shel| put_u32(b, shel, 0))
+        }),
+        ("171-v5-shell-count-9", |b| {
+            in_shel(b, |b, shel| put_u32(b, shel, 9))
+        }),
+        ("172-v5-shel-reserved-set", |b| {
+            in_shel(b, |b, shel| put_u32(b, shel + 4, 1))
+        }),
+        ("173-v5-distance-not-below-camr", |b| {
+            in_shel(b, |b, shel| put_u32(b, record(shel, 1), 3.0f32.to_bits()))
+        }),
+        ("174-v5-distances-not-decreasing", |b| {
+            in_shel(b, |b, shel| put_u32(b, record(shel, 2), 2.5f32.to_bits()))
+        }),
+        ("175-v5-distance-below-radius", |b| {
+            in_shel(b, |b, shel| put_u32(b, record(shel, 3), 1.4f32.to_bits()))
+        }),
+        ("176-v5-distance-nan", |b| {
+            in_shel(b, |b, shel| put_u32(b, record(shel, 2), f32::NAN.to_bits()))
+        }),
+        ("177-v5-shell-level-8", |b| {
+            in_shel(b, |b, shel| put_u32(b, record(shel, 2) + 4, 8))
+        }),
+        ("178-v5-lengths-not-summing", |b| {
+            in_shel(b, |b, shel| {
+                let length = u64_at(b, record(shel, 1) + 8);
+                put_u64(b, record(shel, 1) + 8, length + 1);
+            })
+        }),
+        ("179-v5-two-shel-sections", |b| {
+            Some(rebuilt(b, |body| {
+                vec![(*b"SHEL", body.clone()), (*b"SHEL", body)]
+            }))
+        }),
+        ("180-v5-shel-shorter-than-fixed-part", |b| {
+            Some(rebuilt(b, |body| vec![(*b"SHEL", body[..4].to_vec())]))
+        }),
+        ("181-v5-shel-shorter-than-its-records", |b| {
+            Some(rebuilt(b, |body| vec![(*b"SHEL", body[..40].to_vec())]))
+        }),
+        ("182-v5-payload-unsupported-encoding", |b| {
+            in_shel(b, |b, shel| {
+                let at = payload(b, shel, 2);
+                put_u32(b, at, 3);
+            })
+        }),
+        ("183-v5-payload-reserved-set", |b| {
+            in_shel(b, |b, shel| {
+                let at = payload(b, shel, 3);
+                put_u32(b, at + 4, 1);
+            })
+        }),
+        ("184-v5-payload-tree-node-count-0", |b| {
+            in_shel(b, |b, shel| {
+                let at = payload(b, shel, 1);
+                if u32_at(b, at) == 2 {
+                    put_u32(b, at + 8, 0);
+                }
+            })
+        }),
+        ("185-v5-shell-level-disagrees-with-payload", |b| {
+            in_shel(b, |b, shel| put_u32(b, record(shel, 1) + 4, 3))
+        }),
+        ("186-v5-raw-payload-padding-bits-set", |b| {
+            let (_, shel, _) = find(&b, b"SHEL");
+            if u32_at(&b, payload(&b, shel, 1)) != 0 {
+                return None;
+            }
+            in_shel(b, |b, shel| {
+                // Shell 1's first row: 7 patches in one byte, bit 7 is padding.
+                let at = payload(b, shel, 1);
+                b[at + 8] |= 0x80;
+            })
+        }),
+    ]
+}
+
 /// Every vector the generator makes: `(relative path, bytes)`.
 fn generate() -> Vec<(String, Vec<u8>)> {
     let specs = valid_specs();
@@ -969,12 +1206,28 @@ fn generate() -> Vec<(String, Vec<u8>)> {
             .expect("a version-4 base vector")
     };
     let (v4_base, v4_blocks) = (compact("013-v4"), compact("014-v4"));
+    let (v5_base, v5_raw, v5_one) = (compact("018-v5"), compact("019-v5"), compact("017-v5"));
     for (name, corrupt) in invalid_v4_specs() {
         let bytes = corrupt(v4_base.clone())
             .or_else(|| corrupt(v4_blocks.clone()))
             .unwrap_or_else(|| panic!("{name} applies to neither version-4 base"));
         out.push((format!("invalid/{name}.pvis"), bytes));
     }
+    for (name, corrupt) in invalid_v5_specs() {
+        let bytes = corrupt(v5_base.clone())
+            .or_else(|| corrupt(v5_raw.clone()))
+            .unwrap_or_else(|| panic!("{name} applies to neither version-5 base"));
+        out.push((format!("invalid/{name}.pvis"), bytes));
+    }
+    // A SHEL section in a version-4 file is an unknown section (spec § SHEL): 017 relabelled
+    // as version 4 is valid, without shells.
+    let mut v4_with_shel = v5_one;
+    put_u32(&mut v4_with_shel, 8, 4);
+    fix_crc(&mut v4_with_shel);
+    out.push((
+        "valid/021-v4-shel-section-ignored.pvis".into(),
+        v4_with_shel,
+    ));
     // The tree's depth limit, from both sides: 002's VISB replaced by a chain of internal
     // nodes exactly MAX_TREE_DEPTH deep (valid; every walk of a set feature goes deep) and
     // one deeper (refused).

@@ -1,10 +1,11 @@
 //! **Invariant** check: the reader never allocates. The library's counting global allocator
 //! watches `Pvis::parse`, `query`, `view_row`, streaming and expanded queries, and iterating
-//! the answer. It counts per thread, so the harness's threads, which may allocate at any
-//! time, do not disturb the count of the test's own.
+//! the answer, on a version-4 file and on a version-5 file with sampling shells (eyes in every
+//! band). It counts per thread, so the harness's threads, which may allocate at any time, do
+//! not disturb the count of the test's own.
 #![cfg(feature = "bake")]
 
-use patchvis::format::{BakeContents, encode};
+use patchvis::format::{BakeContents, ShellRows, encode};
 use patchvis::heap;
 use patchvis::runtime::{DepthRange, Frustum, Pvis};
 use patchvis::sampler::{SamplingParams, VisibilityMatrix};
@@ -38,15 +39,43 @@ fn parse_query_streaming_expanded_and_iteration_allocate_nothing() {
         matrix.set(v, v);
         matrix.set(v, 99 - v);
     }
-    let bytes = encode(&BakeContents {
-        sampling: &params,
-        triangle_count: 100,
-        patches: &patches,
-        visibility: &matrix,
-        shells: &[],
-    });
+    // Two shells, of levels 2 and 1, inside the sampling distance (2.92).
+    let mut near = VisibilityMatrix::new(18, 100);
+    for v in 0..18 {
+        for p in (v..100).step_by(7) {
+            near.set(v, p);
+        }
+    }
+    let shells = [
+        ShellRows {
+            distance: 2.0,
+            visibility: &matrix,
+        },
+        ShellRows {
+            distance: 1.3,
+            visibility: &near,
+        },
+    ];
+    for shells in [&shells[..0], &shells[..]] {
+        let bytes = encode(&BakeContents {
+            sampling: &params,
+            triangle_count: 100,
+            patches: &patches,
+            visibility: &matrix,
+            shells,
+        });
+        assert_eq!(
+            Pvis::parse(&bytes).unwrap().shell_count() as usize,
+            shells.len()
+        );
+        reader_allocates_nothing(&bytes);
+    }
+}
+
+/// Every reader call on `bytes` under the counting allocator.
+fn reader_allocates_nothing(bytes: &[u8]) {
     let mut scratch = vec![0u64; 2];
-    let probe = Pvis::parse(&bytes).unwrap();
+    let probe = Pvis::parse(bytes).unwrap();
     let mut stream_scratch = vec![0u64; probe.scratch_bound()];
     let mut table = vec![0u64; probe.expanded_bound()];
     let mut row = vec![0u64; probe.row_words()];
@@ -63,7 +92,7 @@ fn parse_query_streaming_expanded_and_iteration_allocate_nothing() {
 
     let before = heap::allocations();
     let frustum = Frustum::from_view_projection(&view_proj, DepthRange::ZeroToOne);
-    let pvis = Pvis::parse(&bytes).unwrap();
+    let pvis = Pvis::parse(bytes).unwrap();
     let mut seen = 0u32;
     let mut triangles = 0u32;
     for eye in [[5.0, 1.0, -2.0], [0.0, 0.0, 0.0], [-3.0, 9.0, 0.5]] {
@@ -73,11 +102,18 @@ fn parse_query_streaming_expanded_and_iteration_allocate_nothing() {
         assert!(vis.contains(vis.patches().next().unwrap()));
     }
     pvis.view_row(40, &mut row);
+    for s in 0..=pvis.shell_count() {
+        seen += pvis.shell(s).views.min(1);
+        pvis.shell_view_row(s, 3, &mut row);
+    }
     let mut streaming = pvis.streaming(&mut stream_scratch);
     let mut expanded = pvis.expand(&mut table);
     for i in 0..200 {
+        // An orbit whose radius sweeps from outside the sampling sphere to inside the
+        // innermost shell and back, so that every band and shell boundary is crossed.
         let a = i as f32 * 0.05;
-        let eye = [5.0 * a.cos(), 1.0, 5.0 * a.sin()];
+        let r = 0.5 + 2.0 * (1.0 + (a * 0.7).cos());
+        let eye = [r * a.cos(), 0.3, r * a.sin()];
         let s = streaming.query(eye);
         seen += s.count();
         let e = expanded.query(eye);
@@ -100,5 +136,5 @@ fn parse_query_streaming_expanded_and_iteration_allocate_nothing() {
 
     assert!(before > 0, "the counting allocator is not installed");
     assert_eq!(after - before, 0, "the reader allocated");
-    assert!(seen >= 3 && triangles == seen);
+    assert!(seen >= 3 && triangles + 1 + pvis.shell_count() == seen);
 }

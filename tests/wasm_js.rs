@@ -261,8 +261,12 @@ fn javascript_messages_are_the_readers() {
                 expected_first: d,
             },
             Error::TriangleCountMismatch { header: a, sum: b },
-            Error::UnsupportedEncoding { found: a as u32 },
+            Error::UnsupportedEncoding {
+                tag: *b"SHEL",
+                found: a as u32,
+            },
             Error::PaddingBits {
+                tag: *b"VISB",
                 view: a as u32,
                 offset: b,
             },

@@ -22,7 +22,7 @@
 
 const FILE_SIZE = 512; // PATCHVIS_FILE_SIZE
 const STREAM_SIZE = 8192; // PATCHVIS_STREAM_SIZE
-const VISIBLE_SIZE = 32; // sizeof(PatchvisVisible) on wasm32, rounded up
+const VISIBLE_SIZE = 56; // sizeof(PatchvisVisible) on wasm32 (52), rounded up
 const DETAIL_SIZE = 512; // room for PatchvisErrorParts (56 bytes), then for PatchvisInfo
 const PAGE = 65536;
 
@@ -154,10 +154,12 @@ export class PvisFile {
 
   /**
    * The patches visible from a camera at (x, y, z) in model space (spec § Query):
-   * `{ insideSphere, views, patches, ranges }`, where `patches` are the visible patch ids
-   * ascending, `ranges` the triangle ranges to draw as `[first, count]` pairs with adjacent
-   * ranges merged, `views` the three sphere views whose rows were joined, and `insideSphere`
-   * true when the eye is nearer than the sampling cameras (draw everything then). Answered
+   * `{ insideSphere, band, shells, views, innerViews, patches, ranges }`, where `patches` are
+   * the visible patch ids ascending, `ranges` the triangle ranges to draw as `[first, count]`
+   * pairs with adjacent ranges merged, `shells` the one or two sampling shells whose rows were
+   * joined (`[outer, inner]`; 0 is the sampling sphere), `views` and `innerViews` their three
+   * views each, `band` how many shells the eye is inside, and `insideSphere` true when the
+   * eye is nearer than the innermost shell's cameras (draw everything then). Answered
    * by the streaming reader: while the camera stays in one leaf face of the sampling sphere a
    * query decodes nothing; a move to another leaf decodes only the rows it needs.
    */
@@ -171,12 +173,17 @@ export class PvisFile {
     const rc = e.patchvis_stream_query(this.streamAt, this.eyeAt, this.outAt);
     if (rc !== 0) throw new PatchvisError(`patchvis_stream_query failed (${rc})`, rc);
     view = this.view();
-    // PatchvisVisible on wasm32: bits (ptr), words, leaf[3], visible_count, inside_sphere.
-    const bitsAt = view.getUint32(this.outAt, true);
-    const words = view.getUint32(this.outAt + 4, true);
-    const views = [0, 1, 2].map((i) => view.getUint32(this.outAt + 8 + 4 * i, true));
-    const count = view.getUint32(this.outAt + 20, true);
-    const insideSphere = view.getUint32(this.outAt + 24, true) !== 0;
+    // PatchvisVisible on wasm32: bits (ptr), words, leaf[3], visible_count, inside_sphere,
+    // band, shells[2], inner_leaf[3].
+    const u32 = (at) => view.getUint32(this.outAt + at, true);
+    const bitsAt = u32(0);
+    const words = u32(4);
+    const views = [0, 1, 2].map((i) => u32(8 + 4 * i));
+    const count = u32(20);
+    const insideSphere = u32(24) !== 0;
+    const band = u32(28);
+    const shells = [u32(32), u32(36)];
+    const innerViews = [0, 1, 2].map((i) => u32(40 + 4 * i));
     const patches = new Uint32Array(count);
     let n = 0;
     for (let w = 0; w < words; w++) {
@@ -195,7 +202,7 @@ export class PvisFile {
     const flat = new Uint32Array(this.reader.memory.buffer, this.rangesAt, 2 * pairs);
     const ranges = [];
     for (let i = 0; i < pairs; i++) ranges.push([flat[2 * i], flat[2 * i + 1]]);
-    return { insideSphere, views, patches, ranges };
+    return { insideSphere, band, shells, views, innerViews, patches, ranges };
   }
 
   /** Gives the file's memory back to the reader. */
@@ -306,8 +313,8 @@ const MESSAGE_TEMPLATES = [
   "section CAMR: view_count {} but level {} has {} views",
   "section PTCH: patch {} covers triangles {}+{}, expected a non-empty range starting at {}",
   "section PTCH: triangle_count {} but the patches cover {}",
-  "section VISB: unsupported encoding {} (encoding {} is read from version 1, {} from version 2, {} from version 3)",
-  "section VISB: row of view {} sets bits past the last patch (byte {})"
+  "section {t}: unsupported encoding {} (encoding {} is read from version 1, {} from version 2, {} from version 3)",
+  "section {t}: row of view {} sets bits past the last patch (byte {})"
 ];
 const RULE_TEXTS = [
   "header section_count must be at least 1",
@@ -355,6 +362,10 @@ const RULE_TEXTS = [
   "VISB record length must be a LEB128 of at most 4 bytes inside the section",
   "VISB record length must be a minimal LEB128",
   "VISB code length",
-  "VISB code must not end in a zero byte"
+  "VISB code must not end in a zero byte",
+  "SHEL shell_count must be in 1..=8",
+  "SHEL reserved field must be 0",
+  "SHEL distance must be finite, below the previous shell's (CAMR distance for the first) and >= CAMR radius",
+  "SHEL shell level"
 ];
 // END generated

@@ -1,8 +1,8 @@
 //! Fuzz target: arbitrary bytes → `Pvis::parse` → if accepted, every accessor, every view's
-//! row and queries from fixed and fuzzed eye positions in all three modes (stateless,
-//! streaming, expanded; the latter two must agree with the first), checked against the reader's own
-//! promises (spec § Query: the answer is the OR of the leaf's three rows; ranges are
-//! contiguous; padding bits are zero). Any panic or failed check is a reader bug.
+//! row of every shell and queries from fixed and fuzzed eye positions in all three modes
+//! (stateless, streaming, expanded; the latter two must agree with the first), checked against
+//! the reader's own promises (spec § Query: the answer is the OR of the leaf rows of the one or
+//! two shells of the eye's band; ranges are contiguous; padding bits are zero). Any panic or failed check is a reader bug.
 //!
 //! Input: the first `EYE_BYTES` bytes are two eye positions (six little-endian `f32`), the
 //! rest is the file. Each file is tried twice: as given, and with `file_length` and the CRC
@@ -72,22 +72,30 @@ fn exercise(file: &[u8], eyes: &[[f32; 3]]) {
     } else {
         !0u64 << (patches % 64)
     };
-    let mut rows = vec![0u64; words * sampling.views as usize];
-    for (view, row) in rows.chunks_exact_mut(words).enumerate() {
-        pvis.view_row(view as u32, row);
-        assert_eq!(row[words - 1] & tail_mask, 0, "view {view}: padding bits");
-    }
+    // Every shell's rows (shell 0 is the sampling sphere; version 5 adds SHEL's shells).
+    let shells: Vec<Vec<u64>> = (0..=pvis.shell_count())
+        .map(|s| {
+            let mut rows = vec![0u64; words * pvis.shell(s).views as usize];
+            for (view, row) in rows.chunks_exact_mut(words).enumerate() {
+                pvis.shell_view_row(s, view as u32, row);
+                assert_eq!(row[words - 1] & tail_mask, 0, "shell {s} view {view}: padding");
+            }
+            rows
+        })
+        .collect();
 
     let mut scratch = vec![0u64; pvis.scratch_words()];
     for &eye in eyes {
         let visible = pvis.query(eye, &mut scratch);
         let finite = (0..3).all(|i| (eye[i] - sampling.center[i]).is_finite());
         for (w, &bits) in visible.bits().iter().enumerate() {
+            // The OR of the leaf rows of the one or two answering shells (spec § Query).
+            let or = |s: u32, leaf: [u32; 3]| {
+                leaf.iter()
+                    .fold(0, |acc, &v| acc | shells[s as usize][v as usize * words + w])
+            };
             let expected = if finite {
-                visible
-                    .leaf
-                    .iter()
-                    .fold(0, |acc, &v| acc | rows[v as usize * words + w])
+                or(visible.shells[0], visible.leaf) | or(visible.shells[1], visible.inner_leaf)
             } else {
                 !0 & !(if w == words - 1 { tail_mask } else { 0 })
             };

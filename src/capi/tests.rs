@@ -16,6 +16,13 @@ const DUMP: &str = include_str!("../../tests/conformance/valid/002-level1-seven-
 /// A structured level-3 file whose VISB uses encoding 2 with a real tree.
 const TREE: &[u8] =
     include_bytes!("../../tests/conformance/valid/010-level3-300-patches-facing.pvis");
+/// A version-5 file with three sampling shells of mixed levels (encoding 2).
+const SHELLS: &[u8] = include_bytes!(
+    "../../tests/conformance/valid/018-v5-level3-300-patches-three-shells-mixed-levels.pvis"
+);
+const SHELLS_DUMP: &str = include_str!(
+    "../../tests/conformance/valid/018-v5-level3-300-patches-three-shells-mixed-levels.dump"
+);
 const INVALID: &[u8] =
     include_bytes!("../../tests/conformance/invalid/131-non-contiguous-patch-ranges.pvis");
 const INVALID_ERR: &str =
@@ -64,7 +71,110 @@ fn the_block_is_the_size_the_header_says() {
     assert_eq!(align_of::<PatchvisFile>(), 8);
     // The C header's field layout, computed by hand for LP64.
     assert_eq!(size_of::<PatchvisInfo>(), 72);
-    assert_eq!(size_of::<PatchvisVisible>(), 40);
+    assert_eq!(size_of::<PatchvisVisible>(), 64);
+    assert_eq!(size_of::<PatchvisShell>(), 24);
+}
+
+/// A version-5 file through the ABI: the shells' records and every query line of its dump,
+/// band, shells and both leaves included, from the stateless and the streaming query (eyes
+/// near the model, between shells and inside the innermost one).
+#[test]
+fn shells_and_their_answers_match_the_dump() {
+    let (code, file) = parsed(SHELLS);
+    assert_eq!(code, PATCHVIS_OK);
+    // SAFETY: `file` was parsed from static bytes; outputs are writable.
+    let count = unsafe { patchvis_shell_count(&file) };
+    assert_eq!(count, 3);
+    let mut shell = PatchvisShell::default();
+    for k in 1..=count {
+        // SAFETY: as above.
+        assert_eq!(unsafe { patchvis_shell(&file, k, &mut shell) }, PATCHVIS_OK);
+        let line = format!(
+            "shell {k}: distance {} level {} views {} encoding {} bytes {}",
+            shell.distance, shell.level, shell.views, shell.encoding, shell.bytes
+        );
+        assert!(SHELLS_DUMP.lines().any(|l| l == line), "{line}");
+    }
+    // SAFETY: as above; a shell past K and a null output are refused.
+    unsafe {
+        assert_eq!(patchvis_shell(&file, 4, &mut shell), PATCHVIS_ERR_RANGE);
+        assert_eq!(
+            patchvis_shell(&file, 0, core::ptr::null_mut()),
+            PATCHVIS_ERR_ARGUMENT
+        );
+    }
+    // SAFETY: as above.
+    let (words, stream_words) = unsafe {
+        (
+            patchvis_scratch_words(&file),
+            patchvis_stream_scratch_words(&file),
+        )
+    };
+    let mut scratch = vec![0u64; words];
+    let mut stream_scratch = vec![0u64; stream_words];
+    let mut stream = MaybeUninit::<PatchvisStream>::uninit();
+    // SAFETY: the scratch outlives the stream; nothing else uses it.
+    let ok = unsafe {
+        patchvis_stream_init(
+            &file,
+            stream_scratch.as_mut_ptr(),
+            stream_words,
+            stream.as_mut_ptr(),
+        )
+    };
+    assert_eq!(ok, PATCHVIS_OK);
+    let mut bands = [false; 5];
+    for line in SHELLS_DUMP.lines().filter(|l| l.starts_with("query ")) {
+        let position = line["query ".len()..].split(' ').next().unwrap();
+        let eye: Vec<f32> = position.split(',').map(|t| t.parse().unwrap()).collect();
+        let mut streamed = MaybeUninit::<PatchvisVisible>::uninit();
+        // SAFETY: the stream was initialised above; `eye` has 3 floats.
+        let code = unsafe {
+            patchvis_stream_query(stream.as_mut_ptr(), eye.as_ptr(), streamed.as_mut_ptr())
+        };
+        assert_eq!(code, PATCHVIS_OK);
+        // SAFETY: written by the successful call.
+        let streamed = unsafe { streamed.assume_init() };
+        let visible = query_ok(&file, &eye, &mut scratch);
+        let patches: Vec<String> = (0..300u32)
+            .filter(|&p| scratch[p as usize / 64] >> (p % 64) & 1 == 1)
+            .map(|p| p.to_string())
+            .collect();
+        let list = |v: &[u32]| {
+            let v: Vec<String> = v.iter().map(|x| x.to_string()).collect();
+            v.join(",")
+        };
+        let made = format!(
+            "query {position} -> inside {} band {} shells [{}] views [{}] inner [{}] patches [{}]",
+            visible.inside_sphere == 1,
+            visible.band,
+            list(&visible.shells),
+            list(&visible.leaf),
+            list(&visible.inner_leaf),
+            patches.join(",")
+        );
+        assert_eq!(made, line);
+        bands[visible.band as usize] = true;
+        assert_eq!(
+            (
+                streamed.band,
+                streamed.shells,
+                streamed.leaf,
+                streamed.inner_leaf
+            ),
+            (
+                visible.band,
+                visible.shells,
+                visible.leaf,
+                visible.inner_leaf
+            )
+        );
+        assert_eq!(streamed.inside_sphere, visible.inside_sphere);
+        // SAFETY: the streamed answer's bits live in the stream's scratch, unused since.
+        let bits = unsafe { core::slice::from_raw_parts(streamed.bits, streamed.words) };
+        assert_eq!(bits, &scratch[..]);
+    }
+    assert_eq!(bands, [true; 5]);
 }
 
 #[test]

@@ -44,7 +44,18 @@ pub fn info(args: &InfoArgs) -> Result<()> {
                 "total": pvis.total_bytes(),
                 "visibility": pvis.visibility_bytes(),
                 "patch_table": pvis.patch_table_bytes(),
+                "shells": pvis.shells_bytes(),
             },
+            "shells": (1..=pvis.shell_count()).map(|k| {
+                let shell = pvis.shell(k);
+                json!({
+                    "distance": shell.distance,
+                    "level": shell.level,
+                    "views": shell.views,
+                    "encoding": shell.encoding,
+                    "bytes": shell.bytes,
+                })
+            }).collect::<Vec<_>>(),
         });
         outln!("{}", serde_json::to_string_pretty(&report)?)?;
     } else {
@@ -86,6 +97,25 @@ pub fn info(args: &InfoArgs) -> Result<()> {
                 "full"
             }
         )?;
+        if pvis.shell_count() > 0 {
+            outln!(
+                "  {} sampling shells, {} bytes (SHEL section):",
+                pvis.shell_count(),
+                pvis.shells_bytes()
+            )?;
+            for k in 1..=pvis.shell_count() {
+                let shell = pvis.shell(k);
+                outln!(
+                    "    shell {k}: distance {} ({:.3} radii), {} views (level {}), {} bytes (encoding {})",
+                    shell.distance,
+                    shell.distance / s.radius,
+                    shell.views,
+                    shell.level,
+                    shell.bytes,
+                    shell.encoding
+                )?;
+            }
+        }
     }
     if args.compare {
         compare(&pvis)?;
@@ -198,8 +228,11 @@ pub fn query(args: &QueryArgs) -> Result<()> {
             "patches": patches,
             "ranges": ranges,
             "inside_sphere": visible.inside_sphere,
+            "band": visible.band,
+            "shells": visible.shells,
             "triangles": triangles,
             "views": visible.leaf,
+            "inner_views": visible.inner_leaf,
         });
         if frustum.is_some() {
             report["outside_frustum"] = json!(outside);
@@ -213,17 +246,29 @@ pub fn query(args: &QueryArgs) -> Result<()> {
         } else {
             "visible".into()
         };
+        let views = match visible.shells {
+            [0, 0] => format!("views {:?}", visible.leaf),
+            [a, b] if a == b => format!("views {:?} of shell {a}", visible.leaf),
+            [a, b] => format!(
+                "views {:?} of shell {a} and {:?} of shell {b}",
+                visible.leaf, visible.inner_leaf
+            ),
+        };
         outln!(
-            "{} of {} patches {what}, {} of {} triangles in {} ranges (views {:?})",
+            "{} of {} patches {what}, {} of {} triangles in {} ranges ({views}; band {})",
             patches.len(),
             pvis.patch_count(),
             triangles,
             pvis.triangle_count(),
             ranges.len(),
-            visible.leaf
+            visible.band
         )?;
         if visible.inside_sphere {
-            outln!("the camera is inside the sampling sphere: draw everything")?;
+            let sphere = match pvis.shell_count() {
+                0 => "the sampling sphere",
+                _ => "the innermost sampling shell",
+            };
+            outln!("the camera is inside {sphere}: draw everything")?;
         }
     }
     Ok(())

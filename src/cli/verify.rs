@@ -24,8 +24,10 @@ struct Summary {
     triangles: u64,
     level: u32,
     views: u32,
+    /// Sampling shells besides the sampling sphere (version 5).
+    shells: u32,
     bytes: u64,
-    /// Visible (view, patch) pairs over all views.
+    /// Visible (view, patch) pairs over all views of the sampling sphere.
     visible_pairs: u64,
 }
 
@@ -59,8 +61,8 @@ fn report(
         let report = match verdict {
             Ok(s) => json!({
                 "file": file, "ok": true, "version": s.version, "patches": s.patches,
-                "triangles": s.triangles, "level": s.level, "views": s.views, "bytes": s.bytes,
-                "visible_pairs": s.visible_pairs,
+                "triangles": s.triangles, "level": s.level, "views": s.views,
+                "shells": s.shells, "bytes": s.bytes, "visible_pairs": s.visible_pairs,
             }),
             Err(violation) => json!({"file": file, "ok": false, "error": violation}),
         };
@@ -68,13 +70,17 @@ fn report(
     }
     match verdict {
         Ok(s) => outln!(
-            "{file}: OK (version {}, {} patches, {} triangles, {} views at level {}, \
+            "{file}: OK (version {}, {} patches, {} triangles, {} views at level {}, {}\
              {} bytes, {:.1}% of view-patch pairs visible)",
             s.version,
             s.patches,
             s.triangles,
             s.views,
             s.level,
+            match s.shells {
+                0 => String::new(),
+                k => format!("{k} sampling shells, "),
+            },
             s.bytes,
             100.0 * s.visible_pairs as f64 / (s.views as f64 * s.patches as f64)
         ),
@@ -116,15 +122,24 @@ fn verify(bytes: &[u8]) -> Result<Summary, String> {
     };
     let mut row = vec![0u64; words];
     let mut visible_pairs = 0u64;
-    for view in 0..sampling.views {
-        pvis.view_row(view, &mut row);
-        if row.last().is_some_and(|&w| w & padding != 0) {
-            return Err(reader_bug(format_args!(
-                "view {view}: decoded row sets bits past patch {}",
-                patches - 1
-            )));
+    // Every view of the sampling sphere (shell 0) and of every sampling shell.
+    for shell in 0..=pvis.shell_count() {
+        for view in 0..pvis.shell(shell).views {
+            pvis.shell_view_row(shell, view, &mut row);
+            if row.last().is_some_and(|&w| w & padding != 0) {
+                let which = match shell {
+                    0 => String::new(),
+                    s => format!("shell {s} "),
+                };
+                return Err(reader_bug(format_args!(
+                    "{which}view {view}: decoded row sets bits past patch {}",
+                    patches - 1
+                )));
+            }
+            if shell == 0 {
+                visible_pairs += row.iter().map(|w| u64::from(w.count_ones())).sum::<u64>();
+            }
         }
-        visible_pairs += row.iter().map(|w| u64::from(w.count_ones())).sum::<u64>();
     }
     Ok(Summary {
         version: pvis.version(),
@@ -132,6 +147,7 @@ fn verify(bytes: &[u8]) -> Result<Summary, String> {
         triangles: pvis.triangle_count(),
         level: sampling.level,
         views: sampling.views,
+        shells: pvis.shell_count(),
         bytes: pvis.total_bytes(),
         visible_pairs,
     })

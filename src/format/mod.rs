@@ -6,7 +6,8 @@
 //! cannot drift apart; `encode` also runs the reader over its own output. Output is
 //! byte-deterministic: the same contents give the same bytes. VISB is written with encoding 2
 //! (`tree`: rows range-coded given their parent views, probabilities from a context tree);
-//! encodings 0 and 1 on request (`visb`). Cost: a few passes over the visibility matrix plus
+//! encodings 0 and 1 on request (`visb`). Sampling shells, when the contents have any, go into
+//! a SHEL section (version 5), each shell's rows coded as a VISB body of their own. Cost: a few passes over the visibility matrix plus
 //! one CRC and one validation pass over the output. `file.rs` is the other direction: a
 //! `.pvis` on disk opened for the reader ([`PvisFile`]).
 
@@ -59,8 +60,8 @@ pub struct ShellRows<'a> {
     pub visibility: &'a VisibilityMatrix,
 }
 
-/// The sections this writer emits, in file order.
-const SECTIONS: [[u8; 4]; 3] = [TAG_CAMR, TAG_PTCH, TAG_VISB];
+/// The sections this writer emits, in file order; SHEL only for a file with shells.
+const SECTIONS: [[u8; 4]; 4] = [TAG_CAMR, TAG_PTCH, TAG_VISB, TAG_SHEL];
 
 /// How the VISB section stores the rows (spec: "VISB — visibility").
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -114,6 +115,12 @@ pub fn encode_with(contents: &BakeContents, encoding: VisibilityEncoding) -> Vec
 /// encoding 2 with it, 4 with the compact table. Patches whose coordinates are too large for
 /// the compact table's grid (near `f32::MAX`) get the full table instead.
 ///
+/// Contents with shells give version 5, whose SHEL section stores each shell's rows with
+/// `encoding` (a VISB body per shell, with its own table or tree), and which has the compact
+/// table whatever `layout` asks. Where the compact table cannot hold the patches, the shells
+/// are left out: the file then answers every eye inside the sampling sphere with
+/// `inside_sphere` (draw everything), which is never wrong.
+///
 /// # Panics
 /// As [`encode_with`].
 pub fn encode_as(
@@ -134,6 +141,11 @@ pub fn encode_as(
     );
 
     let camr = camr(params, views);
+    // Version 5 has the compact table (§ Versioning).
+    let layout = match contents.shells.is_empty() {
+        true => layout,
+        false => PatchTableLayout::Compact,
+    };
     let compact = match layout {
         PatchTableLayout::Compact => ptch::compact(contents.triangle_count, contents.patches),
         PatchTableLayout::Full => None,
@@ -150,18 +162,26 @@ pub fn encode_as(
             contents.patches.iter().map(|p| p.cone_axis).collect(),
         ),
     };
-    let visb = match encoding {
-        VisibilityEncoding::Raw => encode_raw(contents.visibility),
-        VisibilityEncoding::Hierarchical => {
-            encode_hierarchical(contents.visibility, params.level.min(MAX_LEVEL))
-        }
-        VisibilityEncoding::Tree => encode_tree(contents.visibility, &facing_axes),
+    let body = |matrix: &VisibilityMatrix, level: u32| match encoding {
+        VisibilityEncoding::Raw => encode_raw(matrix),
+        VisibilityEncoding::Hierarchical => encode_hierarchical(matrix, level),
+        VisibilityEncoding::Tree => encode_tree(matrix, &facing_axes),
+    };
+    let visb = body(contents.visibility, params.level.min(MAX_LEVEL));
+    let shells = match layout {
+        PatchTableLayout::Compact => contents.shells,
+        PatchTableLayout::Full => &[],
+    };
+    let shel = shel(shells, patch_count, &body);
+    let bodies: &[&Vec<u8>] = match shel {
+        Some(ref shel) => &[&camr, &ptch, &visb, shel],
+        None => &[&camr, &ptch, &visb],
     };
 
-    let table_end = HEADER_LEN + SECTION_ENTRY_LEN * SECTIONS.len() as u64;
-    let mut offsets = [0u64; 3];
+    let table_end = HEADER_LEN + SECTION_ENTRY_LEN * bodies.len() as u64;
+    let mut offsets = [0u64; SECTIONS.len()];
     let mut end = table_end;
-    for (offset, body) in offsets.iter_mut().zip([&camr, &ptch, &visb]) {
+    for (offset, body) in offsets.iter_mut().zip(bodies) {
         *offset = end.next_multiple_of(SECTION_ALIGN);
         end = *offset + body.len() as u64;
     }
@@ -172,6 +192,7 @@ pub fn encode_as(
     // The oldest version that has the encoding and the table, so older readers take what
     // they can read.
     let version = match (layout, encoding) {
+        _ if bodies.len() == SECTIONS.len() => SHELLS_VERSION,
         (PatchTableLayout::Compact, _) => COMPACT_PTCH_VERSION,
         (PatchTableLayout::Full, VisibilityEncoding::Tree) => 3,
         (PatchTableLayout::Full, _) => 2,
@@ -179,15 +200,15 @@ pub fn encode_as(
     out.extend_from_slice(&version.to_le_bytes());
     out.extend_from_slice(&KNOWN_FLAGS.to_le_bytes());
     out.extend_from_slice(&file_length.to_le_bytes());
-    out.extend_from_slice(&(SECTIONS.len() as u32).to_le_bytes());
+    out.extend_from_slice(&(bodies.len() as u32).to_le_bytes());
     out.extend_from_slice(&0u32.to_le_bytes());
-    for ((tag, offset), body) in SECTIONS.iter().zip(offsets).zip([&camr, &ptch, &visb]) {
+    for ((tag, offset), body) in SECTIONS.iter().zip(offsets).zip(bodies) {
         out.extend_from_slice(tag);
         out.extend_from_slice(&0u32.to_le_bytes());
         out.extend_from_slice(&offset.to_le_bytes());
         out.extend_from_slice(&(body.len() as u64).to_le_bytes());
     }
-    for (offset, body) in offsets.iter().zip([&camr, &ptch, &visb]) {
+    for (offset, body) in offsets.iter().zip(bodies) {
         out.resize(*offset as usize, 0);
         out.extend_from_slice(body);
     }
@@ -199,6 +220,59 @@ pub fn encode_as(
         panic!("encode: the bake contents break the .pvis format: {error}");
     }
     out
+}
+
+/// § SHEL: the shell count, a record per shell (distance, level, payload length) and the
+/// payloads, each the VISB body `body` codes for the shell's matrix and level; `None` without
+/// shells.
+///
+/// # Panics
+/// If there are more than `MAX_SHELLS` shells or a shell's matrix has a view count of no level
+/// or rows of another patch count (broken caller contracts).
+fn shel(
+    shells: &[ShellRows],
+    patch_count: u64,
+    body: &dyn Fn(&VisibilityMatrix, u32) -> Vec<u8>,
+) -> Option<Vec<u8>> {
+    if shells.is_empty() {
+        return None;
+    }
+    assert!(
+        shells.len() <= MAX_SHELLS as usize,
+        "encode: {} sampling shells, at most {MAX_SHELLS}",
+        shells.len()
+    );
+    let payloads: Vec<(u32, Vec<u8>)> = shells
+        .iter()
+        .map(|shell| {
+            let matrix = shell.visibility;
+            let level = (0..=MAX_LEVEL).find(|&l| sphere::view_count(l) == matrix.views());
+            let level = level.unwrap_or_else(|| {
+                panic!(
+                    "encode: a sampling shell has {} views, which no sphere level has",
+                    matrix.views()
+                )
+            });
+            assert_eq!(
+                matrix.patches() as u64,
+                patch_count,
+                "encode: a sampling shell's rows disagree with the patch count"
+            );
+            (level, body(matrix, level))
+        })
+        .collect();
+    let mut out = Vec::new();
+    out.extend_from_slice(&(shells.len() as u32).to_le_bytes());
+    out.extend_from_slice(&0u32.to_le_bytes());
+    for (shell, (level, payload)) in shells.iter().zip(&payloads) {
+        out.extend_from_slice(&shell.distance.to_le_bytes());
+        out.extend_from_slice(&level.to_le_bytes());
+        out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    }
+    for (_, payload) in &payloads {
+        out.extend_from_slice(payload);
+    }
+    Some(out)
 }
 
 /// § CAMR.

@@ -555,7 +555,10 @@ fn coded_visb_structure_errors() {
     v1[8] = 1;
     assert_eq!(
         Pvis::parse(&with_crc(v1)).unwrap_err(),
-        crate::runtime::Error::UnsupportedEncoding { found: 1 }
+        crate::runtime::Error::UnsupportedEncoding {
+            tag: *b"VISB",
+            found: 1
+        }
     );
 }
 
@@ -664,4 +667,105 @@ fn tree_coding_beats_the_table_on_structured_rows() {
         tree.len(),
         table.len()
     );
+}
+
+/// Contents with the given shells (distance, matrix) over `patches(counts)` at level 1.
+fn encode_shells(
+    counts: &[u32],
+    matrix: &VisibilityMatrix,
+    shells: &[ShellRows],
+    encoding: VisibilityEncoding,
+) -> Vec<u8> {
+    let list = patches(counts);
+    let contents = BakeContents {
+        sampling: &params(1),
+        triangle_count: list.iter().map(|p| u64::from(p.count)).sum(),
+        patches: &list,
+        visibility: matrix,
+        shells,
+    };
+    encode_with(&contents, encoding)
+}
+
+/// Shells give version 5 with a SHEL section whose records and payloads read back as written,
+/// in every encoding, deterministically; no shells give version 4's bytes, without SHEL.
+#[test]
+fn shells_are_written_to_shel_in_version_5() {
+    let mut rng = Rng::new(22);
+    let counts = [2u32; 70];
+    let random = |views: u32, rng: &mut Rng| {
+        let mut m = VisibilityMatrix::new(views, 70);
+        for v in 0..views {
+            for p in 0..70 {
+                if rng.next_u64().is_multiple_of(3) {
+                    m.set(v, p);
+                }
+            }
+        }
+        m
+    };
+    let main = random(18, &mut rng);
+    let (near, nearer) = (random(66, &mut rng), random(6, &mut rng));
+    let distance = params(1).distance();
+    let shells = [
+        ShellRows {
+            distance: distance * 0.8,
+            visibility: &near,
+        },
+        ShellRows {
+            distance: 3.6,
+            visibility: &nearer,
+        },
+    ];
+    let plain = encode_shells(&counts, &main, &[], VisibilityEncoding::Tree);
+    assert_eq!(pvis_version(&plain), 4);
+    assert!(!plain.windows(4).any(|w| w == TAG_SHEL));
+    for encoding in [
+        VisibilityEncoding::Raw,
+        VisibilityEncoding::Hierarchical,
+        VisibilityEncoding::Tree,
+    ] {
+        let bytes = encode_shells(&counts, &main, &shells, encoding);
+        assert_eq!(bytes, encode_shells(&counts, &main, &shells, encoding));
+        let pvis = Pvis::parse(&bytes).unwrap();
+        assert_eq!((pvis.version(), pvis.shell_count()), (5, 2));
+        // Version 5 has the compact table whatever the encoding.
+        assert!(pvis.quantisation().is_some());
+        let mut row = vec![0u64; pvis.row_words()];
+        for (k, (shell, level)) in shells.iter().zip([2, 0]).enumerate() {
+            let s = pvis.shell(k as u32 + 1);
+            assert_eq!((s.distance, s.level), (shell.distance, level));
+            for v in 0..s.views {
+                pvis.shell_view_row(k as u32 + 1, v, &mut row);
+                assert_eq!(
+                    &row[..],
+                    shell.visibility.row(v),
+                    "{encoding:?} shell {k} view {v}"
+                );
+            }
+        }
+        // With the same table and encoding, the file is the version-4 one plus the SHEL
+        // section and its table entry (alignment gaps aside).
+        if encoding == VisibilityEncoding::Tree {
+            assert_eq!(
+                pvis.total_bytes() - padding(&bytes),
+                plain.len() as u64 - padding(&plain) + 24 + pvis.shells_bytes()
+            );
+        }
+    }
+}
+
+/// Zero bytes between the sections of a file (alignment gaps).
+fn padding(bytes: &[u8]) -> u64 {
+    let count = u32::from_le_bytes(bytes[24..28].try_into().unwrap()) as usize;
+    let mut end = 32 + 24 * count as u64;
+    let mut gaps = 0;
+    for i in 0..count {
+        let entry = 32 + 24 * i;
+        let offset = u64::from_le_bytes(bytes[entry + 8..entry + 16].try_into().unwrap());
+        let length = u64::from_le_bytes(bytes[entry + 16..entry + 24].try_into().unwrap());
+        gaps += offset - end;
+        end = offset + length;
+    }
+    gaps
 }

@@ -7,8 +7,9 @@
 /// transfers and line-ending conversion, as in PNG.
 pub const MAGIC: [u8; 8] = *b"PVIS\r\n\x1a\n";
 
-/// The format version this reader understands and the writer writes (§ Versioning).
-pub const VERSION: u32 = 4;
+/// The newest format version this reader understands (§ Versioning). The writer writes it
+/// for a file with sampling shells and the oldest version that holds its contents otherwise.
+pub const VERSION: u32 = 5;
 
 /// The oldest version this reader still reads (§ Versioning): version 1 is version 2 restricted
 /// to VISB encoding 0.
@@ -38,6 +39,22 @@ pub const TAG_CAMR: [u8; 4] = *b"CAMR";
 pub const TAG_PTCH: [u8; 4] = *b"PTCH";
 /// Tag of the visibility section (§ VISB).
 pub const TAG_VISB: [u8; 4] = *b"VISB";
+/// Tag of the sampling-shells section (§ SHEL), meaningful from version 5.
+pub const TAG_SHEL: [u8; 4] = *b"SHEL";
+
+/// The first version whose SHEL section a reader must read (§ SHEL, § Versioning); in older
+/// files a SHEL-tagged section is an unknown section, ignored.
+pub const SHELLS_VERSION: u32 = 5;
+
+/// Most shells a SHEL section may hold (§ Resource limits): a query ORs the rows of at most two
+/// of them, and the streaming state keeps a path per shell it moves among.
+pub const MAX_SHELLS: u32 = 8;
+
+/// Length of the SHEL section's fixed part before the shell records (§ SHEL).
+pub const SHEL_HEADER_LEN: u64 = 8;
+
+/// Length of one shell record in SHEL: `distance`, `level`, `length` (§ SHEL).
+pub const SHELL_RECORD_LEN: u64 = 16;
 
 /// Exact length of the CAMR section (§ CAMR).
 pub const CAMR_LEN: u64 = 44;

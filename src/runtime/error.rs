@@ -153,13 +153,17 @@ pub enum Error {
         /// Sum of the patch counts.
         sum: u64,
     },
-    /// VISB uses an encoding this reader does not know.
+    /// VISB (or a shell's payload in SHEL) uses an encoding this reader does not know.
     UnsupportedEncoding {
+        /// The section: VISB, or SHEL for a shell's payload.
+        tag: [u8; 4],
         /// The encoding in the file.
         found: u32,
     },
     /// A visibility row sets bits past the last patch.
     PaddingBits {
+        /// The section: VISB, or SHEL for a shell's payload.
+        tag: [u8; 4],
         /// The view whose row it is.
         view: u32,
         /// Offset of the row's last byte.
@@ -265,6 +269,15 @@ pub enum Rule {
     CodeLength,
     /// `VISB code must not end in a zero byte`
     CodeEnd,
+    /// `SHEL shell_count must be in 1..=8`
+    ShellCount,
+    /// `SHEL reserved field must be 0`
+    ShelReserved,
+    /// `SHEL distance must be finite, below the previous shell's (CAMR distance for the
+    /// first) and >= CAMR radius`
+    ShellDistance,
+    /// `SHEL shell level`
+    ShellLevel,
 }
 
 impl Rule {
@@ -276,7 +289,7 @@ impl Rule {
 
 /// What each [`Rule`] prints, in declaration order (`RULE_TEXTS[rule as usize]`): the `{r}`
 /// of [`MESSAGE_TEMPLATES`].
-pub const RULE_TEXTS: [&str; 46] = [
+pub const RULE_TEXTS: [&str; 50] = [
     "header section_count must be at least 1",
     "section_count",
     "header reserved field must be 0",
@@ -323,6 +336,11 @@ pub const RULE_TEXTS: [&str; 46] = [
     "VISB record length must be a minimal LEB128",
     "VISB code length",
     "VISB code must not end in a zero byte",
+    "SHEL shell_count must be in 1..=8",
+    "SHEL reserved field must be 0",
+    "SHEL distance must be finite, below the previous shell's \
+     (CAMR distance for the first) and >= CAMR radius",
+    "SHEL shell level",
 ];
 
 impl fmt::Display for Rule {
@@ -337,6 +355,7 @@ fn fixed_len(tag: [u8; 4]) -> u64 {
         consts::TAG_CAMR => consts::CAMR_LEN,
         consts::TAG_PTCH => consts::PTCH_HEADER_LEN,
         consts::TAG_VISB => consts::VISB_HEADER_LEN,
+        consts::TAG_SHEL => consts::SHEL_HEADER_LEN,
         _ => 0,
     }
 }
@@ -382,9 +401,9 @@ pub const MESSAGE_TEMPLATES: [&str; 20] = [
     "section PTCH: patch {} covers triangles {}+{}, \
      expected a non-empty range starting at {}",
     "section PTCH: triangle_count {} but the patches cover {}",
-    "section VISB: unsupported encoding {} \
+    "section {t}: unsupported encoding {} \
      (encoding {} is read from version 1, {} from version 2, {} from version 3)",
-    "section VISB: row of view {} sets bits past the last patch (byte {})",
+    "section {t}: row of view {} sets bits past the last patch (byte {})",
 ];
 
 impl Error {
@@ -463,18 +482,22 @@ impl Error {
                 ],
             ),
             Error::TriangleCountMismatch { header, sum } => (17, [header, sum, 0, 0, 0, 0]),
-            Error::UnsupportedEncoding { found } => (
+            Error::UnsupportedEncoding { tag: t, found } => (
                 18,
                 [
+                    tag(t),
                     found.into(),
                     consts::ENCODING_RAW.into(),
                     consts::ENCODING_HIERARCHICAL.into(),
                     consts::ENCODING_TREE.into(),
                     0,
-                    0,
                 ],
             ),
-            Error::PaddingBits { view, offset } => (19, [view.into(), offset, 0, 0, 0, 0]),
+            Error::PaddingBits {
+                tag: t,
+                view,
+                offset,
+            } => (19, [tag(t), view.into(), offset, 0, 0, 0]),
         };
         MessageParts { kind, values }
     }

@@ -11,6 +11,13 @@
 //! `8·4^level` rows (at 2000 patches and level 4, 512 KiB of 1,075 KiB), stored because reading
 //! a leaf's three rows and ORing them was about a quarter of a query (BENCHMARKS.md).
 //!
+//! Sampling shells (spec § SHEL): every shell's views are decoded and every shell's leaves and
+//! leaf answers stored; the faces and the grid go down to the finest shell level. A query walks
+//! once, to the finer of its band's two shells' levels, and takes the coarser shell's leaf as
+//! that leaf's ancestor (its index shifted right by two bits a level); between two shells it
+//! ORs their two stored answers into the answer row (one pass over a row), else it borrows the
+//! stored row as before.
+//!
 //! Start grid: every split plane passes through the origin, so in an octant's central
 //! (gnomonic) projection onto `|x| + |y| + |z| = 1` every face boundary is a straight line.
 //! A `GRID × GRID` grid over `(u, v) = (|x|, |y|) / (|x| + |y| + |z|)` per octant stores, for
@@ -21,11 +28,13 @@
 //! eye mostly walks no level at all. Cost: 8·`GRID`² cells of 2 bytes (256 KiB), built
 //! in `expand` by evaluating the planes at each cell's 4 corners.
 
+use super::consts::MAX_SHELLS;
 use super::frustum::{Bounds, Frustum};
-use super::query::{Eye, classify, everything, origin_leaf, visible};
+use super::query::{Eye, Place, classify, everything, origin_leaf, visible};
+use super::shells::shells_of_band;
 use super::streaming::{choose, octant, planes};
 use super::{Pvis, Visible};
-use crate::sphere::{Face, children, parents, root_faces};
+use crate::sphere::{Face, children, parents, root_faces, view_count};
 
 /// `u32`s per inner-face record: its 3 split planes of 3 `f32` (as bits), and one of padding
 /// so a record is a whole number of words.
@@ -82,35 +91,60 @@ const MARGIN: f64 = 1.0 / (1u32 << 20) as f64;
 /// the root.
 const GRID_S_RANGE: (f32, f32) = (1e-18, 1e18);
 
-/// Where the parts of the table start, in words: after the answer row and every view's row
-/// come the inner-face records, the leaf corners, the start grid, and every leaf's answer
-/// (the OR of its corners' rows), which ends at `end`.
-#[derive(Clone, Copy)]
-struct Layout {
-    faces: usize,
+/// Where one shell's parts of the table start, in words: its rows, its leaves' corner views
+/// and its leaves' answers (the OR of their corners' rows).
+#[derive(Clone, Copy, Debug, Default)]
+struct ShellParts {
+    level: u32,
+    rows: usize,
     leaves: usize,
-    grid: usize,
     answers: usize,
+}
+
+/// Where the parts of the table start, in words: after the answer row come every shell's rows,
+/// the inner-face records (down to the finest shell level), the start grid, and each shell's
+/// leaf corners and answers, which end at `end`.
+#[derive(Clone, Copy, Debug)]
+struct Layout {
+    /// The finest shell level: the faces and the grid go down to it.
+    level: u32,
+    faces: usize,
+    grid: usize,
+    shells: [ShellParts; MAX_SHELLS as usize + 1],
     end: usize,
 }
 
-const fn layout(level: u32, views: u32, row_words: usize) -> Layout {
-    let faces = (1 + views as usize) * row_words;
-    let leaves = faces + FACE_WORDS * faces_before(level);
-    let grid = leaves + leaf_words(level);
-    let answers = grid + GRID_WORDS;
+fn layout(pvis: &Pvis<'_>) -> Layout {
+    let words = pvis.row_words();
+    let count = pvis.shell_count().min(MAX_SHELLS) as usize + 1;
+    let mut shells = [ShellParts::default(); MAX_SHELLS as usize + 1];
+    let mut at = words;
+    for (s, parts) in shells[..count].iter_mut().enumerate() {
+        parts.level = pvis.shell_level(s as u32);
+        parts.rows = at;
+        at += view_count(parts.level) as usize * words;
+    }
+    let level = shells[..count].iter().map(|s| s.level).max().unwrap_or(0);
+    let faces = at;
+    let grid = faces + FACE_WORDS * faces_before(level);
+    at = grid + GRID_WORDS;
+    for parts in &mut shells[..count] {
+        parts.leaves = at;
+        parts.answers = at + leaf_words(parts.level);
+        at = parts.answers + faces_at(parts.level) * words;
+    }
     Layout {
+        level,
         faces,
-        leaves,
         grid,
-        answers,
-        end: answers + faces_at(level) * row_words,
+        shells,
+        end: at,
     }
 }
 
 /// Table words for a file (see [`Layout`]).
-pub(super) const fn words(level: u32, views: u32, row_words: usize) -> usize {
-    layout(level, views, row_words).end + super::frustum::bounds_words(row_words)
+pub(super) fn words(pvis: &Pvis<'_>) -> usize {
+    layout(pvis).end + super::frustum::bounds_words(pvis.row_words())
 }
 
 /// A file with every view decoded: see the module documentation. Made by [`Pvis::expand`].
@@ -118,6 +152,7 @@ pub(super) const fn words(level: u32, views: u32, row_words: usize) -> usize {
 pub struct Expanded<'a, 't> {
     pvis: Pvis<'a>,
     table: &'t mut [u64],
+    at: Layout,
 }
 
 impl<'a, 't> Expanded<'a, 't> {
@@ -129,54 +164,83 @@ impl<'a, 't> Expanded<'a, 't> {
             table.len()
         );
         let words = pvis.row_words();
-        let views = pvis.sampling.views as usize;
+        let at = layout(&pvis);
+        let count = pvis.shell_count() as usize + 1;
         let mut slots = [0u64; super::model::TREE_CACHE_WORDS];
-        let mut cache = super::model::TreeCache::new(&mut slots);
-        for v in 0..views {
-            let at = (1 + v) * words;
-            let (done, rest) = table.split_at_mut(at);
-            let row = |p: u32| {
-                let s = (1 + p as usize) * words;
-                &done[s..s + words]
-            };
-            let parent_rows = parents(v as u32).map(|[a, b]| (row(a), row(b)));
-            let point = super::visb::point_of(v as u32);
-            pvis.decode_row(v as u32, point, parent_rows, &mut rest[..words], &mut cache);
+        for (s, parts) in at.shells[..count].iter().enumerate() {
+            // Each shell has its own tree: a fresh memo.
+            slots.fill(0);
+            let mut cache = super::model::TreeCache::new(&mut slots);
+            let visb = pvis.visb_of(s as u32);
+            for v in 0..view_count(parts.level) as usize {
+                let (done, rest) = table.split_at_mut(parts.rows + v * words);
+                let row = |p: u32| {
+                    let s = parts.rows + p as usize * words;
+                    &done[s..s + words]
+                };
+                let parent_rows = parents(v as u32).map(|[a, b]| (row(a), row(b)));
+                let point = super::visb::point_of(v as u32);
+                pvis.decode_row(
+                    &visb,
+                    v as u32,
+                    point,
+                    parent_rows,
+                    &mut rest[..words],
+                    &mut cache,
+                );
+            }
         }
-        let level = pvis.sampling.level;
-        let at = layout(level, pvis.sampling.views, words);
-        let (front, answers) = table[..at.end].split_at_mut(at.answers);
-        let (faces, rest) = front[at.faces..].split_at_mut(at.leaves - at.faces);
-        let (leaves, grid) = rest.split_at_mut(at.grid - at.leaves);
-        leaves.fill(0);
-        for (octant, face) in root_faces().iter().enumerate() {
-            build(face, 0, octant, level, faces, leaves);
+        let (front, back) = table[..at.end].split_at_mut(at.grid);
+        let faces = &mut front[at.faces..];
+        let (grid, shells) = back.split_at_mut(GRID_WORDS);
+        for parts in &at.shells[..count] {
+            let leaves = &mut shells
+                [parts.leaves - at.grid - GRID_WORDS..parts.answers - at.grid - GRID_WORDS];
+            leaves.fill(0);
+            for (octant, face) in root_faces().iter().enumerate() {
+                build(face, 0, octant, parts.level, faces, leaves);
+            }
         }
-        build_grid(faces, level, grid);
+        build_grid(faces, at.level, grid);
         // Every leaf's answer, so that a query ORs nothing (see the module documentation).
-        let (rows, leaves) = (&front[..at.faces], &front[at.leaves..at.grid]);
-        for (leaf, answer) in answers.chunks_exact_mut(words.max(1)).enumerate() {
-            let corners = leaf_views(leaves, leaf);
-            let row = |v: u32| &rows[(1 + v as usize) * words..][..words];
-            let (a, b, c) = (row(corners[0]), row(corners[1]), row(corners[2]));
-            for (w, ((a, b), c)) in answer.iter_mut().zip(a.iter().zip(b).zip(c)) {
-                *w = a | b | c;
+        for parts in &at.shells[..count] {
+            let (corners, answers) = table[..at.end].split_at_mut(parts.answers);
+            let leaves = &corners[parts.leaves..];
+            let answers = &mut answers[..faces_at(parts.level) * words];
+            for (leaf, answer) in answers.chunks_exact_mut(words.max(1)).enumerate() {
+                let views = leaf_views(leaves, leaf);
+                let row = |v: u32| &corners[parts.rows + v as usize * words..][..words];
+                let (a, b, c) = (row(views[0]), row(views[1]), row(views[2]));
+                for (w, ((a, b), c)) in answer.iter_mut().zip(a.iter().zip(b).zip(c)) {
+                    *w = a | b | c;
+                }
             }
         }
         // The patch bounds of `query_in_frustum`, after everything above.
         let bounds = super::frustum::bounds_words(words);
         super::frustum::build_bounds(&pvis, &mut table[at.end..at.end + bounds]);
-        Expanded { pvis, table }
+        Expanded { pvis, table, at }
     }
 
-    /// The decoded row of `view`: bit `p % 64` of word `p / 64` is patch `p`.
+    /// The decoded row of `view` of the sampling sphere: bit `p % 64` of word `p / 64` is
+    /// patch `p`.
     ///
     /// # Panics
     /// If `view >= views`.
     pub fn row(&self, view: u32) -> &[u64] {
-        assert!(view < self.pvis.sampling.views, "view {view} out of range");
+        self.shell_row(0, view)
+    }
+
+    /// The decoded row of `view` of shell `s` (0 is the sampling sphere).
+    ///
+    /// # Panics
+    /// If `s > pvis.shell_count()` or `view >= pvis.shell(s).views`.
+    pub fn shell_row(&self, s: u32, view: u32) -> &[u64] {
+        assert!(s <= self.pvis.shell_count(), "shell {s} out of range");
+        let parts = self.at.shells[s as usize];
+        assert!(view < view_count(parts.level), "view {view} out of range");
         let words = self.pvis.row_words();
-        let at = (1 + view as usize) * words;
+        let at = parts.rows + view as usize * words;
         &self.table[at..at + words]
     }
 
@@ -184,61 +248,100 @@ impl<'a, 't> Expanded<'a, 't> {
     pub fn query(&mut self, eye: [f32; 3]) -> Visible<'_> {
         let pvis = self.pvis;
         let words = pvis.row_words();
-        let Eye::Direction(d, inside_sphere) = classify(&pvis, eye) else {
+        let Eye::Direction(d, band) = classify(&pvis, eye) else {
             return everything(&pvis, &mut self.table[..words], origin_leaf(&pvis));
         };
-        let level = pvis.sampling.level;
-        let at = layout(level, pvis.sampling.views, words);
-        let t = &self.table[..at.end];
-        let (start, index) = grid_start(d, &t[at.grid..at.answers]);
-        let index = walk(d, &t[at.faces..at.leaves], level, start, index);
-        let corners = leaf_views(&t[at.leaves..at.grid], index);
-        let answer = t[at.answers..]
-            .get(index * words..(index + 1) * words)
-            .unwrap_or(&[]);
-        visible(&pvis, inside_sphere, corners, answer)
+        let (row, t) = self.table[..self.at.end].split_at_mut(words);
+        let (place, [a, b]) = locate(&self.at, t, words, d, band, pvis.shell_count());
+        if b.is_empty() {
+            return visible(&pvis, place, a);
+        }
+        for (w, (x, y)) in row.iter_mut().zip(a.iter().zip(b)) {
+            *w = x | y;
+        }
+        visible(&pvis, place, row)
     }
 
     /// [`Expanded::query`]'s answer without the patches `frustum` drops (spec § Frustum
     /// culling): the same bits as [`Frustum::cull`] on that answer, from the patch bounds
-    /// `expand` stored. Borrows the leaf's row when the frustum holds the whole model, else
-    /// writes the table's answer row. Cost: a few sphere tests, plus 64 patch tests per block
-    /// of patches the frustum's boundary crosses.
+    /// `expand` stored. Borrows the leaf's row when the frustum holds the whole model and one
+    /// shell answers, else writes the table's answer row. Cost: a few sphere tests, plus 64
+    /// patch tests per block of patches the frustum's boundary crosses.
     pub fn query_in_frustum(&mut self, eye: [f32; 3], frustum: &Frustum) -> Visible<'_> {
         let pvis = self.pvis;
         let words = pvis.row_words();
-        let at = layout(pvis.sampling.level, pvis.sampling.views, words);
-        let end = at.end + super::frustum::bounds_words(words);
+        let end = self.at.end + super::frustum::bounds_words(words);
         // The answer row comes first; `t` is the rest, shifted by one row.
         let (row, t) = self.table[..end].split_at_mut(words);
-        let (t, bounds) = t.split_at(at.end - words);
+        let (t, bounds) = t.split_at(self.at.end - words);
         let bounds = Bounds::new(bounds);
         let tests = bounds.tests(frustum);
-        let Eye::Direction(d, inside_sphere) = classify(&pvis, eye) else {
-            let leaf = everything(&pvis, row, origin_leaf(&pvis)).leaf;
+        let Eye::Direction(d, band) = classify(&pvis, eye) else {
+            let place = everything(&pvis, row, origin_leaf(&pvis)).place();
             if let Some(tests) = tests {
                 for (w, word) in row.iter_mut().enumerate() {
                     *word = bounds.cull_word(frustum, &tests, w, *word);
                 }
             }
-            return visible(&pvis, true, leaf, row);
+            return visible(&pvis, place, row);
         };
-        let level = pvis.sampling.level;
-        let part = |from: usize, to: usize| &t[from - words..to - words];
-        let (start, index) = grid_start(d, part(at.grid, at.answers));
-        let index = walk(d, part(at.faces, at.leaves), level, start, index);
-        let corners = leaf_views(part(at.leaves, at.grid), index);
-        let answer = part(at.answers, at.end)
-            .get(index * words..(index + 1) * words)
-            .unwrap_or(&[]);
-        let Some(tests) = tests else {
-            return visible(&pvis, inside_sphere, corners, answer);
-        };
-        for (w, (out, &bits)) in row.iter_mut().zip(answer).enumerate() {
-            *out = bounds.cull_word(frustum, &tests, w, bits);
+        let (place, [a, b]) = locate(&self.at, t, words, d, band, pvis.shell_count());
+        if b.is_empty() && tests.is_none() {
+            return visible(&pvis, place, a);
         }
-        visible(&pvis, inside_sphere, corners, row)
+        for (w, (out, &x)) in row.iter_mut().zip(a).enumerate() {
+            let bits = x | b.get(w).copied().unwrap_or(0);
+            *out = match &tests {
+                Some(tests) => bounds.cull_word(frustum, tests, w, bits),
+                None => bits,
+            };
+        }
+        visible(&pvis, place, row)
     }
+}
+
+/// The leaves of `d` on the shells of `band` and their stored answers (the second empty where
+/// one shell answers), in the table `t` less its first `words` (the answer row). One walk, to
+/// the finer of the two shells' levels: a coarser shell's leaf is that leaf's ancestor.
+#[inline(always)]
+fn locate<'t>(
+    at: &Layout,
+    t: &'t [u64],
+    words: usize,
+    d: [f32; 3],
+    band: u32,
+    k: u32,
+) -> (Place, [&'t [u64]; 2]) {
+    let part = |from: usize, to: usize| t.get(from - words..to - words).unwrap_or(&[]);
+    let [outer, inner] = shells_of_band(band, k);
+    let [so, si] = [outer, inner].map(|s| at.shells[(s as usize).min(MAX_SHELLS as usize)]);
+    let level = so.level.max(si.level);
+    let (mut start, mut index) = grid_start(d, part(at.grid, at.grid + GRID_WORDS));
+    if start > level {
+        index >>= 2 * (start - level);
+        start = level;
+    }
+    let leaf = walk(d, part(at.faces, at.grid), level, start, index);
+    let answer = |parts: &ShellParts| {
+        let index = leaf >> (2 * (level - parts.level));
+        let corners = leaf_views(part(parts.leaves, parts.answers), index);
+        let from = parts.answers + index * words;
+        (corners, part(from, from + words))
+    };
+    let (leaf_o, row_o) = answer(&so);
+    if inner == outer {
+        let place = Place {
+            band,
+            leaves: [leaf_o; 2],
+        };
+        return (place, [row_o, &[]]);
+    }
+    let (leaf_i, row_i) = answer(&si);
+    let place = Place {
+        band,
+        leaves: [leaf_o, leaf_i],
+    };
+    (place, [row_o, row_i])
 }
 
 /// The corner views of leaf `index` in the leaf table.

@@ -7,7 +7,9 @@
 //! sampling sphere, and the patches visible from the face's three corner views approximate those
 //! visible from the eye. Rows are stored raw (VISB encoding 0) or range-coded along the sphere
 //! hierarchy (`visb`, `coder`), with probabilities from a context table per level (encoding 1) or
-//! from a context tree stored in the file (encoding 2, `model`). Cost: `parse` is one pass over the
+//! from a context tree stored in the file (encoding 2, `model`). A version-5 file adds sampling
+//! shells (`shells`, spec § SHEL): views on nearer spheres, so an eye inside the sampling sphere
+//! is answered from the rows of the two shells around it. Cost: `parse` is one pass over the
 //! file (CRC) plus one over the patch table and the VISB records; three query modes trade memory
 //! for time — [`Pvis::query`] (one row of scratch, decodes the leaf's `3 + 3·level` ancestor views
 //! in lock step), [`Streaming`] (`4 + 3·level` rows, decodes only where the path to the leaf
@@ -33,12 +35,16 @@ pub(crate) mod model;
 mod parse;
 mod ptch;
 mod query;
+mod shells;
 mod stream;
 mod streaming;
 mod visb;
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(all(test, feature = "bake"))]
+mod shell_tests;
 
 #[cfg(feature = "bake")]
 pub(crate) use coder::context;
@@ -89,6 +95,22 @@ pub struct PatchInfo {
     pub cone_cos: f32,
 }
 
+/// One sampling shell (spec § SHEL): shell 0 is the sampling sphere (CAMR, VISB), shells
+/// `1..=K` are the SHEL records, nearer and nearer the model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shell {
+    /// Camera distance from the centre (CAMR's for shell 0).
+    pub distance: f32,
+    /// Sphere subdivision level of the shell's views.
+    pub level: u32,
+    /// Number of views (`sphere::view_count(level)`).
+    pub views: u32,
+    /// The VISB encoding of the shell's rows.
+    pub encoding: u32,
+    /// Bytes of the shell's rows: the VISB section, or the shell's payload in SHEL.
+    pub bytes: u64,
+}
+
 /// A validated `.pvis` file.
 #[derive(Clone, Copy, Debug)]
 pub struct Pvis<'a> {
@@ -100,6 +122,8 @@ pub struct Pvis<'a> {
     patches: ptch::PatchTable<'a>,
     /// The VISB payload.
     visb: Visb<'a>,
+    /// The SHEL section (none before version 5).
+    shells: shells::Shells<'a>,
     visibility_bytes: u64,
     patch_table_bytes: u64,
 }
@@ -184,19 +208,94 @@ impl<'a> Pvis<'a> {
     /// The VISB encoding of the file: [`consts::ENCODING_RAW`],
     /// [`consts::ENCODING_HIERARCHICAL`] or [`consts::ENCODING_TREE`].
     pub fn encoding(&self) -> u32 {
-        match self.visb {
-            Visb::Raw { .. } => consts::ENCODING_RAW,
-            Visb::Hierarchical {
-                model: Model::Table(_),
-                ..
-            } => consts::ENCODING_HIERARCHICAL,
-            Visb::Hierarchical {
-                model: Model::Tree { .. },
-                ..
-            } => consts::ENCODING_TREE,
+        encoding_of(&self.visb)
+    }
+
+    /// `K`: the sampling shells besides the sampling sphere (spec § SHEL); 0 for a file without
+    /// SHEL (every file of version ≤ 4).
+    pub fn shell_count(&self) -> u32 {
+        self.shells.count()
+    }
+
+    /// Length of the SHEL section in bytes (0 without one).
+    pub fn shells_bytes(&self) -> u64 {
+        self.shells.section_bytes()
+    }
+
+    /// Shell `s`: 0 is the sampling sphere, `1..=shell_count()` the SHEL records, outermost
+    /// first.
+    ///
+    /// # Panics
+    /// If `s > self.shell_count()`.
+    pub fn shell(&self, s: u32) -> Shell {
+        assert!(
+            s <= self.shells.count(),
+            "shell {s} out of range (shell_count {})",
+            self.shells.count()
+        );
+        let level = self.shell_level(s);
+        let (distance, bytes) = match s {
+            0 => (self.sampling.distance, self.visibility_bytes),
+            _ => (self.shells.distance(s), self.shells.payload_range(s).1),
+        };
+        Shell {
+            distance,
+            level,
+            views: crate::sphere::view_count(level),
+            encoding: encoding_of(&self.visb_of(s)),
+            bytes,
         }
     }
 
+    /// Sphere level of shell `s` (which must be `≤ shell_count()`).
+    fn shell_level(&self, s: u32) -> u32 {
+        match s {
+            0 => self.sampling.level,
+            _ => self.shells.level(s).min(consts::MAX_LEVEL),
+        }
+    }
+
+    /// The rows of shell `s` (which must be `≤ shell_count()`): VISB's, or a shell's payload
+    /// opened again by the parser that checked it (walking its record lengths once).
+    fn visb_of(&self, s: u32) -> Visb<'a> {
+        if s == 0 {
+            return self.visb;
+        }
+        let sampling = parse::shell_sampling(self.sampling, self.shells.level(s));
+        let payload = self.shells.payload(s);
+        parse::parse_visb(
+            self.bytes,
+            payload,
+            consts::TAG_SHEL,
+            consts::SHELLS_VERSION,
+            sampling,
+            self.patch_count,
+            self.patches,
+        )
+        // Parse checked the payload; the fallback (no rows) keeps this total.
+        .unwrap_or(Visb::Raw {
+            rows: &[],
+            row_bytes: 0,
+        })
+    }
+}
+
+/// The encoding of a VISB body.
+fn encoding_of(visb: &Visb<'_>) -> u32 {
+    match *visb {
+        Visb::Raw { .. } => consts::ENCODING_RAW,
+        Visb::Hierarchical {
+            model: Model::Table(_),
+            ..
+        } => consts::ENCODING_HIERARCHICAL,
+        Visb::Hierarchical {
+            model: Model::Tree { .. },
+            ..
+        } => consts::ENCODING_TREE,
+    }
+}
+
+impl<'a> Pvis<'a> {
     /// Decodes the row of `view` into `out[..row_words()]`: bit `p % 64` of word `p / 64` is
     /// patch `p`; bits past the last patch are zero.
     ///
@@ -206,58 +305,70 @@ impl<'a> Pvis<'a> {
     /// # Panics
     /// If `view >= self.sampling().views` or `out.len() < self.row_words()`.
     pub fn view_row(&self, view: u32, out: &mut [u64]) {
+        self.shell_view_row(0, view, out);
+    }
+
+    /// [`Pvis::view_row`] for a view of shell `s` (0 is the sampling sphere).
+    ///
+    /// # Panics
+    /// If `s > self.shell_count()`, `view >= self.shell(s).views` or
+    /// `out.len() < self.row_words()`.
+    pub fn shell_view_row(&self, s: u32, view: u32, out: &mut [u64]) {
         let words = self.row_words();
         assert!(
             out.len() >= words,
             "row buffer holds {} words, {words} needed",
             out.len()
         );
+        assert!(
+            s <= self.shells.count(),
+            "shell {s} out of range (shell_count {})",
+            self.shells.count()
+        );
         out[..words].fill(0);
-        self.or_rows(&[view], &mut out[..words]);
+        self.or_shell_rows(s, &[view], &mut out[..words]);
     }
 
-    /// ORs the rows of `views` (one view, or the corners of a leaf) into `out`.
-    fn or_rows(&self, views: &[u32], out: &mut [u64]) {
+    /// ORs the rows of `views` (one view, or the corners of a leaf) of shell `s` into `out`.
+    fn or_shell_rows(&self, s: u32, views: &[u32], out: &mut [u64]) {
+        let count = crate::sphere::view_count(self.shell_level(s));
         for &view in views {
-            assert!(
-                view < self.sampling.views,
-                "view {view} out of range (views {})",
-                self.sampling.views
-            );
+            assert!(view < count, "view {view} out of range (views {count})");
         }
-        match self.visb {
+        let visb = self.visb_of(s);
+        match visb {
             Visb::Raw { rows, row_bytes } => {
                 for &view in views {
                     or_raw_row(rows, row_bytes, view, out);
                 }
             }
             Visb::Hierarchical { .. } => {
-                self.visb.or_rows_lockstep(views, out, self.patch_count);
+                visb.or_rows_lockstep(views, out, self.patch_count);
             }
         }
     }
 
-    /// Decodes the row of `view`, at lattice point `point`, into `out` given its parents'
-    /// decoded rows (`None` for a level-0 view; ignored for encoding 0, which reads the row
-    /// directly).
+    /// Decodes the row of `view` of the rows `visb` (a shell's, [`Pvis::visb_of`]), at lattice
+    /// point `point`, into `out` given its parents' decoded rows (`None` for a level-0 view;
+    /// ignored for encoding 0, which reads the row directly).
     fn decode_row(
         &self,
+        visb: &Visb<'a>,
         view: u32,
         point: crate::sphere::LatticePoint,
         parent_rows: Option<(&[u64], &[u64])>,
         out: &mut [u64],
         cache: &mut model::TreeCache<'_>,
     ) {
-        match self.visb {
-            // Not through `or_rows`: a build that only streams (the WebAssembly reader) then
-            // carries no lock-step decoder.
+        match *visb {
+            // Not through `or_shell_rows`: a build that only streams (the WebAssembly reader)
+            // then carries no lock-step decoder.
             Visb::Raw { rows, row_bytes } => {
                 out.fill(0);
                 or_raw_row(rows, row_bytes, view, out);
             }
             Visb::Hierarchical { .. } => {
-                self.visb
-                    .decode_row(view, point, parent_rows, out, self.patch_count, cache)
+                visb.decode_row(view, point, parent_rows, out, self.patch_count, cache)
             }
         }
     }
@@ -267,33 +378,44 @@ impl<'a> Pvis<'a> {
         self.row_words()
     }
 
-    /// `u64` words of scratch a [`Streaming`] query state needs: `4 + 3·level` rows (the
-    /// answer, the 3 corners of the root face and 3 edge midpoints per level of the path),
-    /// plus, for VISB encoding 2, a 32 KiB cache of context-tree lookups.
+    /// `u64` words of scratch a [`Streaming`] query state needs: the answer row, then for each
+    /// of its `min(K + 1, 3)` paths (one per shell it moves among: `K` is
+    /// [`Pvis::shell_count`]) `3 + 3·L` rows, the 3 corners of the root face and 3 edge
+    /// midpoints per level, `L` the finest level of the file's shells; plus, where a shell
+    /// uses VISB encoding 2, a 32 KiB cache of context-tree lookups. Without shells: `4 + 3·level`
+    /// rows, as in version 4.
     pub fn scratch_bound(&self) -> usize {
-        streaming::slots(self.sampling.level) * self.row_words() + self.tree_cache_words()
+        streaming::rows(self) * self.row_words() + self.tree_cache_words()
     }
 
-    /// Words of tree cache the streaming state keeps: [`model::TREE_CACHE_WORDS`] for
-    /// encoding 2, none otherwise.
+    /// The finest level of the file's shells (the sampling sphere's included).
+    fn max_level(&self) -> u32 {
+        self.sampling.level.max(self.shells.max_level)
+    }
+
+    /// Words of tree cache the streaming state keeps: [`model::TREE_CACHE_WORDS`] where a shell
+    /// uses encoding 2, none otherwise.
     fn tree_cache_words(&self) -> usize {
-        match self.visb {
-            Visb::Hierarchical {
-                model: Model::Tree { .. },
-                ..
-            } => model::TREE_CACHE_WORDS,
-            _ => 0,
-        }
+        let tree = self.shells.tree
+            || matches!(
+                self.visb,
+                Visb::Hierarchical {
+                    model: Model::Tree { .. },
+                    ..
+                }
+            );
+        if tree { model::TREE_CACHE_WORDS } else { 0 }
     }
 
-    /// `u64` words of the table [`Pvis::expand`] fills: every view's row, the answer row,
-    /// 5 words per inner face of the sphere hierarchy (its 3 split planes), 1.5 words per
-    /// leaf face (its 3 corner views), a 32,768-word (256 KiB) grid of where point location
-    /// starts (8 octants × 128² cells × 2 bytes) and one row per leaf face (its answer); then
-    /// the patch bounds of [`Expanded::query_in_frustum`]: 2 words per patch and per block of
-    /// 64 patches (a bounding sphere), and 2 more.
+    /// `u64` words of the table [`Pvis::expand`] fills: the answer row; every view's row of
+    /// every shell (the sampling sphere and the SHEL shells); 5 words per inner face of the
+    /// sphere hierarchy down to the finest shell level (its 3 split planes); a 32,768-word
+    /// (256 KiB) grid of where point location starts (8 octants × 128² cells × 2 bytes); for
+    /// each shell, 1.5 words per leaf face of its level (its 3 corner views) and one row per
+    /// leaf face (its answer); then the patch bounds of [`Expanded::query_in_frustum`]: 2 words
+    /// per patch and per block of 64 patches (a bounding sphere), and 2 more.
     pub fn expanded_bound(&self) -> usize {
-        expanded::words(self.sampling.level, self.sampling.views, self.row_words())
+        expanded::words(self)
     }
 
     /// A streaming query state over `scratch` (at least [`Pvis::scratch_bound`] words): decodes
@@ -342,8 +464,10 @@ impl<'a> Pvis<'a> {
     }
 
     /// The patches visible from `eye` (model space), following spec § Query: the OR of the rows
-    /// of the three corner views of the sphere face containing `eye − center`. The answer lives
-    /// in `scratch`.
+    /// of the three corner views of the sphere face containing `eye − center`, on the one or
+    /// two shells of the eye's band ([`Visible::band`]; a file without shells has only the
+    /// sampling sphere). The answer lives in `scratch`: each shell's leaf is decoded in lock
+    /// step into it, after its payload's record lengths are walked once.
     ///
     /// An eye with a non-finite coordinate (or one whose offset from the centre overflows) gets
     /// the conservative answer: every patch, `inside_sphere = true`.
@@ -366,13 +490,10 @@ impl<'a> Pvis<'a> {
         frustum: &Frustum,
         scratch: &'s mut [u64],
     ) -> Visible<'s> {
-        let (inside_sphere, leaf) = {
-            let v = query::query(self, eye, scratch);
-            (v.inside_sphere, v.leaf)
-        };
+        let place = query::query(self, eye, scratch).place();
         let row = &mut scratch[..self.row_words()];
         frustum.cull(self, row);
-        query::visible(self, inside_sphere, leaf, row)
+        query::visible(self, place, row)
     }
 
     /// Merged triangle ranges of the patches in `visible`; see [`ranges`].

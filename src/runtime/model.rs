@@ -206,6 +206,11 @@ impl<'c> TreeCache<'c> {
         }
     }
 
+    /// Forgets every entry, for lookups in another tree.
+    pub(crate) fn clear(&mut self) {
+        self.slots.fill(0);
+    }
+
     /// [`tree_p0`]`(nodes, key)`, from the cache when it holds `key`. Every call on one cache
     /// must pass the same tree.
     #[inline(always)]

@@ -2,7 +2,8 @@
 //!
 //! Checks everything a later query relies on, so that queries need no checks and cannot fail:
 //! header, CRC, section table placement, every CAMR field, every patch record, VISB length and
-//! padding bits. Order: signature, version, flags, length, checksum, then structure — a
+//! padding bits, and in version 5 the SHEL section: its records and each shell's payload, which
+//! is a VISB body checked by the same code. Order: signature, version, flags, length, checksum, then structure — a
 //! corrupted file is reported as corrupted before any of its fields is believed.
 //! Cost: one CRC pass over the file plus one pass over PTCH and the last byte of every VISB row;
 //! no allocation.
@@ -12,6 +13,7 @@ use super::crc32c::crc32c;
 use super::fields::{Section, at, finite3, float, read, reserved};
 use super::model::{FEATURES, LEAF, MAX_TREE_DEPTH, MAX_TREE_NODES};
 use super::ptch::{self, PatchTable};
+use super::shells::Shells;
 use super::stream::Stream;
 use super::visb::{Model, Visb, read_varint};
 use super::{Error, Pvis, Rule, Sampling};
@@ -83,7 +85,7 @@ pub(super) fn parse(data: &[u8]) -> Result<Pvis<'_>, Error> {
             have: len,
         });
     }
-    let (mut camr, mut ptch, mut visb) = (None, None, None);
+    let (mut camr, mut ptch, mut visb, mut shel) = (None, None, None, None);
     let mut previous_end = table_end;
     for _ in 0..section_count {
         let tag = read::<[u8; 4]>(&mut s, have)?;
@@ -111,6 +113,8 @@ pub(super) fn parse(data: &[u8]) -> Result<Pvis<'_>, Error> {
             TAG_CAMR => &mut camr,
             TAG_PTCH => &mut ptch,
             TAG_VISB => &mut visb,
+            // Before version 5 a SHEL-tagged section is an unknown one (§ SHEL).
+            TAG_SHEL if version >= SHELLS_VERSION => &mut shel,
             // Unknown sections are skipped: forward compatibility (§ Versioning).
             _ => continue,
         };
@@ -126,7 +130,19 @@ pub(super) fn parse(data: &[u8]) -> Result<Pvis<'_>, Error> {
 
     let sampling = parse_camr(data, camr)?;
     let (patches, patch_count, triangle_count) = ptch::parse(data, ptch, version)?;
-    let payload = parse_visb(data, visb, version, sampling, patch_count, patches)?;
+    let payload = parse_visb(
+        data,
+        visb,
+        TAG_VISB,
+        version,
+        sampling,
+        patch_count,
+        patches,
+    )?;
+    let shells = match shel {
+        Some(section) => parse_shel(data, section, version, sampling, patch_count, patches)?,
+        None => Shells::NONE,
+    };
 
     Ok(Pvis {
         bytes: data,
@@ -135,6 +151,7 @@ pub(super) fn parse(data: &[u8]) -> Result<Pvis<'_>, Error> {
         triangle_count,
         patches,
         visb: payload,
+        shells,
         visibility_bytes: visb.length,
         patch_table_bytes: ptch.length,
     })
@@ -215,33 +232,129 @@ fn parse_camr(data: &[u8], section: Section) -> Result<Sampling, Error> {
     })
 }
 
-/// § VISB: the fixed part, then encoding 0, 1 or 2.
-fn parse_visb<'a>(
+/// § SHEL: the shell count, every shell record (distances strictly decreasing from CAMR's down
+/// to no less than the radius, levels, lengths that tile the rest of the section) and each
+/// payload as a VISB body of its level's views.
+fn parse_shel<'a>(
     data: &'a [u8],
     section: Section,
     version: u32,
     sampling: Sampling,
     patch_count: u32,
     patches: PatchTable<'a>,
+) -> Result<Shells<'a>, Error> {
+    if section.length < SHEL_HEADER_LEN {
+        return Err(Error::BadSection { tag: TAG_SHEL });
+    }
+    let have = data.len();
+    let mut s = Stream::new_at(data, at(section.offset));
+    let count = read::<u32>(&mut s, have)?;
+    if !(1..=MAX_SHELLS).contains(&count) {
+        return Err(Error::Invalid {
+            what: Rule::ShellCount,
+            offset: section.offset,
+            value: count as u64,
+        });
+    }
+    reserved(&mut s, have, Rule::ShelReserved)?;
+    // Cannot overflow: count ≤ 8.
+    let records_end = SHEL_HEADER_LEN + SHELL_RECORD_LEN * count as u64;
+    if section.length < records_end {
+        return Err(Error::SectionLength {
+            tag: TAG_SHEL,
+            length: section.length,
+            expected: records_end,
+        });
+    }
+    let mut outer = sampling.distance;
+    let mut payloads = 0u64;
+    for _ in 0..count {
+        let distance = float(&mut s, have, Rule::ShellDistance, |d| {
+            d < outer && d >= sampling.radius
+        })?;
+        outer = distance;
+        let level = read::<u32>(&mut s, have)?;
+        if level > MAX_LEVEL {
+            return Err(Error::LimitExceeded {
+                what: Rule::ShellLevel,
+                value: level as u64,
+                limit: MAX_LEVEL as u64,
+            });
+        }
+        payloads = payloads.saturating_add(read::<u64>(&mut s, have)?);
+    }
+    if section.length - records_end != payloads {
+        return Err(Error::SectionLength {
+            tag: TAG_SHEL,
+            length: section.length,
+            expected: records_end.saturating_add(payloads),
+        });
+    }
+    let body = &data[at(section.offset)..at(section.offset + section.length)];
+    let mut shells = Shells::new(body, section.offset, count);
+    for k in 1..=count {
+        let level = shells.level(k);
+        let shell = shell_sampling(sampling, level);
+        let visb = parse_visb(
+            data,
+            shells.payload(k),
+            TAG_SHEL,
+            version,
+            shell,
+            patch_count,
+            patches,
+        )?;
+        shells.max_level = shells.max_level.max(level);
+        shells.tree |= matches!(
+            visb,
+            Visb::Hierarchical {
+                model: Model::Tree { .. },
+                ..
+            }
+        );
+    }
+    Ok(shells)
+}
+
+/// The sampling parameters a shell's payload is checked against: the file's, with the shell's
+/// level and its views.
+pub(super) fn shell_sampling(sampling: Sampling, level: u32) -> Sampling {
+    Sampling {
+        level,
+        views: crate::sphere::view_count(level.min(MAX_LEVEL)),
+        ..sampling
+    }
+}
+
+/// § VISB: the fixed part, then encoding 0, 1 or 2 — of the VISB section, or (`tag` SHEL) of a
+/// shell's payload, which follows the same rules.
+pub(super) fn parse_visb<'a>(
+    data: &'a [u8],
+    section: Section,
+    tag: [u8; 4],
+    version: u32,
+    sampling: Sampling,
+    patch_count: u32,
+    patches: PatchTable<'a>,
 ) -> Result<Visb<'a>, Error> {
     if section.length < VISB_HEADER_LEN {
-        return Err(Error::BadSection { tag: TAG_VISB });
+        return Err(Error::BadSection { tag });
     }
     let have = data.len();
     let mut s = Stream::new_at(data, at(section.offset));
     let encoding = read::<u32>(&mut s, have)?;
     reserved(&mut s, have, Rule::VisbReserved)?;
     match encoding {
-        ENCODING_RAW => parse_raw(data, section, sampling.views, patch_count),
+        ENCODING_RAW => parse_raw(data, section, tag, sampling.views, patch_count),
         ENCODING_HIERARCHICAL if version >= 2 => {
-            let (model, model_end) = parse_table(data, section, sampling)?;
-            parse_records(data, section, model, model_end, sampling, patch_count)
+            let (model, model_end) = parse_table(data, section, tag, sampling)?;
+            parse_records(data, section, tag, model, model_end, sampling, patch_count)
         }
         ENCODING_TREE if version >= 3 => {
-            let (model, model_end) = parse_tree(data, section, patches)?;
-            parse_records(data, section, model, model_end, sampling, patch_count)
+            let (model, model_end) = parse_tree(data, section, tag, patches)?;
+            parse_records(data, section, tag, model, model_end, sampling, patch_count)
         }
-        found => Err(Error::UnsupportedEncoding { found }),
+        found => Err(Error::UnsupportedEncoding { tag, found }),
     }
 }
 
@@ -249,6 +362,7 @@ fn parse_visb<'a>(
 fn parse_raw(
     data: &[u8],
     section: Section,
+    tag: [u8; 4],
     views: u32,
     patch_count: u32,
 ) -> Result<Visb<'_>, Error> {
@@ -258,7 +372,7 @@ fn parse_raw(
     let expected = VISB_HEADER_LEN + views as u64 * row_len;
     if section.length != expected {
         return Err(Error::SectionLength {
-            tag: TAG_VISB,
+            tag,
             length: section.length,
             expected,
         });
@@ -274,7 +388,11 @@ fn parse_raw(
                 have: have as u64,
             })?;
             if byte & padding_mask != 0 {
-                return Err(Error::PaddingBits { view, offset: last });
+                return Err(Error::PaddingBits {
+                    tag,
+                    view,
+                    offset: last,
+                });
             }
         }
     }
@@ -288,6 +406,7 @@ fn parse_raw(
 fn parse_table(
     data: &[u8],
     section: Section,
+    tag: [u8; 4],
     sampling: Sampling,
 ) -> Result<(Model<'_>, u64), Error> {
     let end = section.offset + section.length;
@@ -296,7 +415,7 @@ fn parse_table(
     let probs_end = probs_start + (sampling.level as u64 + 1) * CONTEXTS as u64 * 2;
     if probs_end > end {
         return Err(Error::SectionLength {
-            tag: TAG_VISB,
+            tag,
             length: section.length,
             expected: probs_end - section.offset,
         });
@@ -320,13 +439,14 @@ fn parse_table(
 fn parse_tree<'a>(
     data: &'a [u8],
     section: Section,
+    tag: [u8; 4],
     patches: PatchTable<'a>,
 ) -> Result<(Model<'a>, u64), Error> {
     let end = section.offset + section.length;
     let count_at = section.offset + VISB_HEADER_LEN;
     if count_at + 4 > end {
         return Err(Error::SectionLength {
-            tag: TAG_VISB,
+            tag,
             length: section.length,
             expected: count_at + 4 - section.offset,
         });
@@ -343,7 +463,7 @@ fn parse_tree<'a>(
     let nodes_end = nodes_start + 2 * count as u64;
     if nodes_end > end {
         return Err(Error::SectionLength {
-            tag: TAG_VISB,
+            tag,
             length: section.length,
             expected: nodes_end - section.offset,
         });
@@ -411,6 +531,7 @@ fn parse_tree<'a>(
 fn parse_records<'a>(
     data: &'a [u8],
     section: Section,
+    tag: [u8; 4],
     model: Model<'a>,
     model_end: u64,
     sampling: Sampling,
@@ -423,7 +544,7 @@ fn parse_records<'a>(
     let checkpoints_end = probs_end + 4 * sampling.views.div_ceil(CHECKPOINT_INTERVAL) as u64;
     if checkpoints_end > end {
         return Err(Error::SectionLength {
-            tag: TAG_VISB,
+            tag,
             length: section.length,
             expected: checkpoints_end - section.offset,
         });
@@ -482,7 +603,7 @@ fn parse_records<'a>(
     }
     if pos != records.len() {
         return Err(Error::SectionLength {
-            tag: TAG_VISB,
+            tag,
             length: section.length,
             expected: section.length - (records.len() - pos) as u64,
         });

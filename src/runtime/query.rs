@@ -1,20 +1,48 @@
 //! Queries against a validated file (spec § Query): the visible set of an eye position, and
 //! iterators over its patches and their merged triangle ranges.
 //!
-//! Cost: one `sphere::locate` (≤ 4 plane tests per level), three rows OR-ed into the caller's
-//! scratch; iteration is one `trailing_zeros` per visible patch. No allocation.
+//! Cost: the eye's band (§ Query: which shells it is inside, `shells.rs`), one
+//! `sphere::locate` (≤ 4 plane tests per level) on each of the one or two shells that answer,
+//! and three rows a shell OR-ed into the caller's scratch; iteration is one `trailing_zeros`
+//! per visible patch. No allocation.
 
 use super::Pvis;
 use crate::sphere;
 
-/// The answer to a query: which patches are visible. Borrows the caller's scratch space.
+/// The answer to a query: which patches are visible, and which shells' views answered (spec
+/// § Query). Borrows the caller's scratch space.
+///
+/// Shell 0 is the sampling sphere; shells `1..=K` ([`super::Pvis::shell_count`]) are the
+/// file's sampling shells, nearer and nearer the model. The eye's [`band`](Self::band) says
+/// which it is inside, and so which one or two shells' rows were combined:
+///
+/// | `band`       | where the eye is                          | `shells`         | `inside_sphere` |
+/// |--------------|-------------------------------------------|------------------|-----------------|
+/// | 0            | at or beyond the sampling sphere          | `[0, 0]`         | false           |
+/// | `1..=K`      | inside shell `band − 1`, not inside `band`| `[band − 1, band]` | false         |
+/// | `K + 1`      | inside the innermost shell (shell `K`)    | `[K, K]`         | true            |
+///
+/// A file without shells (`K = 0`, every version-1–4 file) has bands 0 and 1, as before: inside
+/// the sampling sphere is `inside_sphere`. An eye with a non-finite offset gets every patch,
+/// band `K + 1`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Visible<'s> {
-    /// Whether the eye is inside the sampling sphere (closer to the centre than the sampling
-    /// cameras). The answer is then only an approximation; callers may prefer to draw all.
+    /// Whether the eye is inside the innermost shell (the sampling sphere for a file without
+    /// shells), where no sampled view is nearer: the answer is then only an approximation, and
+    /// callers may prefer to draw everything.
     pub inside_sphere: bool,
-    /// The three views whose rows were combined (the corners of the sphere face under the eye).
+    /// How many shells (the sampling sphere counted as shell 0) the eye is strictly inside:
+    /// `0..=K + 1`. See the table above.
+    pub band: u32,
+    /// The shells whose rows were combined, outer first: `[band − 1, band]` between two
+    /// shells, the same shell twice where only one answered.
+    pub shells: [u32; 2],
+    /// The three views of shell `shells[0]` whose rows were combined (the corners of that
+    /// shell's face under the eye).
     pub leaf: [u32; 3],
+    /// The three views of shell `shells[1]` whose rows were combined; equal to `leaf` where
+    /// one shell answered.
+    pub inner_leaf: [u32; 3],
     bits: &'s [u64],
     patch_count: u32,
 }
@@ -43,6 +71,14 @@ impl<'s> Visible<'s> {
     /// patch are zero.
     pub fn bits(&self) -> &[u64] {
         self.bits
+    }
+
+    /// Where the answer came from, to wrap other bits (a frustum's cut) with it.
+    pub(super) fn place(&self) -> Place {
+        Place {
+            band: self.band,
+            leaves: [self.leaf, self.inner_leaf],
+        }
     }
 }
 
@@ -146,10 +182,10 @@ pub fn ranges_of_bits<'v>(pvis: &'v Pvis<'_>, bits: &'v [u64]) -> TriangleRanges
     }
 }
 
-/// Where the eye is relative to the sampling sphere (spec § Query steps 1–3).
+/// Where the eye is relative to the sampling sphere and shells (spec § Query steps 1–3).
 pub(super) enum Eye {
-    /// A finite offset `d = eye − center`; whether `|d| < distance`.
-    Direction([f32; 3], bool),
+    /// A finite offset `d = eye − center`, and its band.
+    Direction([f32; 3], u32),
     /// A non-finite offset: no direction to look up.
     Unknown,
 }
@@ -164,7 +200,19 @@ pub(super) fn classify(pvis: &Pvis<'_>, eye: [f32; 3]) -> Eye {
     }
     // Step 3: in binary64, where the squares of binary32 values cannot overflow; taken in
     // integers, exactly as binary64 rounds (`exact.rs`).
-    Eye::Direction(d, super::exact::norm_below(d, pvis.sampling.distance))
+    Eye::Direction(
+        d,
+        super::shells::band(d, pvis.sampling.distance, &pvis.shells),
+    )
+}
+
+/// Where an answer comes from: the eye's band and the leaf (three corner views) on each of the
+/// band's two shells ([`super::shells::shells_of_band`]; the same leaf twice where one shell
+/// answers).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Place {
+    pub band: u32,
+    pub leaves: [[u32; 3]; 2],
 }
 
 /// Sets every patch's bit in `out` (one row), leaving the padding bits zero.
@@ -177,30 +225,33 @@ pub(super) fn fill_all(out: &mut [u64], patch_count: u32) {
     }
 }
 
-/// The conservative answer of § Query step 2, reported with `leaf`, the views of the leaf
-/// that the zero direction locates to ([`origin_leaf`]; a query mode that has its own way of
-/// finding it passes that).
+/// The conservative answer of § Query step 2, reported in band `K + 1` with `leaf`, the views
+/// of the leaf that the zero direction locates to on the innermost shell ([`origin_leaf`]; a
+/// query mode that has its own way of finding it passes that).
 pub(super) fn everything<'s>(pvis: &Pvis<'_>, out: &'s mut [u64], leaf: [u32; 3]) -> Visible<'s> {
     fill_all(out, pvis.patch_count);
-    visible(pvis, true, leaf, out)
+    let place = Place {
+        band: pvis.shells.count() + 1,
+        leaves: [leaf; 2],
+    };
+    visible(pvis, place, out)
 }
 
-/// The views of the leaf face that point location gives the zero direction, which the
-/// conservative answer reports.
+/// The views of the leaf face that point location gives the zero direction on the innermost
+/// shell, which the conservative answer reports.
 pub(super) fn origin_leaf(pvis: &Pvis<'_>) -> [u32; 3] {
-    sphere::locate([0.0; 3], pvis.sampling.level).views
+    sphere::locate([0.0; 3], pvis.shell_level(pvis.shells.count())).views
 }
 
 /// Wraps a computed answer.
-pub(super) fn visible<'s>(
-    pvis: &Pvis<'_>,
-    inside_sphere: bool,
-    leaf: [u32; 3],
-    bits: &'s [u64],
-) -> Visible<'s> {
+pub(super) fn visible<'s>(pvis: &Pvis<'_>, place: Place, bits: &'s [u64]) -> Visible<'s> {
+    let k = pvis.shells.count();
     Visible {
-        inside_sphere,
-        leaf,
+        inside_sphere: place.band > k,
+        band: place.band,
+        shells: super::shells::shells_of_band(place.band, k),
+        leaf: place.leaves[0],
+        inner_leaf: place.leaves[1],
         bits,
         patch_count: pvis.patch_count,
     }
@@ -214,12 +265,21 @@ pub(super) fn query<'s>(pvis: &Pvis<'_>, eye: [f32; 3], scratch: &'s mut [u64]) 
         scratch.len()
     );
     let out = &mut scratch[..words];
-    let Eye::Direction(d, inside_sphere) = classify(pvis, eye) else {
+    let Eye::Direction(d, band) = classify(pvis, eye) else {
         return everything(pvis, out, origin_leaf(pvis));
     };
-    // § Query steps 4–5.
+    // § Query steps 4–5, on each shell of the band; its rows are OR-ed into the one answer row
+    // (lock step: no scratch beyond it).
     out.fill(0);
-    let leaf = sphere::locate(d, pvis.sampling.level).views;
-    pvis.or_rows(&leaf, out);
-    visible(pvis, inside_sphere, leaf, out)
+    let shells = super::shells::shells_of_band(band, pvis.shells.count());
+    let mut leaves = [[0; 3]; 2];
+    for (i, &s) in shells.iter().enumerate() {
+        if i == 1 && s == shells[0] {
+            leaves[1] = leaves[0];
+            break;
+        }
+        leaves[i] = sphere::locate(d, pvis.shell_level(s)).views;
+        pvis.or_shell_rows(s, &leaves[i], out);
+    }
+    visible(pvis, Place { band, leaves }, out)
 }

@@ -8,27 +8,47 @@
 //! are recomputed. A camera that stays in its leaf therefore costs `level` plane tests; moving
 //! to a neighbouring leaf decodes at most 3 rows per level changed (usually 0–3 in total: the
 //! midpoints of a face are kept while the eye moves among its children).
-//! Memory: `4 + 3·level` rows in the caller's scratch ([`super::Pvis::scratch_bound`]), for
-//! VISB encoding 2 a 32 KiB memo of context-tree lookups there too, plus a few KiB of path
-//! state in the struct itself; no allocation.
+//!
+//! Sampling shells (spec § SHEL): an eye between two shells is answered from a path on each,
+//! so the state keeps up to [`PATHS`] paths, shell `s` on path `s mod 3`. A query's two shells
+//! are neighbours, so they never share a path, and a camera moving back and forth across one
+//! shell boundary (bands `b` and `b + 1` use shells `b − 1`, `b` and `b + 1`) rebuilds no
+//! path; a path handed to another shell decodes its `3 + 3·level` rows again.
+//! Memory: one answer row and `3 + 3·L` rows a path (`L` the finest shell level) in the
+//! caller's scratch ([`super::Pvis::scratch_bound`]), for VISB encoding 2 a 32 KiB memo of
+//! context-tree lookups there too (emptied when the tree changes with the shell), plus a few
+//! KiB of path state in the struct itself; no allocation.
 
 use super::model::TreeCache;
-use super::query::{Eye, classify, everything, visible};
+use super::query::{Eye, Place, classify, everything, visible};
+use super::shells::shells_of_band;
+use super::visb::Visb;
 use super::{Frustum, Pvis, Visible};
 use crate::sphere::{Face, LatticePoint, MAX_LEVEL, children, cross, dot, root_face};
 
-/// Row slots the streaming state keeps: the answer, the root face's 3 corners, and the 3 edge
-/// midpoints of the path's face at each level above the leaf.
-pub(super) const fn slots(level: u32) -> usize {
-    4 + 3 * level as usize
+/// Paths a streaming state keeps at most: shell `s` uses path `s % PATHS` (see the module
+/// documentation).
+pub(super) const PATHS: usize = 3;
+
+/// Paths a state over `pvis` keeps: one per shell, at most [`PATHS`].
+fn path_count(pvis: &Pvis<'_>) -> usize {
+    (pvis.shell_count() as usize + 1).min(PATHS)
 }
 
-/// Slot of the answer row.
-const ANSWER: usize = 0;
+/// Row slots of one path: the root face's 3 corners and the 3 edge midpoints of the path's
+/// face at each level above the leaf.
+const fn path_rows(level: u32) -> usize {
+    3 + 3 * level as usize
+}
+
+/// Rows of scratch a state over `pvis` needs: the answer and every path's slots.
+pub(super) fn rows(pvis: &Pvis<'_>) -> usize {
+    1 + path_count(pvis) * path_rows(pvis.max_level())
+}
 
 /// Slot of midpoint `j` (0 = ab, 1 = bc, 2 = ca) of the path's face at level `k`.
 const fn mid_slot(k: usize, j: usize) -> u8 {
-    (4 + 3 * k + j) as u8
+    (3 + 3 * k + j) as u8
 }
 
 /// Edge `j` of a face `(a, b, c)`: its two corners (0 = ab, 1 = bc, 2 = ca).
@@ -37,20 +57,37 @@ const EDGES: [[usize; 2]; 3] = [[0, 1], [1, 2], [2, 0]];
 /// Corners of child `c` as indices into `[a, b, c, m_ab, m_bc, m_ca]` (spec § Faces).
 pub(super) const CHILD_CORNERS: [[usize; 3]; 4] = [[0, 3, 5], [3, 1, 4], [5, 4, 2], [3, 4, 5]];
 
-/// One level of the cached path.
+/// No shell: a path not yet given one.
+const NO_SHELL: u32 = u32::MAX;
+
+/// One level of a cached path. The face's children are not kept (they are recomputed when
+/// the path moves below it), so that three paths fit the C ABI's 8 KiB streaming block.
 #[derive(Clone, Copy, Debug)]
 struct PathLevel {
     face: Face,
-    /// Row slots of the face's corners.
+    /// Row slots of the face's corners, within the path's slots.
     slots: [u8; 3],
-    /// The face's children (unused at the leaf level).
-    kids: [Face; 4],
     /// Split planes of the point-location tests: `m_ab × m_ca`, `m_bc × m_ab`, `m_ca × m_bc`.
     planes: [[f32; 3]; 3],
     /// Whether midpoint `j`'s row is decoded in its slot.
     mid_ready: [bool; 3],
     /// The child the path continues into.
     child: u8,
+}
+
+/// The path to one shell's leaf under the last eye.
+#[derive(Clone, Copy, Debug)]
+struct Path<'a> {
+    /// The shell, or [`NO_SHELL`].
+    shell: u32,
+    /// Its rows.
+    visb: Visb<'a>,
+    /// Its level.
+    level: u32,
+    levels: [PathLevel; MAX_LEVEL as usize + 1],
+    /// Valid levels of `levels` (0 before the first walk).
+    depth: usize,
+    octant: usize,
 }
 
 /// The child of a face the locate tests choose for `d` (spec § Point location, step 2).
@@ -97,7 +134,7 @@ fn mid(kids: &[Face; 4], j: usize) -> (u32, LatticePoint) {
 /// conservative answer reports them): every plane test of a zero vector is `0 ≥ 0`, so the
 /// path stays in child 0 of root face 0. Walked through [`children`], which the streaming
 /// path links anyway, rather than through `locate`, which it otherwise does not need.
-pub(super) fn origin_leaf(level: u32) -> [u32; 3] {
+pub(super) fn origin_leaf_at(level: u32) -> [u32; 3] {
     let mut face = root_face(0);
     for _ in 0..level {
         face = children(&face)[0];
@@ -110,14 +147,15 @@ pub(super) fn origin_leaf(level: u32) -> [u32; 3] {
 pub struct Streaming<'a, 's> {
     pvis: Pvis<'a>,
     rows: &'s mut [u64],
-    /// Memo of context-tree lookups (VISB encoding 2; empty otherwise).
+    /// Memo of context-tree lookups (VISB encoding 2; empty otherwise), for the tree of
+    /// shell `cache_shell`.
     cache: TreeCache<'s>,
-    path: [PathLevel; MAX_LEVEL as usize + 1],
-    /// Valid levels of `path` (0 before the first query).
-    depth: usize,
-    octant: usize,
-    /// Whether the answer slot holds the OR of the leaf's corners.
-    answer_valid: bool,
+    cache_shell: u32,
+    paths: [Path<'a>; PATHS],
+    /// Rows of scratch a path's slots take.
+    path_rows: usize,
+    /// The band and the paths the answer slot holds the OR of, if it is valid.
+    answer: Option<(u32, [usize; 2])>,
     /// Rows decoded so far (for measurements).
     decoded: u64,
 }
@@ -136,26 +174,33 @@ impl<'a, 's> Streaming<'a, 's> {
         let root = root_face(0);
         let level = PathLevel {
             face: root,
-            slots: [1, 2, 3],
-            kids: [root; 4],
+            slots: [0, 1, 2],
             planes: [[0.0; 3]; 3],
             mid_ready: [false; 3],
             child: 0,
+        };
+        let path = Path {
+            shell: NO_SHELL,
+            visb: pvis.visb,
+            level: 0,
+            levels: [level; MAX_LEVEL as usize + 1],
+            depth: 0,
+            octant: 0,
         };
         Streaming {
             pvis,
             rows,
             cache,
-            path: [level; MAX_LEVEL as usize + 1],
-            depth: 0,
-            octant: 0,
-            answer_valid: false,
+            cache_shell: NO_SHELL,
+            paths: [path; PATHS],
+            path_rows: path_rows(pvis.max_level()),
+            answer: None,
             decoded: 0,
         }
     }
 
-    /// Rows decoded since this state was made: 3 for the root, then up to 3 per level the
-    /// path changed at. A measure of how much a query cost.
+    /// Rows decoded since this state was made: 3 for the root of a shell's path, then up to 3
+    /// per level a path changed at. A measure of how much a query cost.
     pub fn decoded_rows(&self) -> u64 {
         self.decoded
     }
@@ -164,42 +209,45 @@ impl<'a, 's> Streaming<'a, 's> {
     pub fn query(&mut self, eye: [f32; 3]) -> Visible<'_> {
         let pvis = self.pvis;
         let words = pvis.row_words();
-        let Eye::Direction(d, inside_sphere) = classify(&pvis, eye) else {
-            self.answer_valid = false;
-            return everything(
-                &pvis,
-                &mut self.rows[..words],
-                origin_leaf(pvis.sampling.level),
-            );
+        let Eye::Direction(d, band) = classify(&pvis, eye) else {
+            self.answer = None;
+            let leaf = origin_leaf_at(pvis.shell_level(pvis.shell_count()));
+            return everything(&pvis, &mut self.rows[..words], leaf);
         };
-        // Parse checked the level; the bound lets the compiler drop the path's index checks.
-        let level = (pvis.sampling.level as usize).min(MAX_LEVEL as usize);
-        let oct = octant(d);
-        if self.depth == 0 || self.octant != oct {
-            self.enter_root(oct);
-        }
-        for k in 0..level {
-            let which = choose(d, &self.path[k].planes);
-            if k + 1 < self.depth && self.path[k].child as usize == which {
-                continue;
-            }
-            self.enter_child(k, which);
-        }
-        let leaf = &self.path[level];
-        if !self.answer_valid {
-            let [a, b, c] = leaf.slots.map(|s| s as usize * words);
+        let [outer, inner] = shells_of_band(band, pvis.shell_count());
+        let po = self.walk(outer, d);
+        let pi = if inner == outer {
+            po
+        } else {
+            self.walk(inner, d)
+        };
+        if self.answer != Some((band, [po, pi])) {
             let (answer, rest) = self.rows.split_at_mut(words);
-            // Corner slots are ≥ 1, so they lie in `rest`, shifted by one row (and hold a
-            // whole row: `Pvis::scratch_bound`).
-            let row = |at: usize| rest.get(at - words..at).unwrap_or(&[]);
-            let rows = row(a).iter().zip(row(b)).zip(row(c));
-            for (w, ((x, y), z)) in answer.iter_mut().zip(rows) {
-                *w = x | y | z;
+            answer.fill(0);
+            for p in [po, pi] {
+                let path = &self.paths[p];
+                let base = p * self.path_rows;
+                // Corner slots lie in `rest`, which holds every path's slots
+                // (`Pvis::scratch_bound`).
+                for slot in path.levels[path.depth.saturating_sub(1)].slots {
+                    let at = (base + slot as usize) * words;
+                    let row = rest.get(at..at + words).unwrap_or(&[]);
+                    for (w, x) in answer.iter_mut().zip(row) {
+                        *w |= x;
+                    }
+                }
             }
-            self.answer_valid = true;
+            self.answer = Some((band, [po, pi]));
         }
-        let views = self.path[level].face.views;
-        visible(&pvis, inside_sphere, views, &self.rows[ANSWER..words])
+        let leaf = |p: usize| {
+            let path = &self.paths[p];
+            path.levels[path.depth.saturating_sub(1)].face.views
+        };
+        let place = Place {
+            band,
+            leaves: [leaf(po), leaf(pi)],
+        };
+        visible(&pvis, place, &self.rows[..words])
     }
 
     /// `u64` words of one row of the file: what [`Streaming::query_in_frustum`]'s `out`
@@ -230,55 +278,101 @@ impl<'a, 's> Streaming<'a, 's> {
         );
         let out = &mut out[..words];
         let v = self.query(eye);
-        let (inside_sphere, leaf) = (v.inside_sphere, v.leaf);
+        let place = v.place();
         out.copy_from_slice(v.bits());
         frustum.cull(&pvis, out);
-        visible(&pvis, inside_sphere, leaf, out)
+        visible(&pvis, place, out)
     }
 
-    /// Starts the path at root face `oct`, decoding its three level-0 corners.
-    fn enter_root(&mut self, oct: usize) {
+    /// Walks the path of `shell` (path `shell % PATHS`, handed to it if another shell had it)
+    /// to the leaf under `d`; returns the path's index.
+    fn walk(&mut self, shell: u32, d: [f32; 3]) -> usize {
+        let p = shell as usize % PATHS;
+        if self.paths[p].shell != shell {
+            let visb = self.pvis.visb_of(shell);
+            let level = self.pvis.shell_level(shell).min(MAX_LEVEL);
+            let path = &mut self.paths[p];
+            (path.shell, path.visb, path.level, path.depth) = (shell, visb, level, 0);
+        }
+        let level = self.paths[p].level as usize;
+        let oct = octant(d);
+        if self.paths[p].depth == 0 || self.paths[p].octant != oct {
+            self.enter_root(p, oct);
+        }
+        for k in 0..level {
+            let path = &self.paths[p];
+            let which = choose(d, &path.levels[k].planes);
+            if k + 1 < path.depth && path.levels[k].child as usize == which {
+                continue;
+            }
+            self.enter_child(p, k, which);
+        }
+        p
+    }
+
+    /// Starts path `p` at root face `oct`, decoding its three level-0 corners.
+    fn enter_root(&mut self, p: usize, oct: usize) {
         let words = self.pvis.row_words();
         let face = root_face(oct);
+        self.use_cache_for(p);
+        let base = 1 + p * self.path_rows;
         for (i, &v) in face.views.iter().enumerate() {
-            let slot = (1 + i) * words;
+            let slot = (base + i) * words;
             // The scratch holds every slot (`Pvis::scratch_bound`), so the row is there.
             if let Some(row) = self.rows.get_mut(slot..slot + words) {
-                self.pvis
-                    .decode_row(v, face.lattice[i], None, row, &mut self.cache);
+                self.pvis.decode_row(
+                    &self.paths[p].visb,
+                    v,
+                    face.lattice[i],
+                    None,
+                    row,
+                    &mut self.cache,
+                );
             }
         }
         self.decoded += 3;
-        self.set_level(0, face, [1, 2, 3]);
-        self.octant = oct;
+        self.set_level(p, 0, face, [0, 1, 2]);
+        self.paths[p].octant = oct;
     }
 
-    /// Makes `face` (with corner rows in `slots`) the path's face at level `k`.
-    fn set_level(&mut self, k: usize, face: Face, slots: [u8; 3]) {
-        let leaf = k == self.pvis.sampling.level as usize;
-        let entry = &mut self.path[k];
+    /// Empties the tree cache if it holds another shell's lookups than path `p`'s.
+    fn use_cache_for(&mut self, p: usize) {
+        let shell = self.paths[p].shell;
+        if self.cache_shell != shell {
+            self.cache.clear();
+            self.cache_shell = shell;
+        }
+    }
+
+    /// Makes `face` (with corner rows in `slots`) path `p`'s face at level `k`.
+    fn set_level(&mut self, p: usize, k: usize, face: Face, slots: [u8; 3]) {
+        let path = &mut self.paths[p];
+        let leaf = k == path.level as usize;
+        let entry = &mut path.levels[k];
         entry.face = face;
         entry.slots = slots;
         entry.mid_ready = [false; 3];
         if !leaf {
-            entry.kids = children(&face);
-            entry.planes = planes(&entry.kids);
+            entry.planes = planes(&children(&face));
         }
-        self.depth = k + 1;
-        self.answer_valid = false;
+        path.depth = k + 1;
+        self.answer = None;
     }
 
-    /// Moves the path below level `k` into child `which`, decoding the midpoints it needs.
-    fn enter_child(&mut self, k: usize, which: usize) {
+    /// Moves path `p` below level `k` into child `which`, decoding the midpoints it needs.
+    fn enter_child(&mut self, p: usize, k: usize, which: usize) {
         let words = self.pvis.row_words();
+        let base = (1 + p * self.path_rows) * words;
+        let kids = children(&self.paths[p].levels[k].face);
         let corners = CHILD_CORNERS[which];
         for &c in &corners {
-            if c < 3 || self.path[k].mid_ready[c - 3] {
+            if c < 3 || self.paths[p].levels[k].mid_ready[c - 3] {
                 continue;
             }
+            self.use_cache_for(p);
             let j = c - 3;
-            let entry = &self.path[k];
-            let (mid, point) = mid(&entry.kids, j);
+            let entry = &self.paths[p].levels[k];
+            let (mid, point) = mid(&kids, j);
             let [e0, e1] = EDGES[j];
             // The context orders the parents by view index (spec § Context).
             let (mut pa, mut pb) = (e0, e1);
@@ -286,10 +380,10 @@ impl<'a, 's> Streaming<'a, 's> {
                 core::mem::swap(&mut pa, &mut pb);
             }
             let (sa, sb) = (
-                entry.slots[pa] as usize * words,
-                entry.slots[pb] as usize * words,
+                base + entry.slots[pa] as usize * words,
+                base + entry.slots[pb] as usize * words,
             );
-            let target = mid_slot(k, j) as usize * words;
+            let target = base + mid_slot(k, j) as usize * words;
             // Corner slots of level k are roots or midpoints of levels < k: all below target,
             // and every slot is in the scratch (`Pvis::scratch_bound`).
             let (lo, hi) = self.rows.split_at_mut(target.min(self.rows.len()));
@@ -298,13 +392,14 @@ impl<'a, 's> Streaming<'a, 's> {
                 lo.get(sb..sb + words),
                 hi.get_mut(..words),
             ) {
+                let visb = self.paths[p].visb;
                 self.pvis
-                    .decode_row(mid, point, Some((ra, rb)), out, &mut self.cache);
+                    .decode_row(&visb, mid, point, Some((ra, rb)), out, &mut self.cache);
             }
             self.decoded += 1;
-            self.path[k].mid_ready[j] = true;
+            self.paths[p].levels[k].mid_ready[j] = true;
         }
-        let entry = &self.path[k];
+        let entry = &self.paths[p].levels[k];
         let all = [
             entry.slots[0],
             entry.slots[1],
@@ -313,9 +408,8 @@ impl<'a, 's> Streaming<'a, 's> {
             mid_slot(k, 1),
             mid_slot(k, 2),
         ];
-        let face = entry.kids[which];
-        self.path[k].child = which as u8;
-        self.set_level(k + 1, face, corners.map(|c| all[c]));
+        self.paths[p].levels[k].child = which as u8;
+        self.set_level(p, k + 1, kids[which], corners.map(|c| all[c]));
     }
 }
 
@@ -330,7 +424,7 @@ mod tests {
     fn origin_leaf_is_where_locate_puts_the_zero_direction() {
         for level in 0..=MAX_LEVEL {
             assert_eq!(
-                origin_leaf(level),
+                origin_leaf_at(level),
                 locate([0.0; 3], level).views,
                 "level {level}"
             );

@@ -224,8 +224,8 @@ fn header_errors() {
     assert_eq!(error_after(|f| f[0] = b'X'), Error::BadMagic);
     assert_eq!(Pvis::parse(b"PVIX").unwrap_err(), Error::BadMagic);
     assert_eq!(
-        error_after(|f| f[8] = 5),
-        Error::UnsupportedVersion { found: 5 }
+        error_after(|f| f[8] = 6),
+        Error::UnsupportedVersion { found: 6 }
     );
     assert_eq!(
         error_after(|f| f[8] = 0),
@@ -367,13 +367,17 @@ fn visb_errors() {
     assert_eq!(
         error_after(|f| f[last] |= 1 << 2),
         Error::PaddingBits {
+            tag: *b"VISB",
             view: 4,
             offset: last as u64
         }
     );
     assert_eq!(
         error_after(|f| f[at] = 1),
-        Error::UnsupportedEncoding { found: 1 }
+        Error::UnsupportedEncoding {
+            tag: *b"VISB",
+            found: 1
+        }
     );
     let short = assemble(&[
         (*b"CAMR", camr(1)),

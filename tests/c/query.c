@@ -200,6 +200,22 @@ int main(int argc, char **argv) {
         printf("patch %u: first %u count %u\n", p, first, count);
     }
 
+    /* Sampling shells (version 5): shell 0 is the sampling sphere, 1..K the SHEL records. */
+    uint32_t shells = patchvis_shell_count(&file);
+    PatchvisShell shell;
+    if (patchvis_shell(&file, shells + 1, &shell) != PATCHVIS_ERR_RANGE ||
+        patchvis_shell(&file, 0, NULL) != PATCHVIS_ERR_ARGUMENT ||
+        patchvis_shell(&file, 0, &shell) != PATCHVIS_OK || shell.level != info.level ||
+        shell.views != info.views || shell.distance != info.distance)
+        return 3;
+    if (shells > 0) printf("shells: %u\n", shells);
+    for (uint32_t k = 1; k <= shells; k++) {
+        if (patchvis_shell(&file, k, &shell) != PATCHVIS_OK) return 3;
+        printf("shell %u: distance %g level %u views %u encoding %u bytes %llu\n", k,
+               shell.distance, shell.level, shell.views, shell.encoding,
+               (unsigned long long)shell.bytes);
+    }
+
     size_t words = patchvis_scratch_words(&file);
     uint64_t *scratch = calloc(words, sizeof *scratch);
     if (!scratch || words != info.scratch_words) return 3;
@@ -237,12 +253,19 @@ int main(int argc, char **argv) {
         PatchvisVisible streamed;
         if (patchvis_stream_query(&stream, eye, &streamed) != PATCHVIS_OK) return 3;
         if (streamed.words != words || streamed.visible_count != vis.visible_count ||
-            streamed.inside_sphere != vis.inside_sphere ||
+            streamed.inside_sphere != vis.inside_sphere || streamed.band != vis.band ||
+            memcmp(streamed.shells, vis.shells, sizeof vis.shells) != 0 ||
             memcmp(streamed.leaf, vis.leaf, sizeof vis.leaf) != 0 ||
+            memcmp(streamed.inner_leaf, vis.inner_leaf, sizeof vis.inner_leaf) != 0 ||
             memcmp(streamed.bits, vis.bits, words * sizeof *vis.bits) != 0)
             return 4;
-        printf("query %s -> inside %s views [%u,%u,%u] patches [", argv[i],
-               vis.inside_sphere ? "true" : "false", vis.leaf[0], vis.leaf[1], vis.leaf[2]);
+        printf("query %s -> inside %s", argv[i], vis.inside_sphere ? "true" : "false");
+        /* A file with shells also says which band and shells answered. */
+        if (shells > 0) printf(" band %u shells [%u,%u]", vis.band, vis.shells[0], vis.shells[1]);
+        printf(" views [%u,%u,%u]", vis.leaf[0], vis.leaf[1], vis.leaf[2]);
+        if (shells > 0)
+            printf(" inner [%u,%u,%u]", vis.inner_leaf[0], vis.inner_leaf[1], vis.inner_leaf[2]);
+        printf(" patches [");
         uint32_t listed = 0;
         for (uint32_t p = 0; p < info.patch_count; p++) {
             if ((vis.bits[p / 64] >> (p % 64)) & 1) printf("%s%u", listed++ ? "," : "", p);

@@ -26,7 +26,7 @@ fail=0
 for vector in tests/conformance/valid/*.pvis; do
     dump="${vector%.pvis}.dump"
     mapfile -t positions < <(sed -n 's/^query \([^ ]*\) .*/\1/p' "$dump")
-    expected=$(grep -E '^(patches|triangles|level|views): |^(patch|view) [0-9]+: |^query ' "$dump")
+    expected=$(grep -E '^(patches|triangles|level|views|shells): |^(patch|view|shell) [0-9]+: |^query ' "$dump")
     if ! actual=$("$target/query" "$vector" "${positions[@]}"); then
         echo "FAIL $vector: query.c exited with an error"; fail=1; continue
     fi

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The reader on a Cortex-M4F under QEMU (firmware/cortex-m4f, issue 23): for a version-3 and a
-# version-4 conformance vector, builds the `queries` firmware with the vector in flash and the
-# eyes of its dump's `query` lines, runs it on QEMU's netduinoplus2 (STM32F405) with
+# The reader on a Cortex-M4F under QEMU (firmware/cortex-m4f, issue 23): for a version-3, a
+# version-4 and a version-5 (sampling shells) conformance vector, builds the `queries` firmware
+# with the vector in flash and the eyes of its dump's `query` lines, runs it on QEMU's netduinoplus2 (STM32F405) with
 # semihosting, and compares every answer with the dump. Then reports the reader's flash (the
 # `size_probe` firmware less `size_base`) and the RAM the queries used (stack high-water,
 # scratch row included). Used by .ci/run; needs qemu-system-arm and the
@@ -51,7 +51,8 @@ report() {
 
 fail=0
 for vector in tests/conformance/valid/010-level3-300-patches-facing.pvis \
-              tests/conformance/valid/016-v4-level3-300-patches-facing.pvis; do
+              tests/conformance/valid/016-v4-level3-300-patches-facing.pvis \
+              tests/conformance/valid/018-v5-level3-300-patches-three-shells-mixed-levels.pvis; do
     dump="${vector%.pvis}.dump"
     sed -n 's/^query \([^ ]*\) .*/\1/p' "$dump" > "$work/eyes.txt"
     build "$root/$vector" "$work/eyes.txt"

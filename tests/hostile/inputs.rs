@@ -578,3 +578,48 @@ fn random_bytes_named_glb_are_not_a_glb_file() {
     assert!(!stderr(&got).contains("JSON"), "{}", stderr(&got));
     assert!(!out.exists());
 }
+
+/// Version-5 files whose SHEL section breaks a rule (issue 22: distances out of order, at or
+/// past the sampling distance, below the radius, NaN; a level past 7; lengths that do not sum;
+/// no shells or more than 8; two SHEL sections; bad payloads): every reading command refuses
+/// each with exit 1 and one line naming the section or the field, never a panic. The files are
+/// the conformance vectors `tests/conformance/invalid/17x-v5-*` and `18x-v5-*`.
+#[test]
+fn broken_sampling_shells_are_refused_in_one_line() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/conformance/invalid");
+    let mut vectors: Vec<PathBuf> = fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            name.contains("-v5-") && name.ends_with(".pvis")
+        })
+        .collect();
+    vectors.sort();
+    assert!(vectors.len() >= 15, "{} version-5 vectors", vectors.len());
+    for vector in &vectors {
+        let path = path_str(vector);
+        let expected = fs::read_to_string(vector.with_extension("err")).unwrap();
+        // Each message names SHEL, a shell field or the VISB rule a payload breaks.
+        let words: &[&str] = if expected.contains("SHEL") {
+            &["SHEL"]
+        } else {
+            &["VISB"]
+        };
+        for args in [
+            vec!["info", path],
+            vec!["query", path, "--from", "0,0,1"],
+            vec!["verify", path],
+        ] {
+            let out = run(&args);
+            if args[0] == "verify" {
+                // verify reports the violation on stdout, exit 1.
+                assert_eq!(out.status.code(), Some(1), "{args:?}");
+                assert!(stdout(&out).contains(expected.trim_end()), "{args:?}");
+                continue;
+            }
+            assert_refused(&out, 1, words);
+            assert!(stderr(&out).contains(expected.trim_end()), "{args:?}");
+        }
+    }
+}

@@ -43,12 +43,15 @@ for (const entry of readdirSync(join(vectors, "valid")).filter((f) => f.endsWith
     if (m) range.set(Number(m[1]), [Number(m[2]), Number(m[3])]);
   }
   for (const l of lines) {
-    const m = /^query ([^ ]+) -> inside (true|false) views \[([^\]]*)\] patches \[([^\]]*)\]$/.exec(l);
+    const m =
+      /^query ([^ ]+) -> inside (true|false)(?: band (\d+) shells \[([^\]]*)\])? views \[([^\]]*)\](?: inner \[([^\]]*)\])? patches \[([^\]]*)\]$/.exec(
+        l,
+      );
     if (!m) continue;
     queries++;
     const [x, y, z] = m[1].split(",").map(number);
     const got = file.query(x, y, z);
-    const patches = list(m[4]);
+    const patches = list(m[7]);
     const merged = [];
     for (const p of patches) {
       const [first, count] = range.get(p);
@@ -57,7 +60,13 @@ for (const entry of readdirSync(join(vectors, "valid")).filter((f) => f.endsWith
       else merged.push([first, count]);
     }
     check(name, got.insideSphere === (m[2] === "true"), `${l}: inside ${got.insideSphere}`);
-    check(name, got.views.join(",") === m[3], `${l}: views ${got.views}`);
+    check(name, got.views.join(",") === m[5], `${l}: views ${got.views}`);
+    // Files with shells: the band, the shells and the inner shell's views too.
+    if (m[3] !== undefined) {
+      check(name, got.band === Number(m[3]), `${l}: band ${got.band}`);
+      check(name, got.shells.join(",") === m[4], `${l}: shells ${got.shells}`);
+      check(name, got.innerViews.join(",") === m[6], `${l}: inner ${got.innerViews}`);
+    }
     check(name, Array.from(got.patches).join(",") === patches.join(","), `${l}: patches ${Array.from(got.patches)}`);
     check(name, JSON.stringify(got.ranges) === JSON.stringify(merged), `${l}: ranges ${JSON.stringify(got.ranges)}`);
   }

@@ -85,11 +85,18 @@ fn run(out: &mut hio::HostStream) -> Result<(), ()> {
         }
         let visible = pvis.query(eye, &mut scratch);
         let [a, b, c] = visible.leaf;
-        let _ = write!(
-            out,
-            "query {line} -> inside {} views [{a},{b},{c}] patches [",
-            visible.inside_sphere
-        );
+        let _ = write!(out, "query {line} -> inside {}", visible.inside_sphere);
+        // A file with sampling shells also says which band and shells answered.
+        if pvis.shell_count() > 0 {
+            let [o, i] = visible.shells;
+            let _ = write!(out, " band {} shells [{o},{i}]", visible.band);
+        }
+        let _ = write!(out, " views [{a},{b},{c}]");
+        if pvis.shell_count() > 0 {
+            let [a, b, c] = visible.inner_leaf;
+            let _ = write!(out, " inner [{a},{b},{c}]");
+        }
+        let _ = write!(out, " patches [");
         for (i, p) in visible.patches().enumerate() {
             let _ = write!(out, "{}{p}", if i > 0 { "," } else { "" });
         }

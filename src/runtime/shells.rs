@@ -1,0 +1,127 @@
+//! The sampling shells of a version-5 file (spec § SHEL) and the band rule of § Query: which
+//! shells' rows answer an eye nearer than the sampling sphere.
+//!
+//! Shell 0 is the sampling sphere itself (CAMR, VISB); shells `1..=K` are SHEL's records,
+//! nearer and nearer the model. An eye's *band* is the number of shells it is strictly inside
+//! (`|d|² < D_s²`, exact as in § Query step 3); band `b` answers with the OR of the leaf rows
+//! of shells `b − 1` and `b` (one shell at either end). A shell's payload is a VISB body; a
+//! `Pvis` keeps only where SHEL is, so it stays a few words however many shells it has, and a
+//! shell's rows are opened again by the VISB parser that checked them (`Pvis::visb_of`; the
+//! embedded readers carry one VISB reader, not two). Cost: `band` is at most `K + 1` exact
+//! comparisons, almost all settled in binary32; opening a payload walks its record lengths
+//! once (a few µs at level 4, under 1% of a stateless query's lock-step decode), which the
+//! stateless query pays per shell and the streaming and expanded modes once per shell they
+//! move to.
+
+use super::consts::*;
+use super::exact::norm_below;
+use super::fields::Section;
+
+/// The SHEL section of a validated file: its body (empty without shells), where it starts
+/// in the file, and `K`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Shells<'a> {
+    body: &'a [u8],
+    offset: u64,
+    count: u32,
+    /// The finest level of the shells `1..=K` (0 without shells).
+    pub(crate) max_level: u32,
+    /// Whether a shell's payload uses VISB encoding 2 (a tree, whose lookups the streaming
+    /// state memoises).
+    pub(crate) tree: bool,
+}
+
+impl<'a> Shells<'a> {
+    /// No shells: a file of version ≤ 4, or one without SHEL.
+    pub(crate) const NONE: Shells<'static> = Shells {
+        body: &[],
+        offset: 0,
+        count: 0,
+        max_level: 0,
+        tree: false,
+    };
+
+    /// The shells of a SHEL `body` at `offset` in the file, whose records parse checked (or is
+    /// checking).
+    pub(crate) fn new(body: &'a [u8], offset: u64, count: u32) -> Self {
+        Shells {
+            body,
+            offset,
+            count,
+            max_level: 0,
+            tree: false,
+        }
+    }
+
+    /// `K`: the shells besides the sampling sphere.
+    pub(crate) fn count(&self) -> u32 {
+        self.count
+    }
+
+    /// Length of the SHEL section (0 without one).
+    pub(crate) fn section_bytes(&self) -> u64 {
+        self.body.len() as u64
+    }
+
+    /// A `u32` of the record of shell `k` (`1..=K`) at `field` bytes into it.
+    fn field(&self, k: u32, field: usize) -> u32 {
+        let at = (SHEL_HEADER_LEN + SHELL_RECORD_LEN * u64::from(k.saturating_sub(1))) as usize;
+        self.body
+            .get(at + field..at + field + 4)
+            .map_or(0, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
+    /// Camera distance of shell `k` (`1..=K`).
+    pub(crate) fn distance(&self, k: u32) -> f32 {
+        f32::from_bits(self.field(k, 0))
+    }
+
+    /// Sphere level of shell `k` (`1..=K`).
+    pub(crate) fn level(&self, k: u32) -> u32 {
+        self.field(k, 4)
+    }
+
+    /// The stored payload length of shell `k` (`1..=K`).
+    fn length(&self, k: u32) -> u64 {
+        u64::from(self.field(k, 8)) | u64::from(self.field(k, 12)) << 32
+    }
+
+    /// Where shell `k`'s payload lies, from the start of the section: `(offset, length)`.
+    /// Payloads follow the records in shell order, contiguous.
+    pub(crate) fn payload_range(&self, k: u32) -> (u64, u64) {
+        let mut offset = SHEL_HEADER_LEN + SHELL_RECORD_LEN * u64::from(self.count);
+        for j in 1..k {
+            offset = offset.saturating_add(self.length(j));
+        }
+        (offset, self.length(k))
+    }
+
+    /// Where shell `k`'s payload lies in the file: a VISB body, as parse checked it.
+    pub(crate) fn payload(&self, k: u32) -> Section {
+        let (offset, length) = self.payload_range(k);
+        Section {
+            offset: self.offset.saturating_add(offset),
+            length,
+        }
+    }
+}
+
+/// The band of an eye at offset `d` from the centre (§ Query): how many of the distances
+/// `outer` (shell 0's, CAMR's) and shells `1..=K` it is strictly inside. Distances decrease,
+/// so the count stops at the first shell the eye is not inside.
+pub(crate) fn band(d: [f32; 3], outer: f32, shells: &Shells<'_>) -> u32 {
+    if !norm_below(d, outer) {
+        return 0;
+    }
+    let mut b = 1;
+    while b <= shells.count && norm_below(d, shells.distance(b)) {
+        b += 1;
+    }
+    b
+}
+
+/// The two shells whose rows answer band `b` of a file with `k` shells: `[outer, inner]`,
+/// equal where one shell answers (band 0: the sampling sphere; band `K + 1`: shell `K`).
+pub(crate) fn shells_of_band(b: u32, k: u32) -> [u32; 2] {
+    [b.saturating_sub(1), b.min(k)]
+}
