@@ -61,9 +61,20 @@ fn differences(a: &VisibilityMatrix, b: &VisibilityMatrix) -> (u64, u64, u64) {
 
 /// Samples the bunny on both backends with `options` and checks that they agree.
 fn compare(test: &str, level: u32, resolution: u32, options: &SamplingOptions) {
+    compare_with(test, level, resolution, &|_| options.clone());
+}
+
+/// [`compare`] with the options made from the sampling parameters.
+fn compare_with(
+    test: &str,
+    level: u32,
+    resolution: u32,
+    options: &dyn Fn(&SamplingParams) -> SamplingOptions,
+) {
     let Some(gpu) = gpu(test) else { return };
     let (mesh, tiling) = bunny();
     let params = SamplingParams::for_mesh(mesh, level, resolution, 45.0);
+    let options = &options(&params);
     let start = std::time::Instant::now();
     let cpu = sample_tiled(mesh, tiling, &params, options, &NoProgress).expect("CPU sampling");
     let cpu_seconds = start.elapsed().as_secs_f64();
@@ -108,6 +119,20 @@ fn gpu_min_pixels_dilate_and_always_visible_match_the_cpu() {
         ..SamplingOptions::default()
     };
     compare("options", 1, 256, &options);
+}
+
+#[test]
+fn gpu_near_views_match_the_cpu() {
+    // A cube map of five cameras per view (1.1 bounding radii) and one camera (2 radii).
+    for factor in [1.1, 2.0] {
+        compare_with(&format!("near {factor}"), 1, 128, &|params| {
+            SamplingOptions {
+                shell: Some(params.radius * factor),
+                min_pixels: 2,
+                ..SamplingOptions::default()
+            }
+        });
+    }
 }
 
 #[test]

@@ -92,18 +92,16 @@ impl Camera {
         Camera { near, ..self }
     }
 
-    fn look_at_f64(eye: [f64; 3], target: [f64; 3], fov_deg: f64, resolution: u32) -> Camera {
+    /// [`Camera::look_at`] in binary64.
+    pub(super) fn look_at_f64(
+        eye: [f64; 3],
+        target: [f64; 3],
+        fov_deg: f64,
+        resolution: u32,
+    ) -> Camera {
         assert!(
             eye.iter().chain(&target).all(|c| c.is_finite()),
             "camera eye {eye:?} and target {target:?} must be finite"
-        );
-        assert!(
-            fov_deg > 0.0 && fov_deg < 180.0,
-            "field of view must be in (0, 180) degrees, got {fov_deg}"
-        );
-        assert!(
-            (1..=MAX_RESOLUTION).contains(&resolution),
-            "resolution must be in 1..={MAX_RESOLUTION}, got {resolution}"
         );
         let to_target = sub(target, eye);
         let distance = dot(to_target, to_target).sqrt();
@@ -116,6 +114,38 @@ impl Camera {
         };
         let right = normalize(cross(forward, world_up));
         let up = cross(right, forward);
+        Camera::from_basis(
+            eye,
+            [right, up, forward],
+            fov_deg,
+            resolution,
+            NEAR_FRACTION * distance,
+        )
+    }
+
+    /// A camera at `eye` with the orthonormal basis `[right, up, forward]` (`right = forward ×
+    /// up`), full field of view `fov_deg`, a `resolution`² image and the near plane at
+    /// view-space depth `near`: [`Camera::look_at`]'s camera once its basis is chosen, and the
+    /// turned faces of a near view's cube map (`near.rs`).
+    pub(super) fn from_basis(
+        eye: [f64; 3],
+        [right, up, forward]: [[f64; 3]; 3],
+        fov_deg: f64,
+        resolution: u32,
+        near: f64,
+    ) -> Camera {
+        assert!(
+            fov_deg > 0.0 && fov_deg < 180.0,
+            "field of view must be in (0, 180) degrees, got {fov_deg}"
+        );
+        assert!(
+            (1..=MAX_RESOLUTION).contains(&resolution),
+            "resolution must be in 1..={MAX_RESOLUTION}, got {resolution}"
+        );
+        assert!(
+            near > 0.0 && near.is_finite(),
+            "near plane must be > 0, got {near}"
+        );
         let half = resolution as f64 * 0.5;
         let scale = half / (fov_deg.to_radians() * 0.5).tan();
         let axes = [
@@ -134,7 +164,7 @@ impl Camera {
             forward,
             fov_deg,
             resolution,
-            near: NEAR_FRACTION * distance,
+            near,
             half,
             scale,
             rows32,
@@ -247,7 +277,11 @@ impl Camera {
         let (x, y, w) = (dot(d, self.right), dot(d, self.up), dot(d, self.forward));
         let (w_near, w_far) = (w - r, w + r);
         if w_near <= self.near {
-            return SphereBounds::Unbounded;
+            return if self.ball_beyond_edges(x, y, w, r) {
+                SphereBounds::Outside
+            } else {
+                SphereBounds::Unbounded
+            };
         }
         let lo_hi = |c: f64| {
             let ratios = [
@@ -279,7 +313,11 @@ impl Camera {
             let d = sub(c, self.eye);
             let (x, y, w) = (dot(d, self.right), dot(d, self.up), dot(d, self.forward));
             if w <= self.near || w.is_nan() {
-                return SphereBounds::Unbounded;
+                return if self.hull_beyond_edges(corners) {
+                    SphereBounds::Outside
+                } else {
+                    SphereBounds::Unbounded
+                };
             }
             let (x, y) = (x / w, y / w);
             x_lo = x_lo.min(x);
@@ -289,6 +327,52 @@ impl Camera {
             w_near = w_near.min(w);
         }
         self.screen_rect(x_lo, x_hi, y_lo, y_hi, w_near)
+    }
+
+    /// The tangent of the half-angle of the image widened by [`SPHERE_RECT_MARGIN`] pixels on
+    /// each side: a point `(x, y, w)` of view space can touch a pixel only if `|x|, |y| <= t ·
+    /// w`.
+    fn widened_tangent(&self) -> f64 {
+        (self.half + SPHERE_RECT_MARGIN) / self.scale
+    }
+
+    /// Whether the ball of radius `r` around view-space `(x, y, w)` covers no pixel although
+    /// it reaches the near plane: it lies wholly behind the eye (`w < 0`), or wholly outside
+    /// one of the four planes through the eye and the widened image's edges, so that no ray
+    /// from the eye through the image meets it. Only the turned faces of a near view's cube
+    /// map (`near.rs`) see patches behind or beside them.
+    fn ball_beyond_edges(&self, x: f64, y: f64, w: f64, r: f64) -> bool {
+        let t = self.widened_tangent();
+        // The planes' normals `(±1, 0, t)` and `(0, ±1, t)` have this length; a relative
+        // slack keeps rounding on the safe side.
+        // A NaN coordinate makes every comparison false: it proves nothing.
+        let slack = 1e-9 * (x.abs() + y.abs() + w.abs() + r);
+        let reach = r * (1.0 + t * t).sqrt() + slack;
+        w + r < -slack || [x, -x, y, -y].iter().any(|&c| c + t * w < -reach)
+    }
+
+    /// [`Camera::ball_beyond_edges`] for the convex hull of `corners`: every corner lies behind
+    /// the eye, or outside the same widened edge plane.
+    fn hull_beyond_edges(&self, corners: &[[f64; 3]]) -> bool {
+        let t = self.widened_tangent();
+        let mut outside = [true; 5];
+        for &c in corners {
+            let d = sub(c, self.eye);
+            let (x, y, w) = (dot(d, self.right), dot(d, self.up), dot(d, self.forward));
+            let slack = 1e-9 * (x.abs() + y.abs() + w.abs());
+            // A NaN coordinate makes every comparison false: it proves nothing.
+            let beyond = [
+                w < -slack,
+                x + t * w < -slack,
+                -x + t * w < -slack,
+                y + t * w < -slack,
+                -y + t * w < -slack,
+            ];
+            for (o, b) in outside.iter_mut().zip(beyond) {
+                *o &= b;
+            }
+        }
+        !corners.is_empty() && outside.iter().any(|&o| o)
     }
 
     /// The bounds of contents whose `x / w` spans `[x_lo, x_hi]`, `y / w` spans `[y_lo,
@@ -346,7 +430,7 @@ impl Camera {
     }
 }
 
-fn widen(p: [f32; 3]) -> [f64; 3] {
+pub(super) fn widen(p: [f32; 3]) -> [f64; 3] {
     [p[0] as f64, p[1] as f64, p[2] as f64]
 }
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {

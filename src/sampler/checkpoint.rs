@@ -25,8 +25,9 @@ const MAGIC: &[u8; 8] = b"PVISCKPT";
 /// older build wrote is refused instead of mixed with rows of this one: 2 since vertices
 /// snap through the binary32 transform (`raster::snap32`), 3 since a depth tie goes to the
 /// smaller patch id instead of the smaller input triangle, 4 since the file ends in a
-/// CRC-32C, 5 since it hashes the probe pass.
-const VERSION: u32 = 5;
+/// CRC-32C, 5 since it hashes the probe pass, 6 since it hashes a near pass's shell and the
+/// band its probe spans.
+const VERSION: u32 = 6;
 const HEADER_BYTES: usize = 8 + 4 + 4 + 8 + 4 + 4;
 const CRC_BYTES: usize = 4;
 /// What a refused checkpoint's message tells the user to do.
@@ -65,6 +66,16 @@ pub(crate) fn input_hash(
         h.word(u64::from(p));
     }
     h.word(options.probe.map_or(0, |r| u64::from(r) + 1));
+    // A tag per option, so that a shell and a band of the same bits hash apart.
+    h.word(
+        options
+            .shell
+            .map_or(0, |r| u64::from(r.to_bits()) | 1 << 32),
+    );
+    h.word(options.band.map_or(0, |[near, far]| {
+        u64::from(near.to_bits()) | u64::from(far.to_bits()) << 32
+    }));
+    h.word(u64::from(options.band.is_some()));
     if let Some(views) = &options.views {
         h.word(views.len() as u64 | 1 << 63);
         for &v in views {

@@ -6,6 +6,13 @@
 //! rasterizer), `clip.rs` (near plane and guard band), `id_buffer.rs` (the render target).
 //! Cost: one full render per view; views run in parallel (one view per task, a buffer and
 //! scratch per worker), and the result does not depend on the number of threads.
+//!
+//! Near views (`SamplingOptions::shell`, for the sampling shells of format version 5): a
+//! view's eye lies on a sphere of radius `r` (`R <= r`) around the centre, in the view's
+//! direction, and its row holds every patch visible from the eye in any direction: the OR of
+//! one camera's row, or of five cube faces' rows when the bounding sphere is wider than 90°
+//! from there (`near.rs` states the convention). [`sample_near`] is their brute-force
+//! reference, as [`sample`] is the sampling views'.
 
 mod camera;
 mod checkpoint;
@@ -16,6 +23,7 @@ pub mod gpu;
 mod id_buffer;
 mod key_buffer;
 mod marks;
+mod near;
 mod patch_box;
 mod patch_graph;
 mod patch_mesh;
@@ -31,6 +39,7 @@ pub use camera::{Camera, MAX_RESOLUTION, NEAR_FRACTION};
 #[doc(hidden)]
 pub use checkpoint::{decode as decode_checkpoint, encode as encode_checkpoint};
 pub use id_buffer::{IdBuffer, NO_PATCH};
+pub use near::{MAX_NEAR_CAMERAS, NearCameras, near_camera_count, near_cameras};
 pub use raster::{Rasterizer, SUBPIXEL_BITS, render_ids, render_ids_filtered};
 pub use supersample::{
     FoldCorners, FoldTargets, MAX_VIEW_SUPERSAMPLE, fold_into, fold_into_with, fold_targets,
@@ -108,6 +117,58 @@ pub fn sample_directions(
             );
     } else {
         progress.inc(views as u64);
+    }
+    progress.finish();
+    matrix
+}
+
+/// Renders every near view of `params` on the shell at `distance` from `params.center` (see
+/// `SamplingOptions::shell`) and returns which patches each one shows in any direction: every
+/// triangle drawn into an ID buffer per camera ([`near_cameras`]), the OR of their ids. The
+/// reference [`sample_tiled`] with `shell: Some(distance)` and default options equals.
+///
+/// Panics (caller contract) as [`sample`] does, and unless `distance` is finite and at least
+/// `params.radius`.
+pub fn sample_near(
+    mesh: &Mesh,
+    patch_of: &[PatchId],
+    patch_count: u32,
+    params: &SamplingParams,
+    distance: f32,
+    progress: &dyn Progress,
+) -> VisibilityMatrix {
+    assert_eq!(
+        patch_of.len(),
+        mesh.triangle_count() as usize,
+        "patch_of must hold one patch per triangle"
+    );
+    if let Some(bad) = patch_of.iter().find(|&&p| p >= patch_count) {
+        panic!("patch id {bad} is not below patch_count {patch_count}");
+    }
+    // Checks `params.radius` and `distance`.
+    near_camera_count(params, distance);
+    let views = crate::sphere::view_count(params.level);
+    let mut matrix = VisibilityMatrix::new(views, patch_count);
+    progress.start("sampling", u64::from(views));
+    if matrix.words_per_row() > 0 {
+        let words_per_row = matrix.words_per_row();
+        matrix
+            .words_mut()
+            .par_chunks_mut(words_per_row)
+            .enumerate()
+            .for_each_init(
+                || (IdBuffer::new(params.resolution), Rasterizer::new()),
+                |(buffer, rasterizer), (view, row)| {
+                    for camera in near_cameras(params, view as u32, distance).iter() {
+                        buffer.clear();
+                        rasterizer.render(mesh, patch_of, camera, buffer);
+                        mark_visible(buffer.ids(), row);
+                    }
+                    progress.inc(1);
+                },
+            );
+    } else {
+        progress.inc(u64::from(views));
     }
     progress.finish();
     matrix

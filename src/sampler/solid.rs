@@ -77,12 +77,48 @@ fn dot(u: [f64; 3], v: [f64; 3]) -> f64 {
     u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
 }
 
+/// The cameras whose queries may use a view's row, for the facing tests: every point within
+/// `radius` of the segment between `ends` (a ball when they coincide). The segment runs along
+/// the view's direction over the camera distances the row answers (`SamplingOptions::band`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Cell {
+    /// The segment's ends.
+    pub(crate) ends: [[f64; 3]; 2],
+    /// Distance from the segment.
+    pub(crate) radius: f64,
+}
+
+impl Cell {
+    /// The ball of `radius` around `eye`.
+    pub(crate) fn ball(eye: [f64; 3], radius: f64) -> Cell {
+        Cell {
+            ends: [eye, eye],
+            radius,
+        }
+    }
+
+    /// The distinct ends. A half-space holds the cell when it holds the balls around its
+    /// ends, since the cell is their convex hull, so every facing test runs on them.
+    fn balls(&self) -> &[[f64; 3]] {
+        if self.ends[0] == self.ends[1] {
+            &self.ends[..1]
+        } else {
+            &self.ends
+        }
+    }
+}
+
 /// Whether a plane through `point` with normal `normal` (not unit) is seen from its front by
-/// some point within `cell` of `eye`.
-pub(crate) fn may_face(point: [f64; 3], normal: [f64; 3], eye: [f64; 3], cell: f64) -> bool {
+/// some point of `cell`.
+pub(crate) fn may_face(point: [f64; 3], normal: [f64; 3], cell: &Cell) -> bool {
     let len = dot(normal, normal).sqrt();
     // A degenerate triangle has no side: treat it as facing.
-    len.is_nan() || len == 0.0 || dot(normal, sub(eye, point)) >= -cell * len
+    len.is_nan()
+        || len == 0.0
+        || cell
+            .balls()
+            .iter()
+            .any(|&eye| dot(normal, sub(eye, point)) >= -cell.radius * len)
 }
 
 fn find(parent: &mut [u32], mut x: u32) -> u32 {
@@ -217,17 +253,16 @@ impl Solids {
         self.loop_start.windows(2).filter(|w| w[0] == w[1]).count()
     }
 
-    /// Where each component may be looked into from a camera within `cell` of the view's eye:
-    /// the screen rectangles of its loops whose caps some such camera sees from the front,
+    /// Where each component may be looked into from a camera of `cell`: the screen rectangles
+    /// in `camera`'s image of its loops whose caps some such camera sees from the front,
     /// widened by `margin` pixels. Component `c`'s are `rects[start[c]..start[c + 1]]`.
     pub(crate) fn openings(
         &self,
         camera: &Camera,
-        cell: f64,
+        cell: &Cell,
         margin: usize,
         openings: &mut Openings,
     ) {
-        let eye = camera.eye();
         let last = camera.resolution() as usize - 1;
         openings.rects.clear();
         openings.start.clear();
@@ -236,7 +271,7 @@ impl Solids {
             for l in &self.loops[w[0] as usize..w[1] as usize] {
                 if !self.caps[l.caps.clone()]
                     .iter()
-                    .any(|cap| may_face(l.apex, cap.normal, eye, cell))
+                    .any(|cap| may_face(l.apex, cap.normal, cell))
                 {
                     continue;
                 }
@@ -259,22 +294,21 @@ impl Solids {
     }
 
     /// Whether input triangle `t` (corners `tri`, covering the pixel rectangle `pixels`, `[x0,
-    /// y0, x1, y1]` inclusive) may show to a camera within `cell` of `eye`: its outward side
-    /// faces some such camera, or it lies behind an opening of its component that one faces
+    /// y0, x1, y1]` inclusive) may show to a camera of `cell`: its outward side faces some
+    /// such camera, or it lies behind an opening of its component that one faces
     /// ([`Solids::openings`] of the view).
     pub(crate) fn may_show(
         &self,
         t: u32,
         tri: [[f32; 3]; 3],
         pixels: [usize; 4],
-        eye: [f64; 3],
-        cell: f64,
+        cell: &Cell,
         openings: &Openings,
     ) -> bool {
         let [a, b, c] = tri.map(|p| p.map(f64::from));
         let normal =
             cross(sub(b, a), sub(c, a)).map(|x| x * f64::from(self.orientation[t as usize]));
-        if may_face(a, normal, eye, cell) {
+        if may_face(a, normal, cell) {
             return true;
         }
         let c = self.component[t as usize] as usize;
@@ -309,8 +343,8 @@ impl Solids {
 
     /// Whether every triangle of a patch on component `c` (bounding sphere `center`,
     /// `radius`; geometric normals within the cone `axis`, `cos`) faces away from every
-    /// camera within `cell` of `eye`, and none lies behind an opening of `c` one of them
-    /// faces (`rect`: the patch's screen rectangle, `[x0, y0, x1, y1]`).
+    /// camera of `cell`, and none lies behind an opening of `c` one of them faces (`rect`:
+    /// the patch's screen rectangle, `[x0, y0, x1, y1]`).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn patch_hidden_side(
         &self,
@@ -320,8 +354,7 @@ impl Solids {
         axis: [f32; 3],
         cos: f32,
         rect: Option<[usize; 4]>,
-        eye: [f64; 3],
-        cell: f64,
+        cell: &Cell,
         openings: &Openings,
     ) -> bool {
         if c == u32::MAX || cos <= 0.0 {
@@ -339,19 +372,22 @@ impl Solids {
             }
         }
         // Outward normals lie within the cone around `sign · axis`; the patch's points seen
-        // from the cell lie within `rho` of direction `d`. All back sides show when the
-        // angle between them, plus the cone's and the ball's half-angles, stays below 90°.
+        // from a ball of the cell lie within `rho` of direction `d`. All back sides show when
+        // the angle between them, plus the cone's and the ball's half-angles, stays below 90°
+        // (for each ball, and so for the cell, their convex hull).
         let sign = f64::from(self.orientation_of_component(c));
         let axis = axis.map(|x| f64::from(x) * sign);
-        let d = sub(center.map(f64::from), eye);
-        let rho = f64::from(radius) + cell;
-        let len = dot(d, d).sqrt();
-        if len.is_nan() || len <= rho {
-            return false;
-        }
-        let angle = (dot(d, axis) / len).clamp(-1.0, 1.0).acos();
-        let spread = (rho / len).asin() + f64::from(cos).clamp(-1.0, 1.0).acos();
-        angle + spread < std::f64::consts::FRAC_PI_2 - 1e-6
+        cell.balls().iter().all(|&eye| {
+            let d = sub(center.map(f64::from), eye);
+            let rho = f64::from(radius) + cell.radius;
+            let len = dot(d, d).sqrt();
+            if len.is_nan() || len <= rho {
+                return false;
+            }
+            let angle = (dot(d, axis) / len).clamp(-1.0, 1.0).acos();
+            let spread = (rho / len).asin() + f64::from(cos).clamp(-1.0, 1.0).acos();
+            angle + spread < std::f64::consts::FRAC_PI_2 - 1e-6
+        })
     }
 
     fn orientation_of_component(&self, c: usize) -> i8 {
@@ -512,13 +548,14 @@ mod tests {
     /// whole image.
     fn shown(solids: &Solids, mesh: &Mesh, camera: &Camera) -> Vec<bool> {
         let mut openings = Openings::default();
-        solids.openings(camera, 0.0, 1, &mut openings);
+        let cell = Cell::ball(camera.eye(), 0.0);
+        solids.openings(camera, &cell, 1, &mut openings);
         (0..mesh.triangle_count())
             .map(|t| {
                 // The whole image: whether an opening's rectangle exists decides.
                 let last = camera.resolution() as usize - 1;
                 let pixels = [0, 0, last, last];
-                solids.may_show(t, corners(mesh, t), pixels, camera.eye(), 0.0, &openings)
+                solids.may_show(t, corners(mesh, t), pixels, &cell, &openings)
             })
             .collect()
     }
@@ -589,11 +626,14 @@ mod tests {
         let camera = Camera::look_at(eye.map(|x| x as f32), [1.75, 0.5, 0.5], 45.0, 64);
         let openings = {
             let mut o = Openings::default();
-            solids.openings(&camera, 0.0, 1, &mut o);
+            solids.openings(&camera, &Cell::ball(camera.eye(), 0.0), 1, &mut o);
             o
         };
         let top: Vec<u32> = (0..24)
-            .filter(|&t| solids.may_show(t, corners(&m, t), [0; 4], camera.eye(), 0.0, &openings))
+            .filter(|&t| {
+                let cell = Cell::ball(camera.eye(), 0.0);
+                solids.may_show(t, corners(&m, t), [0; 4], &cell, &openings)
+            })
             .collect();
         // The +Z face of each cube, and the inner-facing side walls (+X of the first, −X of
         // the second), which the eye between them sees.

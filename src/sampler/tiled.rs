@@ -30,6 +30,10 @@
 //! patch no longer pays for its larger buffers, so each task renders one view
 //! (docs/benchmarks/sampling.md).
 //!
+//! A near pass (`shell`, `near.rs`) renders each view's one or five cameras this way, each
+//! seeded by the parents' rows of its own shell, and ORs their rows; a cube face passes over
+//! the hinted patches wholly outside it, and those it cuts through take the clip path.
+//!
 //! Options: `min_pixels` (a patch counts only if it covers that many pixels), `dilate` (also
 //! mark edge neighbours of visible patches that may face the eye), `always_visible` (patches
 //! set in every row), `conservative` (conservative rasterization, `conservative.rs`), a
@@ -44,11 +48,12 @@
 //! **Invariant**: the result is the same for any number of threads, and with or without a
 //! resumed checkpoint; a row rendered with `views` equals the row of a run without.
 
-use super::camera::{Camera, SphereBounds};
+use super::camera::{Camera, SphereBounds, normalize, widen};
 use super::checkpoint;
 use super::conservative::scan_triangle_conservative;
 use super::key_buffer::{KeyBuffer, low_half, patch_slot};
 use super::marks::Marks;
+use super::near::{near_camera_count, near_cameras};
 use super::patch_box::{PatchBox, patch_boxes};
 use super::patch_graph::faces_away;
 use super::patch_mesh::{PatchMesh, Storage};
@@ -56,6 +61,7 @@ use super::raster::{
     DEFAULT_PATHS, ProjectedVertex, ScreenBatch, ScreenVertex, draw_triangle, prefetch, project,
     scan_triangle_with_area, signed_area, sphere_needs_no_clip, view_planes,
 };
+use super::solid::Cell;
 use super::{SamplingParams, VisibilityMatrix};
 use crate::ooc::Mesh;
 use crate::progress::Progress;
@@ -100,8 +106,10 @@ pub struct SamplingOptions {
     /// A near pass: the views' eyes lie on a sphere of this radius around `params.center`
     /// (below the sampling distance, at least the bounding radius) instead of at the sampling
     /// distance, and each view records every patch visible from its eye in any direction,
-    /// rendering as many frustums as cover the bounding sphere from there (spec § SHEL).
-    /// `None`: the sampling sphere's views.
+    /// rendering as many frustums as cover the bounding sphere from there (spec § SHEL; the
+    /// cameras: [`super::near_cameras`]). `None`: the sampling sphere's views.
+    ///
+    /// Panics in [`sample_tiled`] (caller contract) below `params.radius` or when not finite.
     pub shell: Option<f32>,
     /// The camera distances `[nearest, farthest]` (from `params.center`) whose queries the
     /// rows of this pass answer, with the views of the neighbouring shells (spec § Query):
@@ -154,6 +162,10 @@ pub fn sample_tiled(
         "sampling radius must be positive and finite, got {}",
         params.radius
     );
+    if let Some(distance) = options.shell {
+        // Checks the shell's distance (caller contract).
+        near_camera_count(params, distance);
+    }
     let views = view_count(params.level);
     let mut matrix = VisibilityMatrix::new(views, patch_count);
     let rendered = rendered_views(views, options.views.as_deref());
@@ -200,7 +212,7 @@ pub fn sample_tiled(
         back_winding: back_winding(mesh),
         probe: options
             .probe
-            .map(|radius| probe::Probe::new(radius, params, mesh, tiling)),
+            .map(|radius| probe::Probe::new(radius, params, options, mesh, tiling)),
     };
     let words_per_row = matrix.words_per_row();
     for level in first_level..=params.level {
@@ -357,6 +369,8 @@ struct WorkerScratch {
     draw: DrawScratch,
     resolve: ResolveScratch,
     probe: Option<probe::ProbeScratch>,
+    /// One camera's row of a near view, before it is ORed into the view's.
+    camera_row: Vec<u64>,
 }
 
 impl WorkerScratch {
@@ -379,6 +393,7 @@ impl WorkerScratch {
                 seen: vec![0; words],
             },
             probe: probe.then(|| probe::ProbeScratch::new(resolution)),
+            camera_row: vec![0; words],
         }
     }
 }
@@ -481,12 +496,8 @@ impl Placer<'_, '_> {
 
 impl ViewContext<'_> {
     /// Renders view `index` into `row`, `hint` giving its parents' rows (`None` in the first
-    /// level). The patches its hints show (every patch in the first level) are drawn first,
-    /// except their triangles that face away from the eye, which are put off; then the
-    /// occlusion tiles are built, and the put-off triangles and the other patches are drawn
-    /// unless the tiles prove them hidden (patches by their bounding sphere and box, then each
-    /// cluster by its sphere, then each triangle by its bounding box). The keys do not depend
-    /// on drawing order, so the row equals a brute-force render's.
+    /// level): the sampling view's camera, or each camera of a near view (`near.rs`), whose
+    /// rows are ORed.
     fn render_view(
         &self,
         index: u32,
@@ -494,8 +505,43 @@ impl ViewContext<'_> {
         scratch: &mut WorkerScratch,
         row: &mut [u64],
     ) {
+        let d = normalize(widen(crate::sphere::direction(index)));
+        let Some(distance) = self.options.shell else {
+            let camera = Camera::sampling_view(self.params, index);
+            let cell = self.probe.as_ref().map(|p| p.cell(d, camera.eye()));
+            self.render_camera(&camera, cell.as_ref(), hint, scratch, row);
+            return;
+        };
+        let cameras = near_cameras(self.params, index, distance);
+        let cell = self.probe.as_ref().map(|p| p.cell(d, cameras[0].eye()));
+        let mut part = std::mem::take(&mut scratch.camera_row);
+        row.fill(0);
+        for camera in cameras.iter() {
+            self.render_camera(camera, cell.as_ref(), hint, scratch, &mut part);
+            for (r, p) in row.iter_mut().zip(&part) {
+                *r |= p;
+            }
+        }
+        scratch.camera_row = part;
+    }
+
+    /// Renders `camera`'s image into `row` (and the probe pass for the cameras of `cell`, when
+    /// there is one). The patches its hints show (every patch in the first level) are drawn
+    /// first, except their triangles that face away from the eye, which are put off; then the
+    /// occlusion tiles are built, and the put-off triangles and the other patches are drawn
+    /// unless the tiles prove them hidden (patches by their bounding sphere and box, then each
+    /// cluster by its sphere, then each triangle by its bounding box). The keys do not depend
+    /// on drawing order, so the row equals a brute-force render's.
+    fn render_camera(
+        &self,
+        camera: &Camera,
+        cell: Option<&Cell>,
+        hint: Option<[&[u64]; 2]>,
+        scratch: &mut WorkerScratch,
+        row: &mut [u64],
+    ) {
         let patch_count = self.mesh.patch_count();
-        let camera = Camera::sampling_view(self.params, index);
+        let near = self.options.shell.is_some();
         let valid = |w: usize| valid_bits(w, patch_count);
         let WorkerScratch { view, draw, .. } = scratch;
         view.deferred.clear();
@@ -515,7 +561,15 @@ impl ViewContext<'_> {
         }
         for w in 0..view.drawn.len() {
             for k in Patches::of_bits(&[view.drawn[w]]) {
-                self.draw_patch(w * 64 + k as usize, &camera, view, draw, Pass::First);
+                let p = w * 64 + k as usize;
+                // A cube face of a near view sees only some of the patches.
+                if near && {
+                    let patch = &self.tiling.patches[p];
+                    camera.sphere_bounds(patch.center, patch.radius) == SphereBounds::Outside
+                } {
+                    continue;
+                }
+                self.draw_patch(p, camera, view, draw, Pass::First);
             }
         }
         view.keys.build_tiles();
@@ -534,14 +588,16 @@ impl ViewContext<'_> {
                 let visible = !hidden(camera.sphere_bounds(patch.center, patch.radius), &view.keys)
                     && !hidden(camera.hull_bounds(&self.boxes[p].corners()), &view.keys);
                 if visible {
-                    self.draw_patch(p, &camera, view, draw, Pass::Tested);
+                    self.draw_patch(p, camera, view, draw, Pass::Tested);
                 }
             }
         }
         self.probe_prepare(scratch);
         // Resolving empties the key buffer for the worker's next view.
-        self.resolve(&camera, &mut scratch.view.keys, &mut scratch.resolve, row);
-        self.probe_row(&camera, scratch, row);
+        self.resolve(camera, &mut scratch.view.keys, &mut scratch.resolve, row);
+        if let Some(cell) = cell {
+            self.probe_row(camera, cell, scratch, row);
+        }
     }
 
     /// Draws the triangles of patch `p` into `view`'s key buffer: in the first pass all but

@@ -14,10 +14,12 @@
 //! 1`.
 //!
 //! The cameras are [`Camera::sampling`]'s (same eye, basis, field of view, near plane and
-//! resolution; `view_matrix` turns one into a clip matrix). The result is not bit-identical
-//! to the CPU backend's: the GPU transforms in `f32` and snaps vertices with its own subpixel
-//! precision and tie rules, so pixels on triangle edges can change hands, and a patch seen
-//! only through such pixels can differ (tests/gpu.rs bounds the difference; BENCHMARKS.md
+//! resolution; `view_matrix` turns one into a clip matrix), or in a near pass
+//! ([`SamplingOptions::shell`]) each of a near view's cameras ([`super::near_cameras`]) in a
+//! layer of its own, whose rows are ORed into the view's row on the CPU. The result is not
+//! bit-identical to the CPU backend's: the GPU transforms in `f32` and snaps vertices with its
+//! own subpixel precision and tie rules, so pixels on triangle edges can change hands, and a
+//! patch seen only through such pixels can differ (tests/gpu.rs bounds the difference; BENCHMARKS.md
 //! records it). Options: `min_pixels` runs on the GPU; `dilate` and `always_visible` are the
 //! CPU backend's post-processing of the rows; `conservative` and `resume` are refused
 //! ([`GpuError::Unsupported`]); no checkpoint is written.
@@ -28,7 +30,7 @@
 //! `resolution² × 8` bytes per batched view, capped at [`BATCH_TARGET_BYTES`].
 
 use super::marks::Marks;
-use super::{Camera, SamplingOptions, SamplingParams, VisibilityMatrix};
+use super::{Camera, SamplingOptions, SamplingParams, VisibilityMatrix, near_cameras};
 pub use crate::gpu::GpuError;
 use crate::gpu::mesh::{self as upload};
 use crate::gpu::{depth_tested_pipeline, describe, one_line, open_device, view_matrix};
@@ -153,35 +155,72 @@ impl GpuSampler {
             });
         }
         let views = view_count(params.level);
+        // Every view's cameras, view after view: one each, or a near view's one or five.
+        let cameras: Vec<Camera> = match options.shell {
+            None => (0..views)
+                .map(|v| Camera::sampling_view(params, v))
+                .collect(),
+            Some(distance) => (0..views)
+                .flat_map(|v| near_cameras(params, v, distance).to_vec())
+                .collect(),
+        };
+        let per_view = cameras.len() / views as usize;
         let mut matrix = VisibilityMatrix::new(views, patch_count);
-        progress.start("sampling", u64::from(views));
+        progress.start("sampling", cameras.len() as u64);
         if patch_count > 0 {
+            let mut camera_rows = if per_view == 1 {
+                None
+            } else {
+                Some(VisibilityMatrix::new(cameras.len() as u32, patch_count))
+            };
             // Out-of-memory and validation errors become values instead of wgpu's default
             // panic; scopes pop in reverse order.
             let memory_scope = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
             let validation_scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-            let sampled = self.sample_rows(mesh, tiling, params, options, &mut matrix, progress);
+            let sampled = self.sample_rows(
+                mesh,
+                tiling,
+                params,
+                options,
+                &cameras,
+                camera_rows.as_mut().unwrap_or(&mut matrix),
+                progress,
+            );
             let validation = pollster::block_on(validation_scope.pop());
             let memory = pollster::block_on(memory_scope.pop());
             sampled?;
             if let Some(e) = memory.or(validation) {
                 return Err(GpuError::Failed(one_line(e)));
             }
-            post_process(mesh, tiling, params, options, &mut matrix);
+            if let Some(rows) = &camera_rows {
+                for view in 0..views {
+                    let first = view * per_view as u32;
+                    for c in first..first + per_view as u32 {
+                        for (r, w) in matrix.row_mut(view).iter_mut().zip(rows.row(c)) {
+                            *r |= w;
+                        }
+                    }
+                }
+            }
+            let eyes: Vec<[f64; 3]> = cameras.iter().step_by(per_view).map(Camera::eye).collect();
+            post_process(mesh, tiling, options, &eyes, &mut matrix);
         } else {
-            progress.inc(u64::from(views));
+            progress.inc(cameras.len() as u64);
         }
         progress.finish();
         Ok(matrix)
     }
 
-    /// Fills the rows of `matrix` batch by batch (the module documentation's technique).
+    /// Fills the rows of `matrix`, one per camera of `cameras`, batch by batch (the module
+    /// documentation's technique).
+    #[allow(clippy::too_many_arguments)]
     fn sample_rows(
         &self,
         mesh: &Mesh,
         tiling: &Tiling,
         params: &SamplingParams,
         options: &SamplingOptions,
+        cameras: &[Camera],
         matrix: &mut VisibilityMatrix,
         progress: &dyn Progress,
     ) -> Result<(), GpuError> {
@@ -289,10 +328,9 @@ impl GpuSampler {
         for (k, first) in (0..views).step_by(batch as usize).enumerate() {
             let count = batch.min(views - first);
             let mut matrix_bytes = Vec::with_capacity((MATRIX_BYTES * u64::from(count)) as usize);
-            for view in first..first + count {
-                let camera = Camera::sampling_view(params, view);
+            for camera in &cameras[first as usize..(first + count) as usize] {
                 matrix_bytes.extend(
-                    view_matrix(&camera, params.center)
+                    view_matrix(camera, params.center)
                         .map(f32::to_le_bytes)
                         .concat(),
                 );
@@ -436,13 +474,12 @@ struct Pending {
 fn post_process(
     mesh: &Mesh,
     tiling: &Tiling,
-    params: &SamplingParams,
     options: &SamplingOptions,
+    eyes: &[[f64; 3]],
     matrix: &mut VisibilityMatrix,
 ) {
     let marks = Marks::new(mesh, tiling, options);
-    for view in 0..matrix.views() {
-        let eye = Camera::sampling_view(params, view).eye();
+    for (view, &eye) in (0..matrix.views()).zip(eyes) {
         let seen = matrix.row(view).to_vec();
         marks.apply(tiling, eye, &seen, matrix.row_mut(view));
     }

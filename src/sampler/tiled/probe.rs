@@ -6,18 +6,30 @@
 //! within the sphere faces whose queries use this view's row.
 //!
 //! Shrinking occluders also uncovers the back faces behind every silhouette, which would cost
-//! most of the culling; so a triangle is drawn only if some camera of the view's cell (a ball
-//! around the eye, [`CELL_PER_EDGE`]) may see its visible side: its outward side, or its back
-//! through an opening of its component (`sampler/solid.rs`). Whole patches that face away
-//! from the cell and lie behind no opening are passed over by their normal cone.
+//! most of the culling; so a triangle is drawn only if some camera of the view's cell may see
+//! its visible side: its outward side, or its back through an opening of its component
+//! (`sampler/solid.rs`). Whole patches that face away from the cell and lie behind no opening
+//! are passed over by their normal cone.
+//!
+//! The cell holds every camera whose query may use the view's row: the directions within
+//! [`CELL_PER_EDGE`] edges of the view's, at the pass's distance, or, with
+//! `SamplingOptions::band = [near, far]`, at any distance from `near` to `far`. It is taken as
+//! the points within `CELL_PER_EDGE · edge · far` of the segment from `center + d · near` to
+//! `center + d · far` along the view's direction `d` (a point at angle `φ` and distance `t` lies
+//! within `2 t sin(φ / 2) <= t φ` of `center + d · t`); without a band, the ball of
+//! `CELL_PER_EDGE · edge · distance` around the eye. Every camera of a near view's cube map is
+//! probed, each against its own shrunk occluders.
 
 use super::{ViewContext, WorkerScratch, hidden, valid_bits};
 use crate::runtime::Patches;
+use crate::sampler::SamplingOptions;
 use crate::sampler::camera::{Camera, SphereBounds};
 use crate::sampler::conservative::scan_triangle_conservative;
 use crate::sampler::key_buffer::KeyBuffer;
-use crate::sampler::raster::{SUBPIXEL_BITS, sphere_needs_no_clip};
-use crate::sampler::solid::{Openings, Solids};
+use crate::sampler::raster::{
+    SUBPIXEL_BITS, ScreenVertex, draw_triangle, project, sphere_needs_no_clip, view_planes,
+};
+use crate::sampler::solid::{Cell, Openings, Solids};
 use crate::sphere::{direction, parents, view_count};
 use crate::visibility::SamplingParams;
 
@@ -25,9 +37,12 @@ use crate::visibility::SamplingParams;
 pub(super) struct Probe {
     /// Pixels the occluders are shrunk by.
     radius: usize,
-    /// Radius of the ball around the eye holding every camera whose query may use this
-    /// view's row, in world units, for the facing tests.
+    /// Radius of the cell (see the module documentation) in world units.
     cell: f64,
+    /// The band's camera distances `[near, far]`, if the pass has one.
+    band: Option<[f64; 2]>,
+    /// The sampling centre.
+    center: [f64; 3],
     /// The mesh's solids, for the facing test.
     solids: Solids,
     /// Per patch: [`crate::sampler::solid::Solids::patch_components`].
@@ -77,20 +92,37 @@ fn max_parent_angle(level: u32) -> f64 {
 }
 
 impl Probe {
-    /// The probe of a pass sampling `params` with occluders shrunk by `radius` pixels.
+    /// The probe of a pass sampling `params` with `options` (its shell and band), occluders
+    /// shrunk by `radius` pixels.
     pub(super) fn new(
         radius: u32,
         params: &SamplingParams,
+        options: &SamplingOptions,
         mesh: &crate::ooc::Mesh,
         tiling: &crate::tiling::Tiling,
     ) -> Probe {
         let solids = Solids::new(mesh);
         let patch_component = solids.patch_components(tiling);
+        let distance = options.shell.unwrap_or_else(|| params.distance());
+        let far = options.band.map_or(distance, |[_, far]| far.max(distance));
         Probe {
             radius: radius as usize,
-            cell: CELL_PER_EDGE * f64::from(params.distance()) * max_parent_angle(params.level),
+            cell: CELL_PER_EDGE * f64::from(far) * max_parent_angle(params.level),
+            band: options.band.map(|b| b.map(f64::from)),
+            center: params.center.map(f64::from),
             solids,
             patch_component,
+        }
+    }
+
+    /// The cell of the view with unit direction `d` (binary64) and eye `eye`.
+    pub(super) fn cell(&self, d: [f64; 3], eye: [f64; 3]) -> Cell {
+        match self.band {
+            None => Cell::ball(eye, self.cell),
+            Some(band) => Cell {
+                ends: band.map(|t| std::array::from_fn(|k| self.center[k] + d[k] * t)),
+                radius: self.cell,
+            },
         }
     }
 }
@@ -104,21 +136,56 @@ impl ViewContext<'_> {
         }
     }
 
-    /// Adds to `row` the patches the probe finds.
-    pub(super) fn probe_row(&self, camera: &Camera, scratch: &mut WorkerScratch, row: &mut [u64]) {
+    /// Adds to `row` the patches the probe finds from `camera`, for the cameras of `cell`.
+    pub(super) fn probe_row(
+        &self,
+        camera: &Camera,
+        cell: &Cell,
+        scratch: &mut WorkerScratch,
+        row: &mut [u64],
+    ) {
         let (Some(probe), Some(ps)) = (&self.probe, &mut scratch.probe) else {
             return;
         };
-        let cell = probe.cell;
         probe
             .solids
             .openings(camera, cell, probe.radius + 1, &mut ps.openings);
         let guard = &ps.guard;
         let screen = &mut scratch.draw.screen;
+        let projected = &mut scratch.draw.projected;
         let patch_count = self.mesh.patch_count();
-        let eye = camera.eye();
         let resolution = camera.resolution();
         let last = resolution as i32 - 1;
+        // The pixels a screen triangle touches, for the openings' rectangles.
+        let pixels_of = |st: [ScreenVertex; 3]| {
+            let px = |f: fn(i32, i32) -> i32, v: [i32; 3]| {
+                (f(f(v[0], v[1]), v[2]) >> SUBPIXEL_BITS).clamp(0, last) as usize
+            };
+            let (xs, ys) = (st.map(|v| v.x), st.map(|v| v.y));
+            [
+                px(i32::min, xs),
+                px(i32::min, ys),
+                px(i32::max, xs),
+                px(i32::max, ys),
+            ]
+        };
+        // Whether screen triangle `st` of input triangle `t` (corners `world`) may show to
+        // the cell and has a fragment in front of the shrunk occluders.
+        let openings = &ps.openings;
+        let in_front = |t: u32, world: [[f32; 3]; 3], st: [ScreenVertex; 3]| {
+            if !probe
+                .solids
+                .may_show(t, world, pixels_of(st), cell, openings)
+                || guard.triangle_hidden(st, true)
+            {
+                return false;
+            }
+            let mut hit = false;
+            scan_triangle_conservative(st, resolution, |index, q, _| {
+                hit |= q.to_bits() > guard.depth_bits(index);
+            });
+            hit
+        };
         ps.unseen.clear();
         ps.unseen.extend(
             row.iter()
@@ -140,19 +207,16 @@ impl ViewContext<'_> {
                 patch.cone_axis,
                 patch.cone_cos,
                 rect,
-                eye,
                 cell,
-                &ps.openings,
+                openings,
             ) || hidden(bounds, guard)
                 || hidden(camera.hull_bounds(&self.boxes[p].corners()), guard)
             {
                 continue;
             }
-            let found = if !sphere_needs_no_clip(camera, patch.center, patch.radius) {
-                true
-            } else {
-                let mut found = false;
-                let mut k = patch.first as usize;
+            let mut found = false;
+            let mut k = patch.first as usize;
+            if sphere_needs_no_clip(camera, patch.center, patch.radius) {
                 'sections: for section in self.mesh.sections(p) {
                     let end = section.vertices.len();
                     screen.project_from(camera, section.vertices.blocks(), 0, end);
@@ -160,39 +224,41 @@ impl ViewContext<'_> {
                         let t = self.tiling.order[k];
                         k += 1;
                         let world = tri.map(|i| section.vertices.get(usize::from(i)));
-                        let st = screen.triangle(tri);
-                        // The pixels the triangle touches, for the openings' rectangles.
-                        let px = |f: fn(i32, i32) -> i32, v: [i32; 3]| {
-                            (f(f(v[0], v[1]), v[2]) >> SUBPIXEL_BITS).clamp(0, last) as usize
-                        };
-                        let (xs, ys) = (st.map(|v| v.x), st.map(|v| v.y));
-                        let pixels = [
-                            px(i32::min, xs),
-                            px(i32::min, ys),
-                            px(i32::max, xs),
-                            px(i32::max, ys),
-                        ];
-                        if !probe
-                            .solids
-                            .may_show(t, world, pixels, eye, cell, &ps.openings)
-                        {
-                            continue;
-                        }
-                        if guard.triangle_hidden(st, true) {
-                            continue;
-                        }
-                        let mut hit = false;
-                        scan_triangle_conservative(st, resolution, |index, q, _| {
-                            hit |= q.to_bits() > guard.depth_bits(index);
-                        });
-                        if hit {
+                        if in_front(t, world, screen.triangle(tri)) {
                             found = true;
                             break 'sections;
                         }
                     }
                 }
-                found
-            };
+            } else if self.options.shell.is_some() {
+                // A near view's cube faces cut through patches: the clip path, as the
+                // render draws them.
+                let planes = view_planes(camera);
+                'clipped: for section in self.mesh.sections(p) {
+                    let vertices = section.vertices;
+                    projected.clear();
+                    projected.extend(vertices.iter().map(|v| project(camera, &planes, v)));
+                    for tri in section.triangles {
+                        let t = self.tiling.order[k];
+                        k += 1;
+                        let world = tri.map(|i| vertices.get(usize::from(i)));
+                        draw_triangle(
+                            tri.map(|i| projected[usize::from(i)]),
+                            || world,
+                            camera,
+                            &planes,
+                            |st| found = found || in_front(t, world, st),
+                        );
+                        if found {
+                            break 'clipped;
+                        }
+                    }
+                }
+            } else {
+                // A sampling view's patches never reach the near plane or the guard band:
+                // kept whole rather than drawn.
+                found = true;
+            }
             if found {
                 row[p / 64] |= 1 << (p % 64);
             }

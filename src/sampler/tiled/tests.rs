@@ -451,3 +451,289 @@ fn resume_continues_from_the_checkpoint_and_refuses_a_stale_one() {
         "{err}"
     );
 }
+
+/// A generated model as an in-memory mesh.
+fn model_mesh(model: &dyn crate::generate::Model) -> Mesh {
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    model
+        .vertices(&mut |p| {
+            positions.push(p);
+            Ok(())
+        })
+        .unwrap();
+    model
+        .triangles(&mut |t| {
+            triangles.push(t);
+            Ok(())
+        })
+        .unwrap();
+    Mesh::from_memory("model", positions, triangles).unwrap()
+}
+
+/// A near pass at `factor` bounding radii.
+fn near(p: &SamplingParams, factor: f32, options: SamplingOptions) -> SamplingOptions {
+    SamplingOptions {
+        shell: Some(p.radius * factor),
+        ..options
+    }
+}
+
+/// Checks that the near rows at `factor` bounding radii equal brute force, and that they see
+/// more than the sampling views (the eye is nearer and looks every way), but not everything.
+fn near_equals_brute_force(mesh: &Mesh, tiling: &Tiling, p: &SamplingParams, factor: f32) {
+    let count = tiling.patches.len() as u32;
+    let distance = p.radius * factor;
+    let brute = sample_near(mesh, &tiling.patch_of, count, p, distance, &NoProgress);
+    let fast = tiled(
+        mesh,
+        tiling,
+        p,
+        &near(p, factor, SamplingOptions::default()),
+    );
+    assert_same(&fast, &brute);
+    let sampling = tiled(mesh, tiling, p, &SamplingOptions::default());
+    assert_ne!(fast.count_ones(), sampling.count_ones(), "{factor}");
+    assert!(fast.count_ones() > 0, "{factor}");
+}
+
+#[test]
+fn near_views_equal_brute_force_on_the_bunny() {
+    let mesh = bunny();
+    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
+    let p = params_for(&mesh, 1, 64);
+    // The bounding sphere itself, a cube map (1.1), the last cube map and the first single
+    // camera (1.4, 1.5), one camera (2).
+    for factor in [1.0, 1.1, 1.4, 1.5, 2.0] {
+        near_equals_brute_force(&mesh, &tiling, &p, factor);
+    }
+}
+
+#[test]
+fn near_views_equal_brute_force_on_thin_parts() {
+    // The exposed engine: fins, a perforated plate and narrow gaps, in small patches.
+    let mesh = model_mesh(&crate::generate::exposed::ExposedEngine::new(12_000));
+    let tiling = crate::tiling::tile(&mesh, 150).unwrap();
+    let p = params_for(&mesh, 1, 64);
+    for factor in [1.1, 2.0] {
+        near_equals_brute_force(&mesh, &tiling, &p, factor);
+    }
+    // Nested boxes: most patches hidden behind several layers from every eye.
+    let boxes = boxes_in_a_box();
+    let tiling = crate::tiling::tile(&boxes, 40).unwrap();
+    let p = params_for(&boxes, 2, 48);
+    near_equals_brute_force(&boxes, &tiling, &p, 1.1);
+}
+
+#[test]
+fn a_near_view_sees_every_way_from_its_eye() {
+    // A ring of 8 boxes around the centre: from an eye just outside the ring's bounding
+    // sphere, boxes beside and below the line to the centre lie outside a 90° front face but
+    // inside the side faces.
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    for k in 0..8 {
+        let a = k as f32 * std::f32::consts::FRAC_PI_4;
+        push_cube([a.cos(), 0.0, a.sin()], 0.1, &mut positions, &mut triangles);
+    }
+    let mesh = Mesh::from_memory("ring", positions, triangles).unwrap();
+    let tiling = tiling_of(&mesh, (0..96).map(|t| t / 12).collect());
+    let p = params_for(&mesh, 0, 64);
+    let rows = tiled(
+        &mesh,
+        &tiling,
+        &p,
+        &near(&p, 1.05, SamplingOptions::default()),
+    );
+    let front_only: Vec<u32> = (0..6)
+        .map(|v| {
+            let camera = near_cameras(&p, v, p.radius * 1.05)[0];
+            reference_row(&mesh, &tiling.patch_of, &camera, false, 0, 8)
+                .iter()
+                .filter(|&&b| b)
+                .count() as u32
+        })
+        .collect();
+    // From above and below (views 2 and 3, ±Y) the front face shows every box; from beside
+    // the ring it misses those beside the eye.
+    assert_eq!(front_only, [3, 3, 8, 8, 3, 3]);
+    for v in 0..6 {
+        let seen = rows.row(v)[0].count_ones();
+        if front_only[v as usize] == 8 {
+            assert_eq!(seen, 8, "view {v}");
+        } else {
+            // The box beside the eye hides those behind it; the side faces add the two
+            // boxes more than 45° off the line to the centre.
+            assert_eq!(seen, 5, "view {v}");
+        }
+    }
+}
+
+#[test]
+fn near_passes_are_independent_of_threads_shards_and_resuming() {
+    let mesh = boxes_in_a_box();
+    let tiling = crate::tiling::tile(&mesh, 64).unwrap();
+    let p = params_for(&mesh, 2, 40);
+    let band = Some([p.radius * 1.1, p.radius * 1.6]);
+    for options in [
+        near(&p, 1.2, SamplingOptions::default()),
+        near(
+            &p,
+            1.2,
+            SamplingOptions {
+                conservative: true,
+                min_pixels: 2,
+                dilate: true,
+                always_visible: vec![3],
+                ..SamplingOptions::default()
+            },
+        ),
+        near(
+            &p,
+            1.2,
+            SamplingOptions {
+                probe: Some(2),
+                band,
+                ..SamplingOptions::default()
+            },
+        ),
+        near(&p, 2.0, SamplingOptions::default()),
+    ] {
+        let run = |threads, options: &SamplingOptions| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| tiled(&mesh, &tiling, &p, options))
+        };
+        let full = run(1, &options);
+        assert_same(&run(2, &options), &full);
+        // A shard: its views' rows are the full run's.
+        let wanted = vec![5, 17, 40];
+        let shard = run(
+            2,
+            &SamplingOptions {
+                views: Some(wanted.clone()),
+                ..options.clone()
+            },
+        );
+        for v in wanted {
+            assert_eq!(shard.row(v), full.row(v), "view {v} {options:?}");
+        }
+    }
+}
+
+#[test]
+fn a_near_checkpoint_resumes_and_refuses_another_shell() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("near.ckpt");
+    let mesh = noisy_sphere(20, 40, 0.3, 4);
+    let tiling = crate::tiling::tile(&mesh, 40).unwrap();
+    let p = params_for(&mesh, 2, 32);
+    let options = near(
+        &p,
+        1.1,
+        SamplingOptions {
+            checkpoint: Some(path.clone()),
+            ..SamplingOptions::default()
+        },
+    );
+    let full = tiled(&mesh, &tiling, &p, &options);
+    // Interrupted after level 1, then resumed: the rows of an uninterrupted run.
+    let hash = checkpoint::input_hash(&mesh, &tiling, &p, &options);
+    checkpoint::save(&path, hash, 2, crate::sphere::view_count(1), &full).unwrap();
+    let resume = SamplingOptions {
+        resume: true,
+        ..options.clone()
+    };
+    assert_same(&tiled(&mesh, &tiling, &p, &resume), &full);
+    // Another shell, a band, or the sampling sphere: each another input.
+    for other in [
+        SamplingOptions {
+            shell: Some(p.radius * 1.2),
+            ..resume.clone()
+        },
+        SamplingOptions {
+            band: Some([p.radius, p.radius * 1.2]),
+            ..resume.clone()
+        },
+        SamplingOptions {
+            shell: None,
+            ..resume.clone()
+        },
+    ] {
+        let err = sample_tiled(&mesh, &tiling, &p, &other, &NoProgress).unwrap_err();
+        assert!(err.to_string().contains("stale checkpoint"), "{err}");
+    }
+}
+
+#[test]
+fn the_probe_keeps_near_rows_and_a_band_widens_its_cell() {
+    let mesh = bunny();
+    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
+    let p = params_for(&mesh, 1, 64);
+    for factor in [1.1, 2.0] {
+        let plain = tiled(
+            &mesh,
+            &tiling,
+            &p,
+            &near(&p, factor, SamplingOptions::default()),
+        );
+        let probe = SamplingOptions {
+            probe: Some(2),
+            ..SamplingOptions::default()
+        };
+        let probed = tiled(&mesh, &tiling, &p, &near(&p, factor, probe.clone()));
+        let banded = tiled(
+            &mesh,
+            &tiling,
+            &p,
+            &near(
+                &p,
+                factor,
+                SamplingOptions {
+                    band: Some([p.radius * (factor - 0.05), p.radius * (factor + 0.6)]),
+                    ..probe
+                },
+            ),
+        );
+        for (a, b) in probed.words().iter().zip(plain.words()) {
+            assert_eq!(a & b, *b, "{factor}: a probed row lost a patch");
+        }
+        for (a, b) in banded.words().iter().zip(probed.words()) {
+            assert_eq!(a & b, *b, "{factor}: the band's cell holds the ball's");
+        }
+        assert!(probed.count_ones() > plain.count_ones(), "{factor}");
+        // Back faces behind the silhouettes stay out.
+        let all = u64::from(crate::sphere::view_count(p.level)) * 200;
+        assert!(
+            banded.count_ones() < all * 9 / 10,
+            "{factor}: {}",
+            banded.count_ones()
+        );
+    }
+}
+
+#[test]
+fn a_band_on_the_main_pass_keeps_every_row() {
+    // The main pass with shells: its cell spans the band [D_1, D_0] and holds today's ball.
+    let mesh = bunny();
+    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
+    let p = params_for(&mesh, 1, 64);
+    let probe = SamplingOptions {
+        probe: Some(2),
+        ..SamplingOptions::default()
+    };
+    let today = tiled(&mesh, &tiling, &p, &probe);
+    let banded = tiled(
+        &mesh,
+        &tiling,
+        &p,
+        &SamplingOptions {
+            band: Some([p.radius * 1.7, p.distance()]),
+            ..probe
+        },
+    );
+    for (a, b) in banded.words().iter().zip(today.words()) {
+        assert_eq!(a & b, *b);
+    }
+    assert!(banded.count_ones() > today.count_ones());
+}
