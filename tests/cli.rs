@@ -559,3 +559,120 @@ fn dilate_beyond_the_memory_budget_is_refused_before_sampling() {
     // Within the budget the same bake runs.
     Bake::new(&["--dilate", "--level", "1", "--resolution", "64", "-q"]).run();
 }
+
+/// The version-4 file a bake wrote before sampling shells existed, for the flags of
+/// [`SHELL_FLAGS`] (`tests/data/pvis/README.md`).
+const VERSION_4_FILE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/tests/data/pvis/bunny-p200-l2-r64-v4.pvis"
+);
+
+/// The small bake of the shells' tests: 200 patches, level 2, 64 px.
+const SHELL_FLAGS: [&str; 6] = ["--patches", "200", "--level", "2", "--resolution", "64"];
+
+/// Near cameras (issue 22): a default bake samples three shells at `D·(1.1·R/D)^(s/3)`, each
+/// with the stored level's views and supersampling, reported in `--stats` and the summary;
+/// `--shells 0` writes the bytes bakes wrote before shells, and the bytes each shell adds
+/// are the difference.
+#[test]
+fn default_bakes_sample_three_shells_and_shells_0_writes_the_version_4_bytes() {
+    let default = Bake::new(&SHELL_FLAGS).stats().run();
+    let out = common::stdout(&default.output);
+    assert!(
+        out.contains(
+            "near views: 3 shells of 66 views (level 2) at 1.96, 1.47, 1.10 bounding radii"
+        ) && out.contains(", 3 sampling shells ("),
+        "{out}"
+    );
+    let stats = default.stats();
+    let bytes = default.bytes();
+    let pvis = patchvis::runtime::Pvis::parse(&bytes).unwrap();
+    assert_eq!((pvis.version(), pvis.shell_count()), (5, 3));
+    let (d, r) = (
+        f64::from(pvis.sampling().distance),
+        f64::from(pvis.sampling().radius),
+    );
+    let shells = stats["shells"].as_array().expect("a list of shells");
+    assert_eq!(shells.len(), 3, "{stats}");
+    let mut outer = d as f32;
+    for (s, shell) in shells.iter().enumerate() {
+        let distance = shell["distance"].as_f64().unwrap() as f32;
+        let expected = (d * (1.1 * r / d).powf((s + 1) as f64 / 3.0)) as f32;
+        assert!(
+            (distance - expected).abs() <= expected * f32::EPSILON,
+            "shell {s} at {distance}, expected {expected}"
+        );
+        assert!(distance < outer && f64::from(distance) >= r, "{stats}");
+        outer = distance;
+        assert_eq!(shell["level"], 2);
+        assert_eq!(shell["views"], 66);
+        // The file carries it: format version 5, shell `s + 1` of its SHEL section.
+        let stored = pvis.shell(s as u32 + 1);
+        assert_eq!(
+            (stored.distance, stored.level, stored.views),
+            (distance, 2, 66)
+        );
+        // The stored level folded from one finer level, as the sampling sphere.
+        assert_eq!(shell["sampled_views"], 258);
+        assert!(shell["seconds"].as_f64().unwrap() > 0.0);
+    }
+    // The sampling sphere's own, as before shells.
+    assert_eq!(stats["sampled_views"], 258);
+    let none = Bake::new(&SHELL_FLAGS)
+        .args(&["--shells", "0"])
+        .stats()
+        .run();
+    assert!(
+        none.bytes() == std::fs::read(VERSION_4_FILE).unwrap(),
+        "--shells 0 differs from the version-4 file of bakes before shells"
+    );
+    assert_eq!(none.stats()["shells"], serde_json::json!([]));
+    let added: u64 = shells.iter().map(|s| s["bytes"].as_u64().unwrap()).sum();
+    assert_eq!(added, (bytes.len() - none.bytes().len()) as u64);
+}
+
+/// The shells' flags out of range: one line, exit code 2, no output.
+#[test]
+fn bad_shell_flags_are_usage_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for (flags, needle) in [
+        (&["--shells", "9"][..], "--shells 9: expected 0"),
+        (&["--shell-min", "1"], "--shell-min 1: expected"),
+        (&["--shell-min", "0.5"], "above 1 and below 2.613"),
+        (&["--shell-min", "2.7"], "--shell-min 2.7"),
+        (&["--shell-min", "NaN"], "--shell-min NaN"),
+        (&["--fov", "120", "--shell-min", "1.2"], "below 1.155"),
+        (&["--shell-level", "8"], "--shell-level 8"),
+    ] {
+        let mut args = vec![BUNNY];
+        args.extend_from_slice(flags);
+        let err = failing_bake(d, &args, 2);
+        assert!(err.contains(needle), "{flags:?}: {err}");
+    }
+    // So close to the sampling sphere that 8 shells cannot be told apart in binary32: found
+    // with the mesh, before the tiling.
+    let out_path = d.join("out.pvis");
+    let out = patchvis(&[
+        "bake",
+        BUNNY,
+        "-o",
+        out_path.to_str().unwrap(),
+        "--shells",
+        "8",
+        "--shell-min",
+        "2.6131255",
+    ]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.starts_with("error: --shells 8 --shell-min 2.6131255: shell 1 would be at")
+            && err.contains("not inside the sampling sphere")
+            && err.contains("use fewer shells")
+            && err.lines().count() == 1,
+        "{err}"
+    );
+    assert!(!out_path.exists());
+    let out = patchvis(&["bake", BUNNY, "-o", "x.pvis", "--shells", "-1"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+}

@@ -1,8 +1,9 @@
 //! Sharded bakes through the binary (issue 25): `patchvis tile`, `bake --shard I/N` and
 //! `merge` give the single bake's bytes for any thread count and part order, with the
-//! default supersampling fold and with a thresholded one (two passes); `--shard auto` reads a
-//! Slurm array's or a Kubernetes Indexed Job's environment; and merge refuses, in one line
-//! with exit code 1, a missing, repeated, foreign, truncated or damaged part.
+//! default supersampling fold and with a thresholded one (two passes), with the default
+//! sampling shells and with others (issue 22); `--shard auto` reads a Slurm array's or a
+//! Kubernetes Indexed Job's environment; and merge refuses, in one line with exit code 1, a
+//! missing, repeated, foreign, truncated, damaged or older part.
 
 mod common;
 
@@ -74,6 +75,13 @@ fn merge(parts: &[&Path], out: &Path) -> Output {
     patchvis(&args)
 }
 
+/// `patchvis merge PARTS -o OUT`, with its summary.
+fn merge_loud(parts: &[&Path], out: &Path) -> Output {
+    let mut args = vec!["merge", "-o", s(out)];
+    args.extend(parts.iter().map(|p| s(p)));
+    patchvis(&args)
+}
+
 /// The single bake of the bunny with `flags` on `threads` threads.
 fn single(dir: &Path, flags: &[&str], threads: &str) -> Vec<u8> {
     let out = dir.join("single.pvis");
@@ -108,8 +116,9 @@ fn four_shards_merge_into_the_single_bake_in_any_order() {
     assert!(std::fs::read(&own).unwrap() == std::fs::read(&parts[1]).unwrap());
 }
 
-/// A fold threshold samples two passes; `--shard auto` takes the shard from a Slurm array's
-/// or a Kubernetes Indexed Job's environment.
+/// A fold threshold samples two passes, for the sampling sphere and for each of two shells
+/// at a level of their own; `--shard auto` takes the shard from a Slurm array's or a
+/// Kubernetes Indexed Job's environment.
 #[test]
 fn two_passes_and_scheduler_shards_merge_into_the_single_bake() {
     let dir = TempDir::new().unwrap();
@@ -122,6 +131,10 @@ fn two_passes_and_scheduler_shards_merge_into_the_single_bake() {
         "96",
         "--fold-min-pixels",
         "4",
+        "--shells",
+        "2",
+        "--shell-level",
+        "1",
     ];
     let tiling = dir.path().join("t.ptile");
     ok(patchvis(&[
@@ -158,7 +171,12 @@ fn two_passes_and_scheduler_shards_merge_into_the_single_bake() {
         })
         .collect();
     let out = dir.path().join("merged.pvis");
-    ok(merge(&[&parts[2], &parts[0], &parts[1]], &out));
+    let merged = ok(merge_loud(&[&parts[2], &parts[0], &parts[1]], &out));
+    let summary = common::stdout(&merged);
+    assert!(
+        summary.contains("merged 3 shards: 66 views, 150 patches, 2 sampling shells"),
+        "{summary}"
+    );
     assert!(std::fs::read(&out).unwrap() == single(dir.path(), &flags, "1"));
 }
 
@@ -199,6 +217,13 @@ fn merge_refuses_missing_repeated_foreign_and_damaged_parts() {
         1,
         &[s(&other), "other settings"],
     );
+    // Other sampling shells are other settings too.
+    let shells = bake3(BUNNY, "shells-3.ppart", &["--shells", "1"]);
+    refused(
+        merge(&[p[0], p[1], p[2], &shells], &out),
+        1,
+        &[s(&shells), "other settings"],
+    );
     // Cut short, and one bit flipped.
     let bytes = std::fs::read(p[3]).unwrap();
     let cut = d.join("cut-3.ppart");
@@ -216,6 +241,20 @@ fn merge_refuses_missing_repeated_foreign_and_damaged_parts() {
         merge(&[p[0], p[1], p[2], &bad], &out),
         1,
         &[s(&bad), "checksum mismatch"],
+    );
+    // A part of the layout before sampling shells (version 2).
+    let mut old = bytes.clone();
+    old[8..12].copy_from_slice(&2u32.to_le_bytes());
+    let old_part = d.join("old-3.ppart");
+    std::fs::write(&old_part, &old).unwrap();
+    refused(
+        merge(&[p[0], p[1], p[2], &old_part], &out),
+        1,
+        &[
+            s(&old_part),
+            "part file version 2, expected 3",
+            "bake this shard again",
+        ],
     );
     // An output that is one of the parts is a usage error, before anything is read.
     refused(merge(&p, p[3]), 2, &["-o", s(p[3])]);

@@ -1,6 +1,7 @@
 //! The merge of a sharded bake (`patchvis merge PARTS… -o OUT.pvis`): the parts' rows put
-//! back together and run through the rest of `Recipe::run` (fold, numbering, encoding), so
-//! that the file is byte for byte the one a single bake writes.
+//! back together (the sampling sphere's and every shell's) and run through the rest of
+//! `Recipe::run` (fold, numbering, encoding), so that the file is byte for byte the one a
+//! single bake writes.
 //!
 //! Before anything is merged every part must be whole (`part.rs`'s checks), of the same mesh,
 //! settings and tiling as the others (their hashes), of the same shard count, hold exactly
@@ -11,11 +12,14 @@
 //! bake, and the parts in memory (together, the sampled rows once).
 
 use super::part::Part;
-use super::{BakeError, BakeSettings, Recipe, SampledRows};
+use super::rows::SphereRows;
+use super::settings::Supersample;
+use super::{BakeError, BakeSettings, Recipe};
+use crate::format::ShellRows;
 use crate::runtime::Pvis;
 use crate::sphere::view_count;
 use crate::tiling::renumbered_patches;
-use crate::visibility::VisibilityMatrix;
+use crate::visibility::{SamplingParams, VisibilityMatrix};
 use std::path::{Path, PathBuf};
 
 /// A part and the path it was read from (which errors name).
@@ -59,6 +63,9 @@ pub struct Merged {
     pub patches: u32,
     /// Shards merged.
     pub shards: u32,
+    /// The sampling shells, outermost first: each one's distance and stored rows, in the
+    /// file's patch numbering.
+    pub shells: Vec<(f32, VisibilityMatrix)>,
 }
 
 /// Reads the part file at `path`.
@@ -214,26 +221,59 @@ pub fn merge(parts: &[LoadedPart]) -> Result<Merged, MergeError> {
             "no part holds view {view} of level {level}; bake every shard with one patchvis build"
         )));
     }
+    // Back into one sphere's rows per sphere: the sampling sphere's passes, then each shell's.
+    let (main_passes, shell_passes) = first.settings.sphere_pass_levels();
     let mut matrices = matrices.into_iter();
-    let rows = SampledRows {
-        plain: matrices.next().expect("one pass at least"),
-        fine: matrices.next(),
-        params: first.params,
-        supersample: recipe.supersample,
+    let mut sphere = |params: SamplingParams, supersample: Supersample, passes: usize| {
+        let plain = matrices.next().expect("the passes of pass_levels");
+        SphereRows {
+            plain,
+            fine: if passes == 2 { matrices.next() } else { None },
+            params,
+            supersample,
+        }
     };
     // What `Recipe::run` does after sampling, on the records instead of the tiling.
     let level = recipe.settings.level;
-    let visibility = rows.stored(level);
-    let params = rows.params(level);
-    drop(rows);
-    let (patches, visibility) = match recipe.file_patch_order(&visibility) {
+    let params = first.params;
+    let visibility = sphere(params, recipe.supersample, main_passes.len()).stored(level);
+    let shell_params = SamplingParams {
+        level: recipe.shell_level(),
+        ..params
+    };
+    let shells: Vec<VisibilityMatrix> = (0..recipe.settings.shells)
+        .map(|_| {
+            sphere(shell_params, recipe.shell_supersample, shell_passes.len())
+                .stored(recipe.shell_level())
+        })
+        .collect();
+    // The parts carry the file's camera: the shells are where the single bake puts them.
+    let distances = recipe
+        .shell_distances(&params)
+        .map_err(|e| MergeError::part(&parts[0].path, format!("{e}; bake this shard again")))?;
+    let (patches, visibility, shells) = match recipe.file_patch_order(&visibility) {
         Some(order) => (
             renumbered_patches(&first.patches, &order),
             visibility.with_patch_order(&order),
+            shells.iter().map(|m| m.with_patch_order(&order)).collect(),
         ),
-        None => (first.patches.clone(), visibility),
+        None => (first.patches.clone(), visibility, shells),
     };
-    let bytes = recipe.encode_patches(&params, first.triangle_count, &patches, &visibility);
+    let shell_rows: Vec<ShellRows> = distances
+        .iter()
+        .zip(&shells)
+        .map(|(&distance, visibility)| ShellRows {
+            distance,
+            visibility,
+        })
+        .collect();
+    let bytes = recipe.encode_patches(
+        &params,
+        first.triangle_count,
+        &patches,
+        &visibility,
+        &shell_rows,
+    );
     let visibility_bytes = Pvis::parse(&bytes)
         .map(|p| p.visibility_bytes())
         .map_err(|e| {
@@ -247,6 +287,7 @@ pub fn merge(parts: &[LoadedPart]) -> Result<Merged, MergeError> {
         views: visibility.views(),
         patches: patch_count,
         shards: count,
+        shells: distances.into_iter().zip(shells).collect(),
     })
 }
 
@@ -268,6 +309,9 @@ fn recipe_of(part: &Part) -> Result<Recipe, String> {
         fold_corners: Some(s.fold_corners),
         patch_order: s.patch_order,
         encoding: s.encoding,
+        shells: s.shells,
+        shell_min: s.shell_min,
+        shell_level: Some(s.shell_level),
         ..BakeSettings::default()
     }
     .check()
@@ -299,8 +343,8 @@ mod tests {
     use crate::progress::NoProgress;
     use crate::test_kit::bunny::bunny;
 
-    /// Shards of the bunny merge into the single bake's bytes, in any order, for a plain
-    /// and a thresholded fold; a missing or repeated shard is refused.
+    /// Shards of the bunny merge into the single bake's bytes and sampling shells, in any
+    /// order, for a plain and a thresholded fold; a missing or repeated shard is refused.
     #[test]
     fn shards_merge_into_the_single_bake() {
         // The bunny far from the origin is baked in a working frame (`frame.rs`): the parts
@@ -352,7 +396,13 @@ mod tests {
                 })
                 .collect();
             parts.reverse();
-            assert_eq!(merge(&parts).unwrap().bytes, single.bytes);
+            let merged = merge(&parts).unwrap();
+            assert_eq!(merged.bytes, single.bytes);
+            // The shells too, whether or not the writer stores them yet.
+            assert_eq!(merged.shells.len(), 3);
+            for ((distance, rows), shell) in merged.shells.iter().zip(&single.shells) {
+                assert_eq!((*distance, rows), (shell.distance, &shell.visibility));
+            }
             let missing = merge(&parts[1..]).unwrap_err();
             assert!(missing.reason.contains("is missing"), "{missing}");
             let mut twice = parts.clone();

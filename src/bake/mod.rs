@@ -25,7 +25,8 @@
 //! [`merge`] writes the single bake's bytes.
 //!
 //! Files: `settings.rs` (options, defaults, checks), `recipe.rs` (the stages), `rows.rs`
-//! (sampled rows and the fold), `backend.rs` (CPU or GPU), `stages.rs` (time and heap),
+//! (sampled rows and the fold), `shells.rs` (the sampling shells' radii and bands),
+//! `backend.rs` (CPU or GPU), `stages.rs` (time and heap),
 //! `frame.rs` (the working frame of coordinates `f32` cameras cannot handle). Sharded bakes:
 //! `shard.rs` (which views a shard owns, `--shard auto`), `shard_run.rs` (a shard's bake and
 //! the shared tiling step), `tiling_file.rs` and `part.rs` (their files), `merge.rs`,
@@ -41,6 +42,7 @@ mod rows;
 mod settings;
 mod shard;
 mod shard_run;
+mod shells;
 mod stages;
 mod tiling_file;
 mod wire;
@@ -50,15 +52,16 @@ pub use backend::{Backend, BackendChoice};
 pub use fingerprint::{mesh_hash, tiling_hash};
 pub use merge::{LoadedPart, MergeError, Merged, merge, read_part};
 pub use part::{Part, PartSettings, PassRows};
-pub use recipe::{Baked, Outputs, Recipe};
-pub use rows::SampledRows;
+pub use recipe::{Baked, BakedShell, Outputs, Recipe};
+pub use rows::{SampledRows, SampledShell};
 pub use settings::{
     BakeSettings, CONSERVATIVE_PROBE_PIXELS, DEFAULT_FOLD_CORNERS, DEFAULT_FOLD_MIN_PIXELS,
-    DEFAULT_VIEW_SUPERSAMPLE, MIN_RESOLUTION, PatchOrder, SettingsError, Supersample,
-    WARN_RESOLUTION,
+    DEFAULT_VIEW_SUPERSAMPLE, MIN_RESOLUTION, PassCheckpoints, PatchOrder, SettingsError,
+    Supersample, WARN_RESOLUTION,
 };
 pub use shard::{SHARD_COUNT_ENV, Shard, ShardError};
 pub use shard_run::ShardBaked;
+pub use shells::{DEFAULT_SHELL_MIN, DEFAULT_SHELLS, MAX_SHELLS, bands, shell_distances};
 pub use stages::{StageRecord, Stages};
 pub use tiling_file::{TilingFile, read_tiling_file, write_tiling_file};
 

@@ -16,20 +16,23 @@
 //! | settings block length, then the block ([`PartSettings`]) | `u32` + n |
 //! | the file's camera: level, resolution, fov, centre, radius | `u32` × 2, `f32` × 5 |
 //! | patches, then their records in the tiling's numbering (`wire.rs`) | `u32` + 48 each |
-//! | passes (1, or 2 with a fold threshold), each: level, views, the view ids (ascending), then each view's row (`⌈patches / 64⌉` `u64` words) | … |
+//! | passes ([`PartSettings::pass_levels`]: the sampling sphere's 1, or 2 with a fold threshold, then as many for each sampling shell), each: level, views, the view ids (ascending), then each view's row (`⌈patches / 64⌉` `u64` words) | … |
 //! | CRC-32C of every byte before it | `u32` |
 //!
 //! The settings block holds what decides the rows and the encoding: level, sampled resolution,
 //! fov bits, `min_pixels`, `dilate`, `conservative_raster`, extra levels, fold threshold,
-//! fold corners, patch order, encoding, the probe pass (0, or its radius + 1) and the
-//! always-visible ids. The camera and patch
+//! fold corners, patch order, encoding, the probe pass (0, or its radius + 1), the
+//! always-visible ids, and the sampling shells (count, `--shell-min` as binary64 bits, level,
+//! extra levels and fold threshold). The shells' distances follow from the camera and those
+//! (`shells.rs`), so the merge computes them as the bake does. The camera and patch
 //! records are the original mesh's (a mesh baked in a working frame gets them as
 //! `Recipe::run` computes them). As the sampler's checkpoint does (`sampler/checkpoint.rs`),
 //! the version is bumped whenever the rows change for the same inputs, and the CRC-32C
 //! catches damage that would otherwise merge into a file that verifies but differs.
 
-use super::settings::PatchOrder;
+use super::settings::{PatchOrder, Supersample};
 use super::shard::Shard;
+use super::shells::MAX_SHELLS;
 use super::wire::{Fields, PATCH_BYTES, Put};
 use crate::format::VisibilityEncoding;
 use crate::runtime::crc32c::crc32c;
@@ -40,8 +43,9 @@ use crate::visibility::SamplingParams;
 use xxhash_rust::xxh64::xxh64;
 
 const MAGIC: &[u8; 8] = b"PVISPART";
-/// The layout's version; bumped with the sampler checkpoint's whenever the rows change.
-const VERSION: u32 = 2;
+/// The layout's version; bumped with the sampler checkpoint's whenever the rows change, and
+/// whenever the layout does: 3 since parts carry the sampling shells' passes.
+const VERSION: u32 = 3;
 const CRC_BYTES: usize = 4;
 /// What a refused part's message tells the user to do.
 const BAKE_AGAIN: &str = "bake this shard again";
@@ -75,6 +79,16 @@ pub struct PartSettings {
     pub patch_order: PatchOrder,
     /// The VISB encoding.
     pub encoding: VisibilityEncoding,
+    /// Sampling shells (`--shells`).
+    pub shells: u32,
+    /// The innermost shell's radius over the bounding radius (`--shell-min`).
+    pub shell_min: f64,
+    /// The shells' stored level.
+    pub shell_level: u32,
+    /// Extra levels the shells sample and fold.
+    pub shell_extra_levels: u32,
+    /// Fold threshold of the shells' finer passes (0: no separate pass).
+    pub shell_fold_min_pixels: u32,
 }
 
 impl PartSettings {
@@ -111,6 +125,11 @@ impl PartSettings {
         for &p in &self.always_visible {
             b.put_u32(p);
         }
+        b.put_u32(self.shells);
+        b.put_u64(self.shell_min.to_bits());
+        b.put_u32(self.shell_level);
+        b.put_u32(self.shell_extra_levels);
+        b.put_u32(self.shell_fold_min_pixels);
         b
     }
 
@@ -151,19 +170,50 @@ impl PartSettings {
                 let n = f.u32()?;
                 (0..n).map(|_| f.u32()).collect::<Option<Vec<_>>>()?
             },
+            shells: f.u32()?,
+            shell_min: f64::from_bits(f.u64()?),
+            shell_level: f.u32()?,
+            shell_extra_levels: f.u32()?,
+            shell_fold_min_pixels: f.u32()?,
         };
-        (f.offset() == bytes.len()).then_some(settings)
+        let in_range = settings.level <= MAX_LEVEL
+            && settings.extra_levels <= MAX_LEVEL
+            && settings.shells <= MAX_SHELLS
+            && settings.shell_level <= MAX_LEVEL
+            && settings.shell_extra_levels <= MAX_LEVEL;
+        (f.offset() == bytes.len() && in_range).then_some(settings)
     }
 
-    /// The sphere levels of the sampling passes, in order: the stored level plainly and the
-    /// finer one thresholded, or the finer one alone (whose prefix is the stored level).
+    /// The sphere levels of the sampling passes, in order: the sampling sphere's (the stored
+    /// level plainly and the finer one thresholded, or the finer one alone, whose prefix is
+    /// the stored level), then each shell's the same way at the shells' level.
     pub fn pass_levels(&self) -> Vec<u32> {
-        let fine = (self.level + self.extra_levels).min(MAX_LEVEL);
-        if self.fold_min_pixels > 0 {
-            vec![self.level, fine]
-        } else {
-            vec![fine]
+        let (main, shell) = self.sphere_pass_levels();
+        let mut levels = main;
+        for _ in 0..self.shells {
+            levels.extend_from_slice(&shell);
         }
+        levels
+    }
+
+    /// The pass levels of the sampling sphere, and of one shell.
+    pub(crate) fn sphere_pass_levels(&self) -> (Vec<u32>, Vec<u32>) {
+        let passes = |extra_levels, fold_min_pixels, level| {
+            Supersample {
+                extra_levels,
+                fold_min_pixels,
+                fold_corners: self.fold_corners,
+            }
+            .pass_levels(level)
+        };
+        (
+            passes(self.extra_levels, self.fold_min_pixels, self.level),
+            passes(
+                self.shell_extra_levels,
+                self.shell_fold_min_pixels,
+                self.shell_level,
+            ),
+        )
     }
 }
 
@@ -307,9 +357,6 @@ impl Part {
             return None;
         }
         let settings = PartSettings::decode(block)?;
-        if settings.level > MAX_LEVEL || settings.extra_levels > MAX_LEVEL {
-            return None;
-        }
         let params = SamplingParams {
             level: f.u32()?,
             resolution: f.u32()?,
@@ -329,7 +376,7 @@ impl Part {
         let tail = patch_count % 64;
         let padding = if tail == 0 { 0 } else { !((1u64 << tail) - 1) };
         let pass_count = f.u32()?;
-        if pass_count > 2 {
+        if pass_count > 2 * (1 + MAX_SHELLS) {
             return None;
         }
         let mut passes = Vec::new();
@@ -383,7 +430,8 @@ impl Part {
 pub(crate) mod tests {
     use super::*;
 
-    /// A small valid part: shard 1 of 3 at level 2, 70 patches, two passes.
+    /// A small valid part: shard 1 of 3 at level 1, 70 patches, two passes of the sampling
+    /// sphere and one of each of two shells.
     pub(crate) fn sample_part() -> Part {
         let settings = PartSettings {
             level: 1,
@@ -399,6 +447,11 @@ pub(crate) mod tests {
             fold_corners: FoldCorners::All,
             patch_order: PatchOrder::Covisibility,
             encoding: VisibilityEncoding::Tree,
+            shells: 2,
+            shell_min: 1.1,
+            shell_level: 1,
+            shell_extra_levels: 1,
+            shell_fold_min_pixels: 0,
         };
         let shard = Shard { index: 1, count: 3 };
         let patches = (0..70)

@@ -1,12 +1,14 @@
-//! The recipe a bake follows, stage by stage: tile → sample (supersample and fold) → number
-//! the patches → encode, then write the outputs. [`Recipe::run`] is `patchvis bake`;
-//! `eval --sweep` runs the same stages, sampling once per patch count and cutting every level
-//! it evaluates from those rows ([`SampledRows::stored`]).
+//! The recipe a bake follows, stage by stage: tile → sample (supersample and fold; the
+//! sampling sphere, then each sampling shell, `shells.rs`) → number the patches → encode, then
+//! write the outputs. [`Recipe::run`] is `patchvis bake`; `eval --sweep` runs the same stages,
+//! sampling once per patch count and cutting every level it evaluates from those rows
+//! ([`SampledRows::stored`]).
 
 use super::frame::Frame;
-use super::settings::{BakeSettings, PatchOrder, Supersample};
-use super::{Backend, BakeError, SampledRows, Shard, Stages};
-use crate::format::{self, BakeContents};
+use super::rows::{SampledShell, SphereRows};
+use super::settings::{BakeSettings, PassCheckpoints, PatchOrder, Supersample};
+use super::{Backend, BakeError, SampledRows, Shard, Stages, shells};
+use crate::format::{self, BakeContents, ShellRows};
 use crate::memory::{FixedNeeds, MemoryBudget};
 use crate::meshout::{self, MeshFormat};
 use crate::ooc::attributes::Attributes;
@@ -19,6 +21,7 @@ use crate::tiling::{self, Patch, PatchId, Tiling, TilingOptions};
 use crate::visibility::{SamplingParams, VisibilityMatrix};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 /// Checked settings with every default resolved ([`BakeSettings::check`]): what a bake does.
 #[derive(Clone, Debug, PartialEq)]
@@ -27,10 +30,14 @@ pub struct Recipe {
     pub settings: BakeSettings,
     /// Supersampling and folding.
     pub supersample: Supersample,
+    /// The shells' supersampling and folding: the stored level's, capped at the finest level.
+    pub shell_supersample: Supersample,
     /// Checkpoint of the stored level's plain pass when the fold has a threshold.
     pub coarse_checkpoint: Option<PathBuf>,
     /// Checkpoint of the main (supersampled) pass.
     pub fine_checkpoint: Option<PathBuf>,
+    /// Checkpoints of each shell's passes, outermost first (`OUT.pvis.shellS….ckpt`).
+    pub shell_checkpoints: Vec<PassCheckpoints>,
 }
 
 /// The result of [`Recipe::run`]: the file's bytes and what they were made of.
@@ -44,12 +51,28 @@ pub struct Baked {
     pub visibility: VisibilityMatrix,
     /// Whether the patches were renumbered by co-visibility.
     pub renumbered: bool,
-    /// Views rendered, every pass counted.
+    /// Views rendered for the sampling sphere, every pass counted (the shells' are in
+    /// `shells`).
     pub sampled_views: u32,
+    /// The sampling shells, outermost first (empty without shells).
+    pub shells: Vec<BakedShell>,
     /// The `.pvis` file.
     pub bytes: Vec<u8>,
     /// Bytes of its VISB payload.
     pub visibility_bytes: u64,
+}
+
+/// One sampling shell of a [`Baked`].
+#[derive(Debug)]
+pub struct BakedShell {
+    /// The views' distance from the centre, as the file stores it.
+    pub distance: f32,
+    /// The stored rows, in the file's patch numbering.
+    pub visibility: VisibilityMatrix,
+    /// Views rendered for the shell, every pass counted.
+    pub sampled_views: u32,
+    /// Seconds its sampling took.
+    pub seconds: f64,
 }
 
 impl Baked {
@@ -83,10 +106,7 @@ impl Outputs {
         if let Some(mesh) = &self.mesh {
             paths.push(NamedPath::flag("--mesh-out", mesh));
         }
-        for checkpoint in [&recipe.fine_checkpoint, &recipe.coarse_checkpoint]
-            .into_iter()
-            .flatten()
-        {
+        for checkpoint in recipe.checkpoints() {
             paths.push(NamedPath::new("the checkpoint of -o", "-o", checkpoint));
         }
         paths
@@ -104,6 +124,49 @@ impl Recipe {
         self.settings
             .conservative
             .then_some(super::settings::CONSERVATIVE_PROBE_PIXELS)
+    }
+
+    /// The shells' stored sphere level (`--shell-level`, else the stored level).
+    pub fn shell_level(&self) -> u32 {
+        self.settings.shell_level.unwrap_or(self.settings.level)
+    }
+
+    /// The shells' camera distances for the sampling sphere `params`, outermost first
+    /// (`shells.rs`); a usage error if they cannot be used.
+    pub fn shell_distances(&self, params: &SamplingParams) -> Result<Vec<f32>, BakeError> {
+        shells::shell_distances(params, self.settings.shells, self.settings.shell_min)
+            .map_err(BakeError::Settings)
+    }
+
+    /// Every checkpoint file of this bake: the sampling sphere's, then each shell's.
+    pub fn checkpoints(&self) -> impl Iterator<Item = &PathBuf> {
+        [&self.fine_checkpoint, &self.coarse_checkpoint]
+            .into_iter()
+            .flatten()
+            .chain(
+                self.shell_checkpoints
+                    .iter()
+                    .flat_map(PassCheckpoints::paths),
+            )
+    }
+
+    /// The sphere level of each sampling pass, in order: the sampling sphere's passes, then
+    /// each shell's ([`Supersample::pass_levels`]).
+    pub fn pass_levels(&self) -> Vec<u32> {
+        let shell = self.shell_supersample.pass_levels(self.shell_level());
+        let mut levels = self.supersample.pass_levels(self.settings.level);
+        for _ in 0..self.settings.shells {
+            levels.extend_from_slice(&shell);
+        }
+        levels
+    }
+
+    /// Views every pass together renders.
+    fn sampled_view_count(&self) -> u64 {
+        self.pass_levels()
+            .into_iter()
+            .map(|l| u64::from(crate::sphere::view_count(l)))
+            .sum()
     }
 
     /// The heap budget.
@@ -175,13 +238,14 @@ impl Recipe {
                 ),
             )));
         }
-        let level = (settings.level + self.supersample.extra_levels).min(crate::sphere::MAX_LEVEL);
         let patches = u64::from(settings.patches.min(mesh.triangle_count()));
+        // Every pass's rows live until the encoding: the sampling sphere's and each shell's.
+        let views = self.sampled_view_count();
         let needs = FixedNeeds {
             triangles: mesh.triangle_count(),
             resolution: self.resolution(),
             workers: rayon::current_num_threads(),
-            row_bytes: u64::from(crate::sphere::view_count(level)) * patches.div_ceil(64) * 8,
+            row_bytes: views * patches.div_ceil(64) * 8,
         };
         let minimum = MemoryBudget::minimum(&needs);
         if self.memory().total() < minimum {
@@ -194,7 +258,7 @@ impl Recipe {
                 mesh.triangle_count(),
                 self.resolution(),
                 needs.workers,
-                crate::sphere::view_count(level),
+                views,
                 patches,
                 minimum >> 20
             )));
@@ -231,13 +295,14 @@ impl Recipe {
         Ok(tiling)
     }
 
-    /// Sampling options with `min_pixels`, `checkpoint` and `views`, the rest from the
-    /// settings.
+    /// Sampling options of one pass: `min_pixels`, `checkpoint`, `views` and where the pass's
+    /// views are (`shell`, `band`, see [`SphereSampling`]), the rest from the settings.
     fn sampling_options(
         &self,
         min_pixels: u32,
         checkpoint: Option<PathBuf>,
         views: Option<Vec<u32>>,
+        sphere: &SphereSampling,
     ) -> SamplingOptions {
         let s = &self.settings;
         SamplingOptions {
@@ -250,14 +315,14 @@ impl Recipe {
             memory_budget: Some(self.memory().split().sampling),
             views,
             probe: self.probe(),
-            shell: None,
-            band: None,
+            shell: sphere.shell,
+            band: sphere.band,
         }
     }
 
     /// Samples the views the stored level needs with `backend`: the stored views with every
     /// pixel, and the finer views of the supersampling, thresholded when the fold has a
-    /// threshold (see [`SampledRows`]).
+    /// threshold (see [`SampledRows`]); then each sampling shell's the same way.
     pub fn sample(
         &self,
         mesh: &Mesh,
@@ -270,7 +335,9 @@ impl Recipe {
 
     /// [`Recipe::sample`] of the views `shard` owns in each pass (every view with `None`);
     /// the other rows are empty. Each view is seeded and rendered as in the whole bake, so its
-    /// row is the same bit for bit.
+    /// row is the same bit for bit. The passes run one after the other, each within the
+    /// sampling share of the budget (the rows of those before it are counted in
+    /// [`Recipe::check_mesh`]'s minimum).
     pub fn sample_share(
         &self,
         mesh: &Mesh,
@@ -280,48 +347,114 @@ impl Recipe {
         progress: &dyn Progress,
     ) -> Result<SampledRows, BakeError> {
         let params = self.sampling_params(mesh);
-        let views = |level: u32| shard.map(|s| s.views(level));
-        let Supersample {
-            extra_levels,
-            fold_min_pixels,
+        let distances = self.shell_distances(&params)?;
+        let bands = shells::bands(params.distance(), &distances);
+        let main = self.sample_sphere(
+            mesh,
+            tiling,
+            backend,
+            progress,
+            &SphereSampling {
+                params,
+                supersample: self.supersample,
+                checkpoints: PassCheckpoints {
+                    coarse: self.coarse_checkpoint.clone(),
+                    fine: self.fine_checkpoint.clone(),
+                },
+                shard,
+                shell: None,
+                band: bands[0],
+            },
+        )?;
+        let mut shells = Vec::with_capacity(distances.len());
+        for (s, &distance) in distances.iter().enumerate() {
+            let start = Instant::now();
+            let rows = self.sample_sphere(
+                mesh,
+                tiling,
+                backend,
+                progress,
+                &SphereSampling {
+                    params: SamplingParams {
+                        level: self.shell_level(),
+                        ..params
+                    },
+                    supersample: self.shell_supersample,
+                    checkpoints: self.shell_checkpoints.get(s).cloned().unwrap_or_default(),
+                    shard,
+                    shell: Some(distance),
+                    band: bands[s + 1],
+                },
+            )?;
+            shells.push(SampledShell {
+                distance,
+                rows,
+                seconds: start.elapsed().as_secs_f64(),
+            });
+        }
+        Ok(SampledRows { main, shells })
+    }
+
+    /// Samples one sphere of views (the sampling sphere or a shell): its stored level plainly
+    /// and its finer level thresholded, or the finer level alone.
+    fn sample_sphere(
+        &self,
+        mesh: &Mesh,
+        tiling: &Tiling,
+        backend: &Backend,
+        progress: &dyn Progress,
+        sphere: &SphereSampling,
+    ) -> Result<SphereRows, BakeError> {
+        let SphereSampling {
+            params,
+            supersample,
+            ref checkpoints,
+            shard,
             ..
-        } = self.supersample;
+        } = *sphere;
+        let views = |level: u32| shard.map(|s| s.views(level));
         // The finer pass differs from the stored level in `level` only (same centre, radius,
         // camera distance), so its views are the stored ones plus the finer ones.
         let fine = SamplingParams {
             // Capped for `eval --sweep`, whose recipe may sample at the finest level (a checked
             // bake has `level + extra_levels` within it already).
-            level: (params.level + extra_levels).min(crate::sphere::MAX_LEVEL),
+            level: (params.level + supersample.extra_levels).min(crate::sphere::MAX_LEVEL),
             ..params
         };
         let min_pixels = self.settings.min_pixels;
-        let (plain, fine) = if fold_min_pixels > 0 {
+        let (plain, fine) = if supersample.fold_min_pixels > 0 {
             let coarse_options = self.sampling_options(
                 min_pixels,
-                self.coarse_checkpoint.clone(),
+                checkpoints.coarse.clone(),
                 views(params.level),
+                sphere,
             );
             let plain = backend.sample(mesh, tiling, &params, &coarse_options, progress)?;
             let fine_options = self.sampling_options(
-                fold_min_pixels,
-                self.fine_checkpoint.clone(),
+                supersample.fold_min_pixels,
+                checkpoints.fine.clone(),
                 views(fine.level),
+                sphere,
             );
             let rows = backend.sample(mesh, tiling, &fine, &fine_options, progress)?;
             (plain, Some(rows))
         } else {
-            let options =
-                self.sampling_options(min_pixels, self.fine_checkpoint.clone(), views(fine.level));
+            let options = self.sampling_options(
+                min_pixels,
+                checkpoints.fine.clone(),
+                views(fine.level),
+                sphere,
+            );
             (
                 backend.sample(mesh, tiling, &fine, &options, progress)?,
                 None,
             )
         };
-        Ok(SampledRows {
+        Ok(SphereRows {
             plain,
             fine,
             params,
-            supersample: self.supersample,
+            supersample,
         })
     }
 
@@ -333,12 +466,26 @@ impl Recipe {
         tiling: Tiling,
         visibility: VisibilityMatrix,
     ) -> Result<(Tiling, VisibilityMatrix, bool), BakeError> {
+        let (tiling, visibility, _, renumbered) =
+            self.number_with_shells(tiling, visibility, Vec::new())?;
+        Ok((tiling, visibility, renumbered))
+    }
+
+    /// [`Recipe::number`] of a bake with sampling shells: the numbering comes from the
+    /// sampling sphere's rows `visibility` alone, and every shell's rows follow it.
+    pub fn number_with_shells(
+        &self,
+        tiling: Tiling,
+        visibility: VisibilityMatrix,
+        shells: Vec<VisibilityMatrix>,
+    ) -> Result<(Tiling, VisibilityMatrix, Vec<VisibilityMatrix>, bool), BakeError> {
         match self.file_patch_order(&visibility) {
             Some(order) => {
                 let tiling = tiling.renumbered(&order).map_err(BakeError::TempFile)?;
-                Ok((tiling, visibility.with_patch_order(&order), true))
+                let shells = shells.iter().map(|m| m.with_patch_order(&order)).collect();
+                Ok((tiling, visibility.with_patch_order(&order), shells, true))
             }
-            None => Ok((tiling, visibility, false)),
+            None => Ok((tiling, visibility, shells, false)),
         }
     }
 
@@ -352,7 +499,7 @@ impl Recipe {
         }
     }
 
-    /// The `.pvis` bytes of a bake.
+    /// The `.pvis` bytes of a bake without sampling shells.
     pub fn encode(
         &self,
         params: &SamplingParams,
@@ -360,17 +507,31 @@ impl Recipe {
         tiling: &Tiling,
         visibility: &VisibilityMatrix,
     ) -> Vec<u8> {
-        self.encode_patches(params, triangle_count, &tiling.patches, visibility)
+        self.encode_patches(params, triangle_count, &tiling.patches, visibility, &[])
     }
 
-    /// [`Recipe::encode`] from the patch records alone, which is all the merge of a sharded
-    /// bake has.
+    /// The `.pvis` bytes of a bake with the sampling shells `shells` (outermost first, in the
+    /// file's patch numbering; none: [`Recipe::encode`]'s bytes).
+    pub fn encode_with_shells(
+        &self,
+        params: &SamplingParams,
+        triangle_count: u32,
+        tiling: &Tiling,
+        visibility: &VisibilityMatrix,
+        shells: &[ShellRows],
+    ) -> Vec<u8> {
+        self.encode_patches(params, triangle_count, &tiling.patches, visibility, shells)
+    }
+
+    /// [`Recipe::encode_with_shells`] from the patch records alone, which is all the merge of
+    /// a sharded bake has.
     pub(crate) fn encode_patches(
         &self,
         params: &SamplingParams,
         triangle_count: u32,
         patches: &[Patch],
         visibility: &VisibilityMatrix,
+        shells: &[ShellRows],
     ) -> Vec<u8> {
         format::encode_with(
             &BakeContents {
@@ -378,10 +539,42 @@ impl Recipe {
                 triangle_count: u64::from(triangle_count),
                 patches,
                 visibility,
-                shells: &[],
+                shells,
             },
             self.settings.encoding,
         )
+    }
+
+    /// Bytes each shell of `baked` adds to the file, outermost first: the file encoded with
+    /// the shells up to it, less the file with those before it (one encoding per shell; for
+    /// `--stats`).
+    pub fn shell_bytes(&self, baked: &Baked, triangle_count: u32) -> Vec<u64> {
+        let rows = shell_rows(&baked.shells);
+        let mut before = self
+            .encode(
+                &baked.params,
+                triangle_count,
+                &baked.tiling,
+                &baked.visibility,
+            )
+            .len() as u64;
+        (1..=rows.len())
+            .map(|k| {
+                let bytes = if k == rows.len() {
+                    baked.bytes.len() as u64
+                } else {
+                    let encoded = self.encode_with_shells(
+                        &baked.params,
+                        triangle_count,
+                        &baked.tiling,
+                        &baked.visibility,
+                        &rows[..k],
+                    );
+                    encoded.len() as u64
+                };
+                bytes - std::mem::replace(&mut before, bytes)
+            })
+            .collect()
     }
 
     /// Runs the whole recipe on `mesh`: tile → sample → fold → number → encode, each stage
@@ -402,17 +595,51 @@ impl Recipe {
         let tiling = stages.run("tiling", || spin(progress, "tiling", || self.tile(work)))?;
         let rows = stages.run("sampling", || self.sample(work, &tiling, backend, progress))?;
         let visibility = rows.stored(self.settings.level);
+        let shell_matrices: Vec<VisibilityMatrix> = rows
+            .shells()
+            .iter()
+            .map(|s| s.stored(self.shell_level()))
+            .collect();
         let (mut params, sampled_views) = (rows.params(self.settings.level), rows.sampled_views());
+        let shell_sampling: Vec<(u32, f64)> = rows
+            .shells()
+            .iter()
+            .map(|s| (s.sampled_views(), s.seconds))
+            .collect();
         drop(rows);
-        let (mut tiling, visibility, renumbered) =
-            stages.run("patch-order", || self.number(tiling, visibility))?;
+        let (mut tiling, visibility, shell_matrices, renumbered) = stages
+            .run("patch-order", || {
+                self.number_with_shells(tiling, visibility, shell_matrices)
+            })?;
         if frame.is_some() {
             params = Frame::world_params(mesh, params);
             tiling = Frame::world_tiling(mesh, tiling);
         }
+        // The file's shells are where a bake of the original in its own frame puts them: the
+        // same rule on the file's camera.
+        let shells: Vec<BakedShell> = self
+            .shell_distances(&params)?
+            .into_iter()
+            .zip(shell_matrices)
+            .zip(shell_sampling)
+            .map(
+                |((distance, visibility), (sampled_views, seconds))| BakedShell {
+                    distance,
+                    visibility,
+                    sampled_views,
+                    seconds,
+                },
+            )
+            .collect();
         let bytes = stages.run("encoding", || {
             spin(progress, "encoding", || {
-                self.encode(&params, mesh.triangle_count(), &tiling, &visibility)
+                self.encode_with_shells(
+                    &params,
+                    mesh.triangle_count(),
+                    &tiling,
+                    &visibility,
+                    &shell_rows(&shells),
+                )
             })
         });
         let visibility_bytes = Pvis::parse(&bytes)
@@ -424,13 +651,15 @@ impl Recipe {
             visibility,
             renumbered,
             sampled_views,
+            shells,
             bytes,
             visibility_bytes,
         })
     }
 
     /// What every bake (whole or one shard) does first: reports the mesh's and the
-    /// settings' warnings, checks the mesh, and chooses the working frame. Coordinates
+    /// settings' warnings, checks the mesh and the shells' radii, and chooses the working
+    /// frame. Coordinates
     /// binary32 cameras cannot handle are tiled and sampled in a frame of their own
     /// (`frame.rs`); the file gets the original's camera and patch records.
     pub(crate) fn prepare(
@@ -447,16 +676,19 @@ impl Recipe {
             progress.warn(&warning);
         }
         self.check_mesh(mesh)?;
-        Frame::choose(mesh, self.settings.fov_deg)
+        let frame = Frame::choose(mesh, self.settings.fov_deg)?;
+        if frame.is_none() && self.settings.shells > 0 {
+            // Before the tiling: shells binary32 cannot tell apart are a usage error. (In a
+            // working frame of its own, the mesh's shells are checked where they are sampled.)
+            self.shell_distances(&self.sampling_params(mesh))?;
+        }
+        Ok(frame)
     }
 
     /// Removes this bake's sampling checkpoints (once its output is complete, they have
     /// served their purpose); a missing one is fine.
     pub(crate) fn remove_checkpoints(&self) -> Result<(), BakeError> {
-        for checkpoint in [&self.fine_checkpoint, &self.coarse_checkpoint]
-            .into_iter()
-            .flatten()
-        {
+        for checkpoint in self.checkpoints() {
             match std::fs::remove_file(checkpoint) {
                 Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
                     return Err(BakeError::Remove {
@@ -502,6 +734,32 @@ impl Recipe {
     }
 }
 
+/// How one sphere of views is sampled ([`Recipe::sample_share`]).
+struct SphereSampling {
+    /// The cameras at the sphere's stored level (the sampling sphere's centre, radius and
+    /// field of view).
+    params: SamplingParams,
+    supersample: Supersample,
+    checkpoints: PassCheckpoints,
+    /// The shard whose views are rendered, or every view.
+    shard: Option<Shard>,
+    /// A shell's camera distance (`SamplingOptions::shell`); `None`: the sampling sphere.
+    shell: Option<f32>,
+    /// The camera distances its rows answer for (`SamplingOptions::band`).
+    band: Option<[f32; 2]>,
+}
+
+/// The shells of a bake as the writer takes them.
+fn shell_rows(shells: &[BakedShell]) -> Vec<ShellRows<'_>> {
+    shells
+        .iter()
+        .map(|s| ShellRows {
+            distance: s.distance,
+            visibility: &s.visibility,
+        })
+        .collect()
+}
+
 /// A byte count as `--memory` spells it: whole MiB, KiB or bytes.
 fn size_text(bytes: u64) -> String {
     if bytes >= 1 << 20 && bytes.is_multiple_of(1 << 20) {
@@ -539,4 +797,136 @@ fn write_mesh_tmp(path: &Path, mesh: &Mesh, tiling: &Tiling) -> Result<AtomicFil
             .map_err(failed)?;
     }
     Ok(tmp)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::progress::NoProgress;
+    use crate::sphere::view_count;
+    use crate::test_kit::bunny::bunny;
+
+    /// The default bake's three shells lie at the documented radii, are sampled like the
+    /// sampling sphere (its supersampling), the same on one thread and two, and follow the
+    /// sampling sphere's patch numbering.
+    #[test]
+    fn shells_lie_at_their_radii_and_follow_the_sampling_spheres_numbering() {
+        let mesh = bunny();
+        let recipe = |patch_order| {
+            BakeSettings {
+                patches: 80,
+                level: 1,
+                resolution: 32,
+                patch_order,
+                ..BakeSettings::default()
+            }
+            .check()
+            .unwrap()
+        };
+        let bake = |patch_order, threads| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                recipe(patch_order)
+                    .run(&mesh, &Backend::Cpu, &NoProgress, &mut Stages::new())
+                    .unwrap()
+            })
+        };
+        let spatial = bake(PatchOrder::Spatial, 2);
+        let (d, r) = (
+            f64::from(spatial.params.distance()),
+            f64::from(spatial.params.radius),
+        );
+        assert_eq!(spatial.shells.len(), 3);
+        for (s, shell) in spatial.shells.iter().enumerate() {
+            let expected = (d * (1.1 * r / d).powf((s + 1) as f64 / 3.0)) as f32;
+            assert!(
+                (shell.distance - expected).abs() <= expected * f32::EPSILON,
+                "shell {s}: {} vs {expected}",
+                shell.distance
+            );
+            assert_eq!(shell.visibility.views(), view_count(1));
+            assert_eq!(shell.sampled_views, view_count(2));
+        }
+        assert_eq!(spatial.sampled_views, view_count(2));
+        let (one, two) = (
+            bake(PatchOrder::Covisibility, 1),
+            bake(PatchOrder::Covisibility, 2),
+        );
+        assert_eq!(one.bytes, two.bytes);
+        let order = recipe(PatchOrder::Covisibility)
+            .file_patch_order(&spatial.visibility)
+            .expect("renumbered by co-visibility");
+        assert_eq!(one.visibility, spatial.visibility.with_patch_order(&order));
+        for ((a, b), s) in one.shells.iter().zip(&two.shells).zip(&spatial.shells) {
+            assert_eq!((a.distance, &a.visibility), (b.distance, &b.visibility));
+            assert_eq!(a.distance, s.distance);
+            assert_eq!(a.visibility, s.visibility.with_patch_order(&order));
+        }
+    }
+
+    /// Every pass, each shell's included, checkpoints beside the output; a bake resumed
+    /// from them (one shell's missing, so sampled again) gives the same bytes and shells.
+    #[test]
+    fn every_pass_checkpoints_and_a_resumed_bake_gives_the_same_file() {
+        let mesh = bunny();
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("b.pvis");
+        let recipe = |resume| {
+            BakeSettings {
+                patches: 60,
+                level: 1,
+                resolution: 32,
+                fold_min_pixels: Some(4),
+                shells: 2,
+                checkpoint: Some(out.clone()),
+                resume,
+                ..BakeSettings::default()
+            }
+            .check()
+            .unwrap()
+        };
+        let first = recipe(false)
+            .run(&mesh, &Backend::Cpu, &NoProgress, &mut Stages::new())
+            .unwrap();
+        let mut names: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        names.sort();
+        assert_eq!(
+            names,
+            [
+                "b.pvis.ckpt",
+                "b.pvis.shell1.ckpt",
+                "b.pvis.shell1.vs1.m4.ckpt",
+                "b.pvis.shell2.ckpt",
+                "b.pvis.shell2.vs1.m4.ckpt",
+                "b.pvis.vs1.m4.ckpt"
+            ]
+        );
+        std::fs::remove_file(dir.path().join("b.pvis.shell2.vs1.m4.ckpt")).unwrap();
+        let resumed = recipe(true)
+            .run(&mesh, &Backend::Cpu, &NoProgress, &mut Stages::new())
+            .unwrap();
+        assert_eq!(resumed.bytes, first.bytes);
+        for (a, b) in resumed.shells.iter().zip(&first.shells) {
+            assert_eq!((a.distance, &a.visibility), (b.distance, &b.visibility));
+        }
+        // Written out, the bake removes every checkpoint.
+        let outputs = Outputs {
+            pvis: out.clone(),
+            mesh: None,
+        };
+        recipe(true)
+            .write(&resumed, &mesh, &outputs, &mut Stages::new())
+            .unwrap();
+        let left: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(left, ["b.pvis"]);
+    }
 }

@@ -1,21 +1,44 @@
-//! The rows one sampling run yields, from which the stored matrix of any level up to the
-//! sampled one is cut: the stored views' own rows, plus (when supersampling) the finer views'
-//! rows folded into them.
+//! The rows one sampling run yields, from which the stored matrices of any level up to the
+//! sampled one are cut: per sphere of views (the sampling sphere, then each sampling shell),
+//! the stored views' own rows, plus (when supersampling) the finer views' rows folded into
+//! them.
 //!
 //! Level `l`'s views are a prefix of level `l + 1`'s (`sphere::ViewIndex`), so one run at the
 //! finest level serves every coarser one: the bake takes its own level, and `eval --sweep`
 //! takes each level it evaluates from the same run. With a fold threshold the stored views
 //! are sampled plainly (every pixel) and the finer ones separately with the threshold; without
-//! one, the finer pass holds the stored views' rows as its prefix and is sampled alone.
+//! one, the finer pass holds the stored views' rows as its prefix and is sampled alone. A
+//! shell's rows are folded the same way, at the shell's own level (`shells.rs`).
 
 use super::Supersample;
 use crate::sampler::fold_into_with;
 use crate::sphere::{MAX_LEVEL, view_count};
 use crate::visibility::{SamplingParams, VisibilityMatrix};
 
-/// The sampled rows of one tiling (see the module documentation).
+/// The sampled rows of one tiling (see the module documentation): the sampling sphere's and
+/// the shells'.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SampledRows {
+    /// The sampling sphere's rows.
+    pub(crate) main: SphereRows,
+    /// The shells', outermost first (empty without shells).
+    pub(crate) shells: Vec<SampledShell>,
+}
+
+/// The rows of one shell of near views.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SampledShell {
+    /// The views' distance from the centre, in the frame sampled in.
+    pub distance: f32,
+    /// Its rows; `params.level` is the shell's finest stored level.
+    pub(crate) rows: SphereRows,
+    /// Seconds its passes took.
+    pub seconds: f64,
+}
+
+/// The rows of one sphere of views: the sampling sphere or a shell.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct SphereRows {
     /// Every pixel counted: at `level`, or at the finer level when there is no threshold and
     /// this pass serves as both.
     pub(crate) plain: VisibilityMatrix,
@@ -27,34 +50,24 @@ pub struct SampledRows {
     pub(crate) supersample: Supersample,
 }
 
-impl SampledRows {
-    /// The finest stored level these rows serve.
-    pub fn level(&self) -> u32 {
-        self.params.level
-    }
-
-    /// Where the cameras of stored level `level` are: the sampled ones, at that level.
-    pub fn params(&self, level: u32) -> SamplingParams {
-        SamplingParams {
-            level,
-            ..self.params
-        }
-    }
-
+impl SphereRows {
     /// Views rendered to get these rows.
-    pub fn sampled_views(&self) -> u32 {
+    pub(crate) fn sampled_views(&self) -> u32 {
         self.plain.views() + self.fine.as_ref().map_or(0, VisibilityMatrix::views)
     }
 
-    /// The matrix a bake at `level` (at most [`SampledRows::level`]) stores: the level's own
-    /// rows, with the finer views of `level + K` (capped at the finest sphere level) folded in.
-    ///
-    /// Panics (caller contract) if `level` is finer than the sampled level.
-    pub fn stored(&self, level: u32) -> VisibilityMatrix {
+    /// The matrices of the passes, in sampling order: the plain pass, then the thresholded
+    /// finer one if any.
+    pub(crate) fn passes(&self) -> impl Iterator<Item = &VisibilityMatrix> {
+        std::iter::once(&self.plain).chain(self.fine.as_ref())
+    }
+
+    /// The stored matrix at `level` (see [`SampledRows::stored`]).
+    pub(crate) fn stored(&self, level: u32) -> VisibilityMatrix {
         assert!(
-            level <= self.level(),
+            level <= self.params.level,
             "level {level} is finer than the sampled level {}",
-            self.level()
+            self.params.level
         );
         let coarse = self.plain.prefix(view_count(level));
         let fine_level = (level + self.supersample.extra_levels).min(MAX_LEVEL);
@@ -73,5 +86,67 @@ impl SampledRows {
             level,
             self.supersample.fold_corners,
         )
+    }
+}
+
+impl SampledRows {
+    /// The finest stored level these rows serve.
+    pub fn level(&self) -> u32 {
+        self.main.params.level
+    }
+
+    /// Where the cameras of stored level `level` are: the sampled ones, at that level.
+    pub fn params(&self, level: u32) -> SamplingParams {
+        SamplingParams {
+            level,
+            ..self.main.params
+        }
+    }
+
+    /// Views rendered to get the sampling sphere's rows, every pass counted (each shell's
+    /// are [`SampledShell::sampled_views`]).
+    pub fn sampled_views(&self) -> u32 {
+        self.main.sampled_views()
+    }
+
+    /// The shells, outermost first.
+    pub fn shells(&self) -> &[SampledShell] {
+        &self.shells
+    }
+
+    /// The matrix a bake at `level` (at most [`SampledRows::level`]) stores: the level's own
+    /// rows, with the finer views of `level + K` (capped at the finest sphere level) folded in.
+    ///
+    /// Panics (caller contract) if `level` is finer than the sampled level.
+    pub fn stored(&self, level: u32) -> VisibilityMatrix {
+        self.main.stored(level)
+    }
+
+    /// Every pass's matrix in sampling order: the sampling sphere's, then each shell's
+    /// (`PartSettings::pass_levels` has their levels).
+    pub(crate) fn passes(&self) -> impl Iterator<Item = &VisibilityMatrix> {
+        self.main
+            .passes()
+            .chain(self.shells.iter().flat_map(|s| s.rows.passes()))
+    }
+}
+
+impl SampledShell {
+    /// The finest stored level of the shell's rows.
+    pub fn level(&self) -> u32 {
+        self.rows.params.level
+    }
+
+    /// Views rendered for the shell.
+    pub fn sampled_views(&self) -> u32 {
+        self.rows.sampled_views()
+    }
+
+    /// The matrix a bake storing the shell at `level` (at most [`SampledShell::level`])
+    /// stores, folded as [`SampledRows::stored`] folds the sampling sphere's.
+    ///
+    /// Panics (caller contract) if `level` is finer than the sampled level.
+    pub fn stored(&self, level: u32) -> VisibilityMatrix {
+        self.rows.stored(level)
     }
 }

@@ -3,8 +3,8 @@
 //!
 //! Defaults that depend on other settings are resolved here and nowhere else: view
 //! supersampling (one finer level unless the level is the finest), whether a thresholded
-//! fold needs a plain pass of its own, the probe pass of `--conservative`, and the checkpoint
-//! files of each sampling pass.
+//! fold needs a plain pass of its own, the probe pass of `--conservative`, the sampling
+//! shells' level and supersampling, and the checkpoint files of each sampling pass.
 
 use crate::format::VisibilityEncoding;
 use crate::sampler::{FoldCorners, MAX_RESOLUTION, MAX_VIEW_SUPERSAMPLE};
@@ -12,6 +12,7 @@ use crate::sphere::{MAX_LEVEL, view_count};
 use crate::tiling::{PatchId, TilingMode};
 use std::path::PathBuf;
 
+use super::shells::{DEFAULT_SHELL_MIN, DEFAULT_SHELLS, MAX_SHELLS};
 use super::{MemoryBudget, Recipe};
 
 /// `--view-supersample` unless given: one level finer, which removes most misses between the
@@ -98,6 +99,14 @@ pub struct BakeSettings {
     pub checkpoint: Option<PathBuf>,
     /// Continue from the checkpoints (`--resume`).
     pub resume: bool,
+    /// Sampling shells of near views inside the sampling sphere (`--shells`, `shells.rs`);
+    /// 0: none, a version-4 file.
+    pub shells: u32,
+    /// The innermost shell's radius over the bounding radius (`--shell-min`), above 1 and
+    /// below the sampling distance's.
+    pub shell_min: f64,
+    /// Sphere level of the shells' views (`--shell-level`); `None`: the stored level.
+    pub shell_level: Option<u32>,
 }
 
 impl Default for BakeSettings {
@@ -121,6 +130,9 @@ impl Default for BakeSettings {
             memory: MemoryBudget::default(),
             checkpoint: None,
             resume: false,
+            shells: DEFAULT_SHELLS,
+            shell_min: DEFAULT_SHELL_MIN,
+            shell_level: None,
         }
     }
 }
@@ -129,6 +141,22 @@ impl Default for BakeSettings {
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error("{0}")]
 pub struct SettingsError(pub String);
+
+/// The checkpoint files of one sphere's sampling passes (the sampling sphere's or a shell's).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct PassCheckpoints {
+    /// Of the stored level's plain pass, when the fold has a threshold.
+    pub coarse: Option<PathBuf>,
+    /// Of the main (supersampled) pass.
+    pub fine: Option<PathBuf>,
+}
+
+impl PassCheckpoints {
+    /// Both, the ones there are.
+    pub fn paths(&self) -> impl Iterator<Item = &PathBuf> {
+        [&self.fine, &self.coarse].into_iter().flatten()
+    }
+}
 
 /// How the stored views are supersampled, resolved.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -141,6 +169,20 @@ pub struct Supersample {
     pub fold_min_pixels: u32,
     /// Which stored views receive a finer view's patches.
     pub fold_corners: FoldCorners,
+}
+
+impl Supersample {
+    /// The sphere levels of one sphere's sampling passes at stored level `level`, in order:
+    /// the stored level plainly and the finer one thresholded, or the finer one alone (whose
+    /// prefix is the stored level). The finer level is capped at the finest.
+    pub fn pass_levels(&self, level: u32) -> Vec<u32> {
+        let fine = (level + self.extra_levels).min(MAX_LEVEL);
+        if self.fold_min_pixels > 0 {
+            vec![level, fine]
+        } else {
+            vec![fine]
+        }
+    }
 }
 
 impl BakeSettings {
@@ -187,13 +229,67 @@ impl BakeSettings {
             ));
         }
         let fold_min_pixels = self.fold_min_pixels.unwrap_or(DEFAULT_FOLD_MIN_PIXELS);
-        // A threshold at or below the stored views' own changes nothing: no extra plain pass.
-        let thresholded = extra_levels > 0 && fold_min_pixels > self.min_pixels.max(1);
         let fold_corners = self.fold_corners.unwrap_or(DEFAULT_FOLD_CORNERS);
-        // The supersampled bake samples other rows than a plain one: its own checkpoint, so
-        // that resuming finds the right one and a plain bake's checkpoint stays usable. The
-        // plain pass of a thresholded fold samples exactly what a plain bake does: it shares
-        // a plain bake's checkpoint.
+        let resolve = |extra_levels: u32| {
+            // A threshold at or below the stored views' own changes nothing: no extra plain
+            // pass.
+            let thresholded = extra_levels > 0 && fold_min_pixels > self.min_pixels.max(1);
+            Supersample {
+                extra_levels,
+                fold_min_pixels: if thresholded { fold_min_pixels } else { 0 },
+                fold_corners,
+            }
+        };
+        let supersample = resolve(extra_levels);
+        if self.shells > MAX_SHELLS {
+            return fail(format!(
+                "--shells {}: expected 0 (no near views) to {MAX_SHELLS}",
+                self.shells
+            ));
+        }
+        // D / R of the sampling sphere; the radii themselves are checked with the mesh
+        // (`shells::shell_distances`).
+        let outer_ratio = 1.0 / (f64::from(self.fov_deg).to_radians() * 0.5).sin();
+        if !(self.shell_min.is_finite() && self.shell_min > 1.0 && self.shell_min < outer_ratio) {
+            return fail(format!(
+                "--shell-min {}: expected the innermost shell's radius over the bounding \
+                 radius, above 1 and below {outer_ratio:.3} (the sampling distance's at --fov {})",
+                self.shell_min, self.fov_deg
+            ));
+        }
+        if let Some(level) = self.shell_level.filter(|&l| l > MAX_LEVEL) {
+            return fail(format!(
+                "--shell-level {level}: expected a sphere level from 0 to {MAX_LEVEL}"
+            ));
+        }
+        // The shells' supersampling is the stored level's, capped at the finest level.
+        let shell_level = self.shell_level.unwrap_or(self.level);
+        let shell_supersample = resolve(extra_levels.min(MAX_LEVEL - shell_level));
+        let probe = self.conservative.then_some(CONSERVATIVE_PROBE_PIXELS);
+        let main = self.pass_checkpoints("", supersample, probe);
+        Ok(Recipe {
+            supersample,
+            shell_supersample,
+            coarse_checkpoint: main.coarse,
+            fine_checkpoint: main.fine,
+            shell_checkpoints: (1..=self.shells)
+                .map(|s| self.pass_checkpoints(&format!(".shell{s}"), shell_supersample, probe))
+                .collect(),
+            settings: self,
+        })
+    }
+
+    /// The checkpoints of one sphere's passes, named `OUT.pvis` + `prefix` (the shell) + what
+    /// decides the rows + `.ckpt`. The supersampled bake samples other rows than a plain one:
+    /// its own checkpoint, so that resuming finds the right one and a plain bake's checkpoint
+    /// stays usable. The plain pass of a thresholded fold samples exactly what a plain bake
+    /// does: it shares a plain bake's checkpoint.
+    fn pass_checkpoints(
+        &self,
+        prefix: &str,
+        supersample: Supersample,
+        probe: Option<u32>,
+    ) -> PassCheckpoints {
         let checkpoint_with = |suffix: String| {
             self.checkpoint.as_ref().map(|base| {
                 let mut path = base.clone().into_os_string();
@@ -201,31 +297,24 @@ impl BakeSettings {
                 PathBuf::from(path)
             })
         };
-        let probe = self.conservative.then_some(CONSERVATIVE_PROBE_PIXELS);
-        let probe_suffix = probe.map(|r| format!(".p{r}")).unwrap_or_default();
-        let mut suffix = probe_suffix.clone();
-        if extra_levels > 0 {
-            suffix.push_str(&format!(".vs{extra_levels}"));
+        let plain = format!(
+            "{prefix}{}",
+            probe.map(|r| format!(".p{r}")).unwrap_or_default()
+        );
+        let mut suffix = plain.clone();
+        if supersample.extra_levels > 0 {
+            suffix.push_str(&format!(".vs{}", supersample.extra_levels));
         }
+        let thresholded = supersample.fold_min_pixels > 0;
         if thresholded {
-            suffix.push_str(&format!(".m{fold_min_pixels}"));
+            suffix.push_str(&format!(".m{}", supersample.fold_min_pixels));
         }
-        let fine_checkpoint = checkpoint_with(suffix + ".ckpt");
-        let coarse_checkpoint = if thresholded {
-            checkpoint_with(probe_suffix + ".ckpt")
-        } else {
-            None
-        };
-        Ok(Recipe {
-            supersample: Supersample {
-                extra_levels,
-                fold_min_pixels: if thresholded { fold_min_pixels } else { 0 },
-                fold_corners,
-            },
-            coarse_checkpoint,
-            fine_checkpoint,
-            settings: self,
-        })
+        PassCheckpoints {
+            coarse: thresholded
+                .then(|| checkpoint_with(plain + ".ckpt"))
+                .flatten(),
+            fine: checkpoint_with(suffix + ".ckpt"),
+        }
     }
 }
 
@@ -339,9 +428,76 @@ mod tests {
                 &|s: &mut BakeSettings| s.view_supersample = Some(3),
                 "--view-supersample",
             ),
+            (
+                &|s: &mut BakeSettings| s.shells = MAX_SHELLS + 1,
+                "--shells",
+            ),
+            (&|s: &mut BakeSettings| s.shell_min = 1.0, "--shell-min"),
+            (
+                &|s: &mut BakeSettings| s.shell_min = f64::NAN,
+                "--shell-min",
+            ),
+            // The sampling distance is 2.61 radii at 45°, 1 at 180°.
+            (&|s: &mut BakeSettings| s.shell_min = 2.62, "--shell-min"),
+            (
+                &|s: &mut BakeSettings| {
+                    s.fov_deg = 120.0;
+                    s.shell_min = 1.2
+                },
+                "--shell-min",
+            ),
+            (
+                &|s: &mut BakeSettings| s.shell_level = Some(MAX_LEVEL + 1),
+                "--shell-level",
+            ),
         ] {
             let err = check(|s| f(s)).unwrap_err();
             assert!(err.0.starts_with(flag), "{flag}: {}", err.0);
         }
+    }
+
+    #[test]
+    fn every_shell_has_checkpoints_of_its_own_and_the_stored_levels_fold() {
+        let c = check(|_| {}).unwrap();
+        assert_eq!(c.shell_supersample, c.supersample);
+        assert_eq!(c.shell_level(), 4);
+        assert_eq!(
+            c.shell_checkpoints,
+            (1..=DEFAULT_SHELLS)
+                .map(|s| PassCheckpoints {
+                    coarse: None,
+                    fine: Some(format!("out.pvis.shell{s}.vs1.ckpt").into()),
+                })
+                .collect::<Vec<_>>()
+        );
+        assert_eq!(c.checkpoints().count(), 1 + DEFAULT_SHELLS as usize);
+        // A thresholded fold: two passes per shell, each with a checkpoint.
+        let c = check(|s| {
+            s.fold_min_pixels = Some(4);
+            s.conservative = true;
+            s.shells = 1
+        })
+        .unwrap();
+        assert_eq!(
+            c.shell_checkpoints,
+            vec![PassCheckpoints {
+                coarse: Some("out.pvis.shell1.p2.ckpt".into()),
+                fine: Some("out.pvis.shell1.p2.vs1.m4.ckpt".into()),
+            }]
+        );
+        assert_eq!(c.pass_levels(), vec![4, 5, 4, 5]);
+        // The shells' own level, its supersampling capped at the finest level.
+        let c = check(|s| s.shell_level = Some(MAX_LEVEL)).unwrap();
+        assert_eq!(c.shell_level(), MAX_LEVEL);
+        assert_eq!(c.shell_supersample.extra_levels, 0);
+        assert_eq!(
+            c.shell_checkpoints[0].fine,
+            Some("out.pvis.shell1.ckpt".into())
+        );
+        assert_eq!(c.pass_levels(), vec![5, 7, 7, 7]);
+        // No shells: the sampling sphere's passes alone, as before.
+        let c = check(|s| s.shells = 0).unwrap();
+        assert!(c.shell_checkpoints.is_empty());
+        assert_eq!(c.pass_levels(), vec![5]);
     }
 }

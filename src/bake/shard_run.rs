@@ -3,8 +3,9 @@
 //! every shard can share (`patchvis tile`, `tiling_file.rs`).
 //!
 //! A shard works as `Recipe::run` does up to the sampled rows, in the same frame, on the
-//! same tiling (read from the tiling file, or tiled again), with each pass restricted to the
-//! shard's views and the ancestors that seed them; it stops before the fold, the numbering
+//! same tiling (read from the tiling file, or tiled again), with each pass (the sampling
+//! sphere's and every shell's) restricted to the shard's views and the ancestors that seed
+//! them; it stops before the fold, the numbering
 //! and the encoding, which need every view and are the merge's. Cost: the mesh hash (one
 //! pass), the tiling unless given, and the sampling of about `1/N` of the views plus the
 //! ancestors across the shard's border.
@@ -51,6 +52,11 @@ impl Recipe {
             fold_corners: self.supersample.fold_corners,
             patch_order: s.patch_order,
             encoding: s.encoding,
+            shells: s.shells,
+            shell_min: s.shell_min,
+            shell_level: self.shell_level(),
+            shell_extra_levels: self.shell_supersample.extra_levels,
+            shell_fold_min_pixels: self.shell_supersample.fold_min_pixels,
         }
     }
 
@@ -105,12 +111,11 @@ impl Recipe {
             None => tiling.patches.clone(),
         };
         let settings = self.part_settings();
-        let matrices = [Some(&rows.plain), rows.fine.as_ref()];
         let (mut owned_views, mut rendered_views) = (0, 0);
         let passes: Vec<PassRows> = settings
             .pass_levels()
             .into_iter()
-            .zip(matrices.into_iter().flatten())
+            .zip(rows.passes())
             .map(|(level, matrix)| {
                 let views = shard.views(level);
                 owned_views += views.len() as u32;

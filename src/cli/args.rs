@@ -123,6 +123,24 @@ pub struct BakeArgs {
     /// covers every finer sample of a face, culls more, misses more). [default: all]
     #[arg(long, value_enum, value_name = "WHICH")]
     pub fold_corners: Option<FoldCornersArg>,
+    /// Sampling shells for near cameras: N nested spheres of near views between the sampling
+    /// sphere (distance D = R / sin(fov/2), R the bounding radius) and F·R (--shell-min), at
+    /// D·(F·R/D)^(s/N) for s = 1..N. Each near view records every patch visible from its eye
+    /// in any direction, so a query nearer than D is answered from the two shells around it
+    /// instead of drawing everything; inside the innermost shell the answer is flagged
+    /// inside_sphere. Cost: each shell is one more sampling pass of the stored level (its
+    /// views render several frustums each) and one more visibility matrix in the file. 0: no
+    /// shells, a version-4 file as before.
+    #[arg(long, default_value_t = 3, value_name = "N")]
+    pub shells: u32,
+    /// The innermost shell's radius over the bounding radius: above 1 and below D/R (2.61 at
+    /// --fov 45).
+    #[arg(long, default_value_t = 1.1, value_name = "F")]
+    pub shell_min: f64,
+    /// Sphere level of the shells' views (0..=7), supersampled and folded as the stored level
+    /// is. [default: --level]
+    #[arg(long, value_name = "L")]
+    pub shell_level: Option<u32>,
     /// Continue an interrupted bake from its checkpoint (OUT.pvis.ckpt, written after every
     /// sphere level); a checkpoint of other inputs or settings is refused.
     #[arg(long)]

@@ -56,6 +56,9 @@ pub(super) fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
         memory: memory_budget(args.memory),
         checkpoint: Some(args.output.clone()),
         resume: args.resume,
+        shells: args.shells,
+        shell_min: args.shell_min,
+        shell_level: args.shell_level,
     })
 }
 
@@ -197,6 +200,7 @@ impl Summary<'_> {
             "patch_order": if b.renumbered { "covisibility" } else { "spatial" },
             "encoding": format!("{:?}", self.args.encoding).to_lowercase(),
             "sampled_views": b.sampled_views,
+            "shells": self.shells_json(),
             "always_visible": s.always_visible.len(),
             "visible_fraction_mean": b.visible_fraction(),
             "bytes": {"total": b.bytes.len(), "visibility": b.visibility_bytes},
@@ -206,6 +210,28 @@ impl Summary<'_> {
                 "name": r.name, "seconds": r.seconds, "peak_heap_bytes": r.peak_heap_bytes,
             })).collect::<Vec<_>>(),
         })
+    }
+
+    /// Each sampling shell's distance (also over the bounding radius), level, views, views
+    /// sampled, sampling seconds and the bytes it adds to the file.
+    fn shells_json(&self) -> Vec<serde_json::Value> {
+        let (r, b) = (self.recipe, self.baked);
+        let bytes = r.shell_bytes(b, self.mesh.triangle_count());
+        b.shells
+            .iter()
+            .zip(bytes)
+            .map(|(shell, bytes)| {
+                json!({
+                    "distance": shell.distance,
+                    "radii": f64::from(shell.distance) / f64::from(b.params.radius),
+                    "level": r.shell_level(),
+                    "views": shell.visibility.views(),
+                    "sampled_views": shell.sampled_views,
+                    "seconds": shell.seconds,
+                    "bytes": bytes,
+                })
+            })
+            .collect()
     }
 
     /// The summary on stdout.
@@ -274,8 +300,28 @@ impl Summary<'_> {
                 )?;
             }
         }
+        if !b.shells.is_empty() {
+            let radii: Vec<String> = b
+                .shells
+                .iter()
+                .map(|shell| format!("{:.2}", shell.distance / b.params.radius))
+                .collect();
+            outln!(
+                "          near views: {} shells of {} views (level {}) at {} bounding radii, {} views sampled in {:.2} s",
+                b.shells.len(),
+                view_count(r.shell_level()),
+                r.shell_level(),
+                radii.join(", "),
+                b.shells.iter().map(|s| s.sampled_views).sum::<u32>(),
+                b.shells.iter().map(|s| s.seconds).sum::<f64>()
+            )?;
+        }
+        let shells = match b.shells.len() {
+            0 => String::new(),
+            k => format!(", {k} sampling shells"),
+        };
         outln!(
-            "wrote {}: {} bytes, visibility {} bytes ({:.2} s total)",
+            "wrote {}: {} bytes, visibility {} bytes{shells} ({:.2} s total)",
             self.args.output.display(),
             b.bytes.len(),
             b.visibility_bytes,

@@ -192,8 +192,12 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     patchvis::format::write_atomic(&args.output, &merged.bytes)
         .map_err(|e| anyhow!("{}: cannot write: {e}", args.output.display()))?;
     if !args.quiet {
+        let shells = match merged.shells.len() {
+            0 => String::new(),
+            k => format!(", {k} sampling shells"),
+        };
         outln!(
-            "merged {} shards: {} views, {} patches",
+            "merged {} shards: {} views, {} patches{shells}",
             merged.shards,
             merged.views,
             merged.patches
