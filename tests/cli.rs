@@ -570,7 +570,7 @@ const VERSION_4_FILE: &str = concat!(
 /// The small bake of the shells' tests: 200 patches, level 2, 64 px.
 const SHELL_FLAGS: [&str; 6] = ["--patches", "200", "--level", "2", "--resolution", "64"];
 
-/// Near cameras (issue 22): a default bake samples three shells at `D·(1.1·R/D)^(s/3)`, each
+/// Near cameras (issue 22): a default bake samples two shells at `D·(1.1·R/D)^(s/2)`, each
 /// with the stored level's views and supersampling, reported in `--stats` and the summary;
 /// `--shells 0` writes the bytes bakes wrote before shells, and the bytes each shell adds
 /// are the difference.
@@ -579,25 +579,24 @@ fn default_bakes_sample_three_shells_and_shells_0_writes_the_version_4_bytes() {
     let default = Bake::new(&SHELL_FLAGS).stats().run();
     let out = common::stdout(&default.output);
     assert!(
-        out.contains(
-            "near views: 3 shells of 66 views (level 2) at 1.96, 1.47, 1.10 bounding radii"
-        ) && out.contains(", 3 sampling shells ("),
+        out.contains("near views: 2 shells of 66 views (level 2) at 1.70, 1.10 bounding radii")
+            && out.contains(", 2 sampling shells ("),
         "{out}"
     );
     let stats = default.stats();
     let bytes = default.bytes();
     let pvis = patchvis::runtime::Pvis::parse(&bytes).unwrap();
-    assert_eq!((pvis.version(), pvis.shell_count()), (5, 3));
+    assert_eq!((pvis.version(), pvis.shell_count()), (5, 2));
     let (d, r) = (
         f64::from(pvis.sampling().distance),
         f64::from(pvis.sampling().radius),
     );
     let shells = stats["shells"].as_array().expect("a list of shells");
-    assert_eq!(shells.len(), 3, "{stats}");
+    assert_eq!(shells.len(), 2, "{stats}");
     let mut outer = d as f32;
     for (s, shell) in shells.iter().enumerate() {
         let distance = shell["distance"].as_f64().unwrap() as f32;
-        let expected = (d * (1.1 * r / d).powf((s + 1) as f64 / 3.0)) as f32;
+        let expected = (d * (1.1 * r / d).powf((s + 1) as f64 / 2.0)) as f32;
         assert!(
             (distance - expected).abs() <= expected * f32::EPSILON,
             "shell {s} at {distance}, expected {expected}"

@@ -806,7 +806,7 @@ mod tests {
     use crate::sphere::view_count;
     use crate::test_kit::bunny::bunny;
 
-    /// The default bake's three shells lie at the documented radii, are sampled like the
+    /// The default bake's shells lie at the documented radii, are sampled like the
     /// sampling sphere (its supersampling), the same on one thread and two, and follow the
     /// sampling sphere's patch numbering.
     #[test]
@@ -839,9 +839,10 @@ mod tests {
             f64::from(spatial.params.distance()),
             f64::from(spatial.params.radius),
         );
-        assert_eq!(spatial.shells.len(), 3);
+        assert_eq!(spatial.shells.len(), shells::DEFAULT_SHELLS as usize);
         for (s, shell) in spatial.shells.iter().enumerate() {
-            let expected = (d * (1.1 * r / d).powf((s + 1) as f64 / 3.0)) as f32;
+            let expected =
+                (d * (1.1 * r / d).powf((s + 1) as f64 / f64::from(shells::DEFAULT_SHELLS))) as f32;
             assert!(
                 (shell.distance - expected).abs() <= expected * f32::EPSILON,
                 "shell {s}: {} vs {expected}",
