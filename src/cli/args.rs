@@ -131,11 +131,11 @@ pub struct BakeArgs {
     /// inside_sphere. Cost: each shell is one more sampling pass of the stored level (its
     /// views render several frustums each) and one more visibility matrix in the file. 0: no
     /// shells, a version-4 file as before.
-    #[arg(long, default_value_t = 3, value_name = "N")]
+    #[arg(long, default_value_t = patchvis::bake::DEFAULT_SHELLS, value_name = "N")]
     pub shells: u32,
     /// The innermost shell's radius over the bounding radius: above 1 and below D/R (2.61 at
     /// --fov 45).
-    #[arg(long, default_value_t = 1.1, value_name = "F")]
+    #[arg(long, default_value_t = patchvis::bake::DEFAULT_SHELL_MIN, value_name = "F")]
     pub shell_min: f64,
     /// Sphere level of the shells' views (0..=7), supersampled and folded as the stored level
     /// is. [default: --level]
