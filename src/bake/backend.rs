@@ -113,9 +113,8 @@ impl Backend {
         matches!(self, Backend::Cpu)
     }
 
-    /// Samples every view of `params` for the patches of `tiling` (a tiling of `mesh`). A
-    /// shell's near views (`options.shell`) are rendered on the CPU whatever the backend: the
-    /// GPU sampler renders the sampling sphere's views only.
+    /// Samples every view of `params` for the patches of `tiling` (a tiling of `mesh`): the
+    /// sampling sphere's, or a shell's near views (`options.shell`), on either backend.
     pub fn sample(
         &self,
         mesh: &Mesh,
@@ -126,10 +125,6 @@ impl Backend {
     ) -> Result<VisibilityMatrix, BakeError> {
         match self {
             Backend::Cpu => Ok(sampler::sample_tiled(
-                mesh, tiling, params, options, progress,
-            )?),
-            #[cfg(feature = "gpu")]
-            Backend::Gpu(_) if options.shell.is_some() => Ok(sampler::sample_tiled(
                 mesh, tiling, params, options, progress,
             )?),
             #[cfg(feature = "gpu")]
