@@ -221,8 +221,49 @@ fn dump(pvis: &Pvis<'_>) -> String {
             list(&visible.leaf),
             patches.join(",")
         );
+        if k > 0 {
+            let _ = writeln!(out, "{}", far_query(pvis, eye, visible.band));
+        }
     }
     out
+}
+
+/// The answer of a far-only reader (spec § Far-only readers) to `eye`, as a `far-query` line
+/// in the `query` format of a file without shells: § Query's rule on the sampling sphere
+/// alone, taken literally from the sampling sphere's rows, with `inside` for every eye nearer
+/// than the sampling distance: for an eye in `band` ≥ 1 (the full reader's answer), the band-0
+/// rule with `inside_sphere` true.
+fn far_query(pvis: &Pvis<'_>, eye: [f32; 3], band: u32) -> String {
+    let s = pvis.sampling();
+    let c = s.center;
+    let d = [eye[0] - c[0], eye[1] - c[1], eye[2] - c[2]];
+    let mut answer = vec![0u64; pvis.row_words()];
+    let mut row = vec![0u64; pvis.row_words()];
+    let (inside, leaf) = if d.iter().all(|x| x.is_finite()) {
+        let leaf = sphere::locate(d, s.level).views;
+        for view in leaf {
+            pvis.view_row(view, &mut row);
+            answer.iter_mut().zip(&row).for_each(|(a, r)| *a |= r);
+        }
+        (band >= 1, leaf)
+    } else {
+        for p in 0..pvis.patch_count() {
+            answer[p as usize / 64] |= 1 << (p % 64);
+        }
+        (true, sphere::locate([0.0; 3], s.level).views)
+    };
+    let list = |v: &mut dyn Iterator<Item = u32>| {
+        let v: Vec<String> = v.map(|x| x.to_string()).collect();
+        v.join(",")
+    };
+    format!(
+        "far-query {},{},{} -> inside {inside} views [{}] patches [{}]",
+        eye[0],
+        eye[1],
+        eye[2],
+        list(&mut leaf.into_iter()),
+        list(&mut patchvis::runtime::Patches::of_bits(&answer)),
+    )
 }
 
 /// The extra eye positions of a file with shells (vectors 017 on, centred at the origin, with

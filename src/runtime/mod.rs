@@ -16,6 +16,10 @@
 //! changed) and [`Expanded`] (every row decoded once and every leaf's answer stored; `O(level)` a
 //! query).
 //!
+//! Without feature `shells` this is a far-only reader (spec § SHEL, far-only readers): it skips
+//! SHEL's contents and answers every eye from the sampling sphere, `inside_sphere` nearer than
+//! it (the WebAssembly module and the Cortex-M4F firmware, for their size targets).
+//!
 //! **Invariant:** nothing here allocates or panics on any input; the only panics are `assert!`s
 //! on caller contracts (an out-of-range patch index, a too-small scratch buffer).
 //! Needs only `core` (and the core-only [`crate::sphere`]). Format: `spec/FORMAT.md`.
@@ -212,7 +216,9 @@ impl<'a> Pvis<'a> {
     }
 
     /// `K`: the sampling shells besides the sampling sphere (spec § SHEL); 0 for a file without
-    /// SHEL (every file of version ≤ 4).
+    /// SHEL (every file of version ≤ 4), and for every file in a far-only reader (built without
+    /// feature `shells`: spec § SHEL, far-only readers), which answers from the sampling sphere
+    /// alone.
     pub fn shell_count(&self) -> u32 {
         self.shells.count()
     }
@@ -249,16 +255,17 @@ impl<'a> Pvis<'a> {
 
     /// Sphere level of shell `s` (which must be `≤ shell_count()`).
     fn shell_level(&self, s: u32) -> u32 {
-        match s {
-            0 => self.sampling.level,
-            _ => self.shells.level(s).min(consts::MAX_LEVEL),
+        // A far-only reader has shell 0 only.
+        if s == 0 || !cfg!(feature = "shells") {
+            return self.sampling.level;
         }
+        self.shells.level(s).min(consts::MAX_LEVEL)
     }
 
     /// The rows of shell `s` (which must be `≤ shell_count()`): VISB's, or a shell's payload
     /// opened again by the parser that checked it (walking its record lengths once).
     fn visb_of(&self, s: u32) -> Visb<'a> {
-        if s == 0 {
+        if s == 0 || !cfg!(feature = "shells") {
             return self.visb;
         }
         let sampling = parse::shell_sampling(self.sampling, self.shells.level(s));

@@ -140,8 +140,11 @@ pub(super) fn parse(data: &[u8]) -> Result<Pvis<'_>, Error> {
         patches,
     )?;
     let shells = match shel {
-        Some(section) => parse_shel(data, section, version, sampling, patch_count, patches)?,
-        None => Shells::NONE,
+        // A far-only reader (spec § SHEL, far-only readers) skips SHEL's contents.
+        Some(section) if cfg!(feature = "shells") => {
+            parse_shel(data, section, version, sampling, patch_count, patches)?
+        }
+        _ => Shells::NONE,
     };
 
     Ok(Pvis {

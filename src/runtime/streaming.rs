@@ -27,8 +27,9 @@ use super::{Frustum, Pvis, Visible};
 use crate::sphere::{Face, LatticePoint, MAX_LEVEL, children, cross, dot, root_face};
 
 /// Paths a streaming state keeps at most: shell `s` uses path `s % PATHS` (see the module
-/// documentation).
-pub(super) const PATHS: usize = 3;
+/// documentation). One in a far-only reader (without feature `shells`), which has shell 0
+/// only.
+pub(super) const PATHS: usize = if cfg!(feature = "shells") { 3 } else { 1 };
 
 /// Paths a state over `pvis` keeps: one per shell, at most [`PATHS`].
 fn path_count(pvis: &Pvis<'_>) -> usize {
@@ -287,6 +288,8 @@ impl<'a, 's> Streaming<'a, 's> {
     /// Walks the path of `shell` (path `shell % PATHS`, handed to it if another shell had it)
     /// to the leaf under `d`; returns the path's index.
     fn walk(&mut self, shell: u32, d: [f32; 3]) -> usize {
+        // `PATHS` is 1 in a far-only reader, whose only shell is 0.
+        #[cfg_attr(not(feature = "shells"), allow(clippy::modulo_one))]
         let p = shell as usize % PATHS;
         if self.paths[p].shell != shell {
             let visb = self.pvis.visb_of(shell);
