@@ -494,7 +494,10 @@ mod tests {
             c.shell_checkpoints[0].fine,
             Some("out.pvis.shell1.ckpt".into())
         );
-        assert_eq!(c.pass_levels(), vec![5, 7, 7, 7]);
+        // The sampling sphere's fold level, then each shell's own.
+        let mut levels = vec![5];
+        levels.extend([MAX_LEVEL; DEFAULT_SHELLS as usize]);
+        assert_eq!(c.pass_levels(), levels);
         // No shells: the sampling sphere's passes alone, as before.
         let c = check(|s| s.shells = 0).unwrap();
         assert!(c.shell_checkpoints.is_empty());
