@@ -336,11 +336,10 @@ fn distance_bands_give_a_row_each_equal_to_single_runs() {
     let text = stdout(&run(&["--distance-scale", "0.45,1.5,0.8"]));
     let rows: Vec<&str> = text.lines().filter(|l| l.starts_with("| x")).collect();
     assert_eq!(rows.len(), 3, "{text}");
-    for (row, (scale, answered)) in rows.iter().zip([
-        ("0.45", "5/5"),
-        ("1.5", "5/5"),
-        ("0.8", "5/5"),
-    ]) {
+    for (row, (scale, answered)) in
+        rows.iter()
+            .zip([("0.45", "5/5"), ("1.5", "5/5"), ("0.8", "5/5")])
+    {
         assert!(row.starts_with(&format!("| x{scale} | ")), "{row}");
         assert!(row.contains(&format!(" | {answered} | ")), "{row}");
     }
