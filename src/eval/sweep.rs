@@ -119,6 +119,8 @@ fn recipe_for(template: &BakeSettings, patches: u32, finest: u32) -> Result<Reci
         level: 0,
         checkpoint: None,
         resume: false,
+        // The sweep evaluates the sampling sphere's levels at the sampling distance: no shells.
+        shells: 0,
         ..template.clone()
     }
     .check()
