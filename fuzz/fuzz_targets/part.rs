@@ -60,6 +60,12 @@ fuzz_target!(|data: &[u8]| {
         fold_corners: FoldCorners::All,
         patch_order: PatchOrder::Covisibility,
         encoding: VisibilityEncoding::Tree,
+        // No sampling shells: the passes below are the sampling sphere's.
+        shells: 0,
+        shell_min: 1.1,
+        shell_level: level,
+        shell_extra_levels: 0,
+        shell_fold_min_pixels: 0,
     };
     let words_per_row = (patches as usize).div_ceil(64);
     let mut next_bit = bits.iter().cycle();
