@@ -83,14 +83,7 @@ pub fn sample_directions(
     directions: &[[f32; 3]],
     progress: &dyn Progress,
 ) -> VisibilityMatrix {
-    assert_eq!(
-        patch_of.len(),
-        mesh.triangle_count() as usize,
-        "patch_of must hold one patch per triangle"
-    );
-    if let Some(bad) = patch_of.iter().find(|&&p| p >= patch_count) {
-        panic!("patch id {bad} is not below patch_count {patch_count}");
-    }
+    check_patch_of(mesh, patch_of, patch_count);
     assert!(
         params.radius > 0.0 && params.radius.is_finite(),
         "sampling radius must be positive and finite, got {}",
@@ -137,14 +130,7 @@ pub fn sample_near(
     distance: f32,
     progress: &dyn Progress,
 ) -> VisibilityMatrix {
-    assert_eq!(
-        patch_of.len(),
-        mesh.triangle_count() as usize,
-        "patch_of must hold one patch per triangle"
-    );
-    if let Some(bad) = patch_of.iter().find(|&&p| p >= patch_count) {
-        panic!("patch id {bad} is not below patch_count {patch_count}");
-    }
+    check_patch_of(mesh, patch_of, patch_count);
     // Checks `params.radius` and `distance`.
     near_camera_count(params, distance);
     let views = crate::sphere::view_count(params.level);
@@ -185,5 +171,18 @@ fn mark_visible(ids: &[u32], row: &mut [u64]) {
                 row[id as usize / 64] |= 1 << (id % 64);
             }
         }
+    }
+}
+
+/// The caller contract of the brute-force samplers: one patch per triangle, each below
+/// `patch_count`.
+fn check_patch_of(mesh: &Mesh, patch_of: &[PatchId], patch_count: u32) {
+    assert_eq!(
+        patch_of.len(),
+        mesh.triangle_count() as usize,
+        "patch_of must hold one patch per triangle"
+    );
+    if let Some(bad) = patch_of.iter().find(|&&p| p >= patch_count) {
+        panic!("patch id {bad} is not below patch_count {patch_count}");
     }
 }
