@@ -69,8 +69,10 @@ static ZOO: [(&str, Source); 5] = [
 enum Mode {
     /// The default bake.
     Default,
-    /// `--conservative`.
+    /// `--conservative` (its split fold).
     Conservative,
+    /// `--conservative --fold-corners all`: `--conservative` before the split fold.
+    ConservativeAll,
     /// `--fold-min-pixels 4 --fold-corners one`.
     Thresholded,
 }
@@ -80,6 +82,7 @@ impl Mode {
         match self {
             Mode::Default => "default",
             Mode::Conservative => "conservative",
+            Mode::ConservativeAll => "conservative-all",
             Mode::Thresholded => "thresholded",
         }
     }
@@ -114,6 +117,11 @@ struct Args {
     /// Keep the generated meshes and the .pvis files in DIR (created if missing).
     #[arg(long, value_name = "DIR")]
     keep: Option<PathBuf>,
+    /// Sampling shells per bake (`bake --shells`). The zoo's cameras are at the sampling
+    /// distance, where shells do not answer, so none by default: the bake times and file
+    /// sizes are those of the sampling sphere, comparable with baselines that had no shells.
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    shells: u32,
 }
 
 /// One line of the table.
@@ -163,7 +171,15 @@ fn main() -> Result<()> {
     for (name, source) in models {
         let path = mesh_path(name, source, args.triangles, &dir)?;
         for &mode in &args.modes {
-            rows.extend(bake_and_eval(name, &path, mode, &directions, memory, &dir)?);
+            rows.extend(bake_and_eval(
+                name,
+                &path,
+                mode,
+                &directions,
+                memory,
+                &dir,
+                args.shells,
+            )?);
         }
     }
     eprintln!("zoo: done in {:.0} s", start.elapsed().as_secs_f64());
@@ -236,11 +252,17 @@ fn bake_and_eval(
     directions: &[[f32; 3]],
     memory: MemoryBudget,
     dir: &Path,
+    shells: u32,
 ) -> Result<Vec<Row>> {
     let recipe = BakeSettings {
-        conservative: mode == Mode::Conservative,
+        conservative: matches!(mode, Mode::Conservative | Mode::ConservativeAll),
         fold_min_pixels: (mode == Mode::Thresholded).then_some(4),
-        fold_corners: (mode == Mode::Thresholded).then_some(FoldCorners::One),
+        fold_corners: match mode {
+            Mode::Thresholded => Some(FoldCorners::One),
+            Mode::ConservativeAll => Some(FoldCorners::All),
+            Mode::Default | Mode::Conservative => None,
+        },
+        shells,
         memory,
         ..BakeSettings::default()
     }

@@ -180,6 +180,30 @@ fn two_passes_and_scheduler_shards_merge_into_the_single_bake() {
     assert!(std::fs::read(&out).unwrap() == single(dir.path(), &flags, "1"));
 }
 
+/// `--conservative`'s split fold: each pass's rows before the probe travel as a second pass,
+/// for the sampling sphere and a shell; three shards on one and two threads merge into the
+/// single bake.
+#[test]
+fn conservative_split_passes_merge_into_the_single_bake() {
+    let dir = TempDir::new().unwrap();
+    let flags = [
+        "--patches",
+        "120",
+        "--level",
+        "2",
+        "--resolution",
+        "64",
+        "--conservative",
+        "--shells",
+        "1",
+    ];
+    let parts = shards(dir.path(), BUNNY, &flags, 3, |i| 1 + i % 2);
+    let out = dir.path().join("merged.pvis");
+    let given: Vec<&Path> = parts.iter().map(|p| p.as_path()).collect();
+    ok(merge(&given, &out));
+    assert!(std::fs::read(&out).unwrap() == single(dir.path(), &flags, "2"));
+}
+
 /// Every refusal is one line with exit code 1 (2 for a usage error), naming the file at fault.
 #[test]
 fn merge_refuses_missing_repeated_foreign_and_damaged_parts() {

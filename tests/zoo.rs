@@ -118,3 +118,68 @@ fn every_zoo_model_loses_no_pixel_to_the_all_corner_fold() {
         "the zoo shows no miss the all-corner fold removes ({missed_default} vs {missed_thresholded})"
     );
 }
+
+/// `--conservative`'s split fold (its default) against its all-corner fold and the default
+/// bake, view by view: its rows hold the default's (what the views showed goes to every
+/// corner, as in the default), so no view misses more than the default's; and they are held
+/// by the all-corner fold's (the probe's additions go to one corner of those), so no view
+/// culls less than with `--fold-corners all`.
+#[test]
+fn the_split_fold_culls_at_least_the_all_corner_fold_and_misses_no_more_than_the_default() {
+    let dir = TempDir::new().unwrap();
+    let engine = dir.path().join("exposed-engine.ply");
+    let out = patchvis(&[
+        "gen",
+        "--kind",
+        "exposed-engine",
+        "--triangles",
+        "6000",
+        "-o",
+        engine.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let meshes = [
+        ("ant", format!("{ASSETS}/ant.ply")),
+        ("airplane", format!("{ASSETS}/airplane.ply")),
+        ("exposed-engine", engine.to_str().unwrap().to_owned()),
+    ];
+    let (mut culling_split, mut culling_all) = (0.0, 0.0);
+    for (name, mesh) in &meshes {
+        let default = bake_and_eval(&dir, mesh, &format!("{name}.pvis"), &[]);
+        let split = bake_and_eval(&dir, mesh, &format!("{name}.s.pvis"), &["--conservative"]);
+        let all = bake_and_eval(
+            &dir,
+            mesh,
+            &format!("{name}.a.pvis"),
+            &["--conservative", "--fold-corners", "all"],
+        );
+        for ((d, s), a) in default.iter().zip(&split).zip(&all) {
+            let resolution = &d["resolution"];
+            for (i, (s, d)) in missed_per_view(s)
+                .iter()
+                .zip(missed_per_view(d))
+                .enumerate()
+            {
+                assert!(*s <= d, "{name} at {resolution}: view {i} misses {s} > {d}");
+            }
+            let views = |r: &serde_json::Value| {
+                r["per_view"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|v| number(v, "culling_rate"))
+                    .collect::<Vec<_>>()
+            };
+            for (i, (s, a)) in views(s).iter().zip(views(a)).enumerate() {
+                assert!(*s >= a, "{name} at {resolution}: view {i} culls {s} < {a}");
+            }
+            culling_split += number(s, "culling_rate_mean");
+            culling_all += number(a, "culling_rate_mean");
+        }
+    }
+    assert!(
+        culling_split > culling_all,
+        "the split fold culls nothing more ({culling_split} vs {culling_all})"
+    );
+}

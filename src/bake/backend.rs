@@ -133,4 +133,26 @@ impl Backend {
                 .map_err(|e| BakeError::Backend(format!("GPU sampling failed: {e}"))),
         }
     }
+
+    /// [`Backend::sample`], also returning the rows before the probe pass
+    /// (`sampler::sample_tiled_split`, for the split fold of `--conservative`). CPU only, as
+    /// the probe pass is: [`Backend::open`] refuses `--conservative` on the GPU.
+    pub fn sample_split(
+        &self,
+        mesh: &Mesh,
+        tiling: &Tiling,
+        params: &SamplingParams,
+        options: &SamplingOptions,
+        progress: &dyn Progress,
+    ) -> Result<(VisibilityMatrix, VisibilityMatrix), BakeError> {
+        match self {
+            Backend::Cpu => Ok(sampler::sample_tiled_split(
+                mesh, tiling, params, options, progress,
+            )?),
+            #[cfg(feature = "gpu")]
+            Backend::Gpu(_) => Err(BakeError::Backend(
+                "the split fold (--conservative) samples on the CPU backend only".into(),
+            )),
+        }
+    }
 }

@@ -110,6 +110,7 @@ impl PartSettings {
         b.put_u8(match self.fold_corners {
             FoldCorners::All => 0,
             FoldCorners::One => 1,
+            FoldCorners::Split => 2,
         });
         b.put_u8(match self.patch_order {
             PatchOrder::Covisibility => 0,
@@ -152,6 +153,7 @@ impl PartSettings {
             fold_corners: match f.u8()? {
                 0 => FoldCorners::All,
                 1 => FoldCorners::One,
+                2 => FoldCorners::Split,
                 _ => return None,
             },
             patch_order: match f.u8()? {

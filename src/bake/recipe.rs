@@ -445,10 +445,15 @@ impl Recipe {
                 views(fine.level),
                 sphere,
             );
-            (
-                backend.sample(mesh, tiling, &fine, &options, progress)?,
-                None,
-            )
+            if supersample.splits(params.level) {
+                let (rows, seen) = backend.sample_split(mesh, tiling, &fine, &options, progress)?;
+                (rows, Some(seen))
+            } else {
+                (
+                    backend.sample(mesh, tiling, &fine, &options, progress)?,
+                    None,
+                )
+            }
         };
         Ok(SphereRows {
             plain,

@@ -7,11 +7,13 @@
 //! finest level serves every coarser one: the bake takes its own level, and `eval --sweep`
 //! takes each level it evaluates from the same run. With a fold threshold the stored views
 //! are sampled plainly (every pixel) and the finer ones separately with the threshold; without
-//! one, the finer pass holds the stored views' rows as its prefix and is sampled alone. A
-//! shell's rows are folded the same way, at the shell's own level (`shells.rs`).
+//! one, the finer pass holds the stored views' rows as its prefix and is sampled alone; with
+//! the split fold of `--conservative` it also keeps its rows before the probe pass, as a
+//! second pass. A shell's rows are folded the same way, at the shell's own level
+//! (`shells.rs`).
 
 use super::Supersample;
-use crate::sampler::fold_into_with;
+use crate::sampler::{fold_into_with, split_fold};
 use crate::sphere::{MAX_LEVEL, view_count};
 use crate::visibility::{SamplingParams, VisibilityMatrix};
 
@@ -42,7 +44,9 @@ pub(crate) struct SphereRows {
     /// Every pixel counted: at `level`, or at the finer level when there is no threshold and
     /// this pass serves as both.
     pub(crate) plain: VisibilityMatrix,
-    /// The thresholded finer views, at `min(level + K, MAX_LEVEL)`, when there is a threshold.
+    /// The second pass, at `min(level + K, MAX_LEVEL)`: the thresholded finer views when there
+    /// is a threshold, or, with the split fold, the finer views' rows before the probe pass
+    /// (`sampler::sample_tiled_split`).
     pub(crate) fine: Option<VisibilityMatrix>,
     /// Where the cameras of the finest stored level were (the mesh's bounding sphere is
     /// computed once, for every level cut from these rows).
@@ -53,6 +57,10 @@ pub(crate) struct SphereRows {
 impl SphereRows {
     /// Views rendered to get these rows.
     pub(crate) fn sampled_views(&self) -> u32 {
+        if self.supersample.splits(self.params.level) {
+            // The seen rows come from the same renders.
+            return self.plain.views();
+        }
         self.plain.views() + self.fine.as_ref().map_or(0, VisibilityMatrix::views)
     }
 
@@ -73,6 +81,16 @@ impl SphereRows {
         let fine_level = (level + self.supersample.extra_levels).min(MAX_LEVEL);
         if fine_level == level {
             return coarse;
+        }
+        if self.supersample.splits(level) {
+            let seen = self.fine.as_ref().expect("a split pass has its seen rows");
+            return split_fold(
+                coarse,
+                &self.plain.prefix(view_count(fine_level)),
+                &seen.prefix(view_count(fine_level)),
+                fine_level,
+                level,
+            );
         }
         let fine = self
             .fine

@@ -26,6 +26,11 @@ pub const DEFAULT_FOLD_MIN_PIXELS: u32 = 0;
 /// faces holding it share), so that a query anywhere in a face sees every finer sample of it
 /// from each corner's side, not one.
 pub const DEFAULT_FOLD_CORNERS: FoldCorners = FoldCorners::All;
+/// `--fold-corners` unless given, with `--conservative`: the probe's additions go to one
+/// corner, what the views showed to all of them. 2.3–3.3 points more culling on the model
+/// zoo than [`FoldCorners::All`], every model still ≥ 99 % identical (BENCHMARKS.md,
+/// "Quality on the model zoo").
+pub const CONSERVATIVE_FOLD_CORNERS: FoldCorners = FoldCorners::Split;
 /// `--conservative`'s probe pass shrinks each view's occluders by this many pixels
 /// (`sampler/tiled/probe.rs`). 0 catches sub-pixel parts only; more also the parts about to
 /// come out from behind an edge. The generated exposed engine's views at 2× the resolution
@@ -175,13 +180,25 @@ impl Supersample {
     /// The sphere levels of one sphere's sampling passes at stored level `level`, in order:
     /// the stored level plainly and the finer one thresholded, or the finer one alone (whose
     /// prefix is the stored level). The finer level is capped at the finest.
+    /// With the split fold, the finer pass's seen rows come as a second pass of the same
+    /// level.
     pub fn pass_levels(&self, level: u32) -> Vec<u32> {
         let fine = (level + self.extra_levels).min(MAX_LEVEL);
         if self.fold_min_pixels > 0 {
             vec![level, fine]
+        } else if self.splits(level) {
+            vec![fine, fine]
         } else {
             vec![fine]
         }
+    }
+
+    /// Whether the passes at stored level `level` fold with [`FoldCorners::Split`]: there is
+    /// a finer level to fold from, so the finer pass keeps its seen rows too
+    /// (`sampler::sample_tiled_split`).
+    pub fn splits(&self, level: u32) -> bool {
+        self.fold_corners == FoldCorners::Split
+            && (level + self.extra_levels).min(MAX_LEVEL) > level
     }
 }
 
@@ -229,7 +246,29 @@ impl BakeSettings {
             ));
         }
         let fold_min_pixels = self.fold_min_pixels.unwrap_or(DEFAULT_FOLD_MIN_PIXELS);
-        let fold_corners = self.fold_corners.unwrap_or(DEFAULT_FOLD_CORNERS);
+        let threshold = fold_min_pixels > self.min_pixels.max(1);
+        let fold_corners = self
+            .fold_corners
+            .unwrap_or(if self.conservative && !threshold {
+                CONSERVATIVE_FOLD_CORNERS
+            } else {
+                DEFAULT_FOLD_CORNERS
+            });
+        if fold_corners == FoldCorners::Split {
+            if !self.conservative {
+                return fail(
+                    "--fold-corners split: expected --conservative (it folds the probe pass's \
+                     additions apart from what the views showed)"
+                        .into(),
+                );
+            }
+            if threshold {
+                return fail(format!(
+                    "--fold-corners split with --fold-min-pixels {fold_min_pixels}: expected no \
+                     fold threshold (the split fold folds every pixel)"
+                ));
+            }
+        }
         let resolve = |extra_levels: u32| {
             // A threshold at or below the stored views' own changes nothing: no extra plain
             // pass.
@@ -304,6 +343,10 @@ impl BakeSettings {
         let mut suffix = plain.clone();
         if supersample.extra_levels > 0 {
             suffix.push_str(&format!(".vs{}", supersample.extra_levels));
+            if supersample.fold_corners == FoldCorners::Split {
+                // The pass holds its seen rows too.
+                suffix.push_str(".split");
+            }
         }
         let thresholded = supersample.fold_min_pixels > 0;
         if thresholded {
@@ -378,10 +421,22 @@ mod tests {
             (DEFAULT_VIEW_SUPERSAMPLE, 0, 512)
         );
         assert_eq!(c.probe(), Some(CONSERVATIVE_PROBE_PIXELS));
-        let suffix = format!(".p{CONSERVATIVE_PROBE_PIXELS}.vs1.ckpt");
+        // The split fold: the finer pass keeps its seen rows, in a checkpoint of its own.
+        let suffix = format!(".p{CONSERVATIVE_PROBE_PIXELS}.vs1.split.ckpt");
         assert_eq!(c.fine_checkpoint, Some(format!("out.pvis{suffix}").into()));
         assert!(!c.settings.conservative_raster);
-        assert_eq!(c.supersample.fold_corners, FoldCorners::All);
+        assert_eq!(c.supersample.fold_corners, FoldCorners::Split);
+        assert_eq!(c.pass_levels()[..2], [5, 5]);
+        // Asked for without --conservative, or with a fold threshold: refused.
+        let err = check(|s| s.fold_corners = Some(FoldCorners::Split)).unwrap_err();
+        assert!(err.0.contains("expected --conservative"), "{}", err.0);
+        let err = check(|s| {
+            s.conservative = true;
+            s.fold_min_pixels = Some(4);
+            s.fold_corners = Some(FoldCorners::Split)
+        })
+        .unwrap_err();
+        assert!(err.0.contains("no fold threshold"), "{}", err.0);
         assert_eq!(check(|_| {}).unwrap().probe(), None);
         // A threshold at or below --min-pixels changes nothing: no extra plain pass.
         let c = check(|s| {

@@ -120,7 +120,9 @@ pub struct BakeArgs {
     pub fold_min_pixels: Option<u32>,
     /// With view supersampling: a finer view's patches go to all the stored views around it
     /// that every sphere face holding it shares (all), or to just one of them (one: still
-    /// covers every finer sample of a face, culls more, misses more). [default: all]
+    /// covers every finer sample of a face, culls more, misses more), or, with
+    /// --conservative, what the view showed to all of them and what only the probe pass added
+    /// to one (split). [default: all; split with --conservative]
     #[arg(long, value_enum, value_name = "WHICH")]
     pub fold_corners: Option<FoldCornersArg>,
     /// Sampling shells for near cameras: N nested spheres of near views between the sampling
@@ -212,6 +214,9 @@ pub enum FoldCornersArg {
     All,
     /// One of them.
     One,
+    /// With --conservative (its default there): what a finer view showed to all of them,
+    /// what only the probe pass added to the one whose faces gain the fewest new answers.
+    Split,
 }
 
 /// `--tiling`.

@@ -42,6 +42,7 @@ pub(super) fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
         fold_corners: args.fold_corners.map(|c| match c {
             FoldCornersArg::All => FoldCorners::All,
             FoldCornersArg::One => FoldCorners::One,
+            FoldCornersArg::Split => FoldCorners::Split,
         }),
         patch_order: match args.patch_order {
             PatchOrderArg::Covisibility => PatchOrder::Covisibility,

@@ -761,6 +761,7 @@ fn run_sweep(args: &EvalArgs, distance_scale: f32) -> Result<()> {
             match DEFAULT_FOLD_CORNERS {
                 FoldCorners::All => "all",
                 FoldCorners::One => "one",
+                FoldCorners::Split => "split",
             }
         ),
     };

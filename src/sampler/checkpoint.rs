@@ -26,8 +26,8 @@ const MAGIC: &[u8; 8] = b"PVISCKPT";
 /// snap through the binary32 transform (`raster::snap32`), 3 since a depth tie goes to the
 /// smaller patch id instead of the smaller input triangle, 4 since the file ends in a
 /// CRC-32C, 5 since it hashes the probe pass, 6 since it hashes a near pass's shell and the
-/// band its probe spans.
-const VERSION: u32 = 6;
+/// band its probe spans, 7 since a pass may hold its seen rows too (`sample_tiled_split`).
+const VERSION: u32 = 7;
 const HEADER_BYTES: usize = 8 + 4 + 4 + 8 + 4 + 4;
 const CRC_BYTES: usize = 4;
 /// What a refused checkpoint's message tells the user to do.
@@ -49,9 +49,11 @@ pub(crate) fn input_hash(
     tiling: &Tiling,
     params: &SamplingParams,
     options: &SamplingOptions,
+    split: bool,
 ) -> u64 {
     let mut h = InputHash(0xCBF2_9CE4_8422_2325);
     h.word(u64::from(VERSION));
+    h.word(u64::from(split));
     h.word(u64::from(params.level));
     h.word(u64::from(params.resolution));
     h.word(u64::from(params.fov_deg.to_bits()));

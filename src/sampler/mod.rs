@@ -43,9 +43,11 @@ pub use near::{MAX_NEAR_CAMERAS, NearCameras, near_camera_count, near_cameras};
 pub use raster::{Rasterizer, SUBPIXEL_BITS, render_ids, render_ids_filtered};
 pub use supersample::{
     FoldCorners, FoldTargets, MAX_VIEW_SUPERSAMPLE, fold_into, fold_into_with, fold_targets,
-    supersample_rows,
+    split_fold, supersample_rows,
 };
-pub use tiled::{SamplingError, SamplingOptions, rendered_view_count, sample_tiled};
+pub use tiled::{
+    SamplingError, SamplingOptions, rendered_view_count, sample_tiled, sample_tiled_split,
+};
 
 mod bounding;
 

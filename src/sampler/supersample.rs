@@ -38,6 +38,11 @@
 //! rows are not spread to their neighbours: every face having such a view as a corner ORs its
 //! row anyway. With `K = 0` there is nothing to fold and the rows are returned unchanged.
 //!
+//! With the probe pass of `bake --conservative` a fine view's row is what it showed plus
+//! what the probe guessed the cameras around it may see. [`split_fold`] folds the two apart:
+//! what it showed as above, and each guessed patch no target holds yet into one target only
+//! (one suffices for the coverage above), the one whose faces least often answer it already.
+//!
 //! The fine rows may be sampled with a pixel threshold (`bake --fold-min-pixels T`: the fine
 //! views report only patches covering at least `T` pixels) while the coarse rows keep every
 //! pixel: [`fold_into`] takes the coarse rows and the fine rows separately. The coverage above
@@ -49,7 +54,8 @@
 
 use super::VisibilityMatrix;
 use crate::sphere::{
-    LatticePoint, ViewIndex, direction, lattice_point, locate, view_count, view_index,
+    LatticePoint, ViewIndex, children, direction, lattice_point, locate, root_faces, view_count,
+    view_index,
 };
 
 /// The finest extra level [`supersample_rows`] is meant for: `K = 2` already samples 16× the
@@ -146,6 +152,12 @@ pub enum FoldCorners {
     /// row that stays smaller (more culling, fewer patches for queries near the view from
     /// faces that do not hold it).
     One,
+    /// For a pass with the probe (`bake --conservative`), whose finer views also report what
+    /// they showed before the probe added anything ([`split_fold`]): what a finer view showed
+    /// goes to all of its targets, as with [`FoldCorners::All`]; each patch only the probe
+    /// added, and that none of the targets holds yet, goes to the one target whose faces gain
+    /// the fewest new answers.
+    Split,
 }
 
 /// [`supersample_rows`] with the coarse views' rows given separately: returns `coarse` with
@@ -164,7 +176,9 @@ pub fn fold_into(
     fold_into_with(coarse, fine, fine_level, level, FoldCorners::All)
 }
 
-/// [`fold_into`] sending each fine view's row to the coarse views `corners` picks.
+/// [`fold_into`] sending each fine view's row to the coarse views `corners` picks
+/// ([`FoldCorners::Split`] needs the rows before the probe too: [`split_fold`]; here it folds
+/// as [`FoldCorners::All`]).
 ///
 /// Panics under the same caller contracts as [`fold_into`].
 pub fn fold_into_with(
@@ -193,12 +207,79 @@ pub fn fold_into_with(
         let row = fine.row(u);
         let targets = fold_targets(u, level);
         let chosen = match corners {
-            FoldCorners::All => targets.views(),
+            FoldCorners::All | FoldCorners::Split => targets.views(),
             FoldCorners::One => &targets.views()[..1],
         };
         for &corner in chosen {
             for (dst, &src) in coarse.row_mut(corner).iter_mut().zip(row) {
                 *dst |= src;
+            }
+        }
+    }
+    coarse
+}
+
+/// The split fold ([`FoldCorners::Split`]) of the rows of a pass with the probe: `coarse` the
+/// stored views' own rows, `full` every view's row of level `fine_level` (probe included),
+/// `seen` the same views' rows before the probe. First `seen` is folded as
+/// [`FoldCorners::All`] folds; then every patch of a finer view's `full` row that none of its
+/// [`fold_targets`] holds is added to the target whose closed faces at `level` least often
+/// answer it already (ties: the smaller view index).
+///
+/// Coverage is [`FoldCorners::One`]'s for the probe's additions and [`FoldCorners::All`]'s
+/// for what the views showed: a face's corners together hold every finer view's `full` row
+/// in the face, and what a finer view showed is in every corner shared by the faces holding
+/// it. Why: the probe's additions are guesses about the cameras around a view, each one
+/// spread to every target costs the culling of every face around those targets (about 3
+/// points on the zoo, BENCHMARKS.md); what the views showed is spread to all of them, which
+/// keeps the redundancy that covers the probe's own misses (the exposed engine loses 1–2
+/// points of identical views without it).
+///
+/// Deterministic: the views are taken in index order. Panics under [`fold_into`]'s caller
+/// contracts, or if `full` and `seen` differ in shape.
+pub fn split_fold(
+    coarse: VisibilityMatrix,
+    full: &VisibilityMatrix,
+    seen: &VisibilityMatrix,
+    fine_level: u32,
+    level: u32,
+) -> VisibilityMatrix {
+    assert_eq!(
+        (full.views(), full.patches()),
+        (seen.views(), seen.patches()),
+        "the full and the seen rows differ in shape"
+    );
+    let mut coarse = fold_into_with(coarse, seen, fine_level, level, FoldCorners::All);
+    // The closed faces around every stored view.
+    let mut faces = root_faces().to_vec();
+    for _ in 0..level {
+        faces = faces.iter().flat_map(children).collect();
+    }
+    let mut around: Vec<Vec<[ViewIndex; 3]>> = vec![Vec::new(); view_count(level) as usize];
+    for face in &faces {
+        for &corner in &face.views {
+            around[corner as usize].push(face.views);
+        }
+    }
+    for u in view_count(level)..full.views() {
+        let targets = fold_targets(u, level);
+        let targets = targets.views();
+        for (w, &word) in full.row(u).iter().enumerate() {
+            let mut missing = word;
+            for &t in targets {
+                missing &= !coarse.row(t)[w];
+            }
+            while missing != 0 {
+                let bit = 1u64 << missing.trailing_zeros();
+                missing &= !bit;
+                let answers = |f: &[ViewIndex; 3]| f.iter().any(|&c| coarse.row(c)[w] & bit != 0);
+                let cost = |t: ViewIndex| around[t as usize].iter().filter(|f| !answers(f)).count();
+                let best = targets
+                    .iter()
+                    .copied()
+                    .min_by_key(|&t| (cost(t), t))
+                    .expect("a fold has a target");
+                coarse.row_mut(best)[w] |= bit;
             }
         }
     }
@@ -406,6 +487,56 @@ mod tests {
         assert_eq!(folded, expected);
         // The fine matrix's own coarse rows were random and different: they were not used.
         assert_ne!(fine.row(0), folded.row(0));
+    }
+
+    #[test]
+    fn the_split_fold_covers_every_face_and_spreads_only_what_the_views_showed() {
+        for (level, fine_level) in [(0, 1), (1, 2), (2, 3), (1, 3)] {
+            let views = view_count(fine_level);
+            let full = random_matrix(views, 70, 5 + u64::from(fine_level));
+            // What the views showed: about half of each row.
+            let mask = random_matrix(views, 70, 17 + u64::from(level));
+            let mut seen = full.clone();
+            for (s, (&f, &m)) in seen
+                .words_mut()
+                .iter_mut()
+                .zip(full.words().iter().zip(mask.words()))
+            {
+                *s = f & !m;
+            }
+            let own = full.prefix(view_count(level));
+            let split = split_fold(own.clone(), &full, &seen, fine_level, level);
+            let all = fold_into(own.clone(), &full, fine_level, level);
+            let (mut bits_split, mut bits_all) = (0, 0);
+            for v in 0..view_count(level) {
+                assert!(row_contains(split.row(v), own.row(v)), "view {v}");
+                assert!(row_contains(all.row(v), split.row(v)), "view {v}");
+                bits_split += split.row(v).iter().map(|w| w.count_ones()).sum::<u32>();
+                bits_all += all.row(v).iter().map(|w| w.count_ones()).sum::<u32>();
+            }
+            assert!(bits_split < bits_all, "{level}/{fine_level}");
+            for u in view_count(level)..views {
+                for &t in fold_targets(u, level).views() {
+                    assert!(
+                        row_contains(split.row(t), seen.row(u)),
+                        "view {u} target {t}"
+                    );
+                }
+            }
+            for face in leaves(level) {
+                let mut answer = vec![0u64; 2];
+                for c in face.views {
+                    for (a, &w) in answer.iter_mut().zip(split.row(c)) {
+                        *a |= w;
+                    }
+                }
+                for u in 0..views {
+                    if in_closed_face(&face, direction(u), 1e-5) {
+                        assert!(row_contains(&answer, full.row(u)), "{:?} {u}", face.views);
+                    }
+                }
+            }
+        }
     }
 
     #[test]

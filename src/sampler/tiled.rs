@@ -156,6 +156,36 @@ pub fn sample_tiled(
     options: &SamplingOptions,
     progress: &dyn Progress,
 ) -> Result<VisibilityMatrix, SamplingError> {
+    Ok(sample_rows(mesh, tiling, params, options, false, progress)?.0)
+}
+
+/// [`sample_tiled`], also returning each view's row as it was before the probe pass added
+/// anything (the rows [`sample_tiled`] returns without [`SamplingOptions::probe`], bit for
+/// bit): `(rows, seen)`. The split fold (`supersample::split_fold`) folds the two apart.
+/// Checkpoints hold both.
+pub fn sample_tiled_split(
+    mesh: &Mesh,
+    tiling: &Tiling,
+    params: &SamplingParams,
+    options: &SamplingOptions,
+    progress: &dyn Progress,
+) -> Result<(VisibilityMatrix, VisibilityMatrix), SamplingError> {
+    let (rows, seen) = sample_rows(mesh, tiling, params, options, true, progress)?;
+    Ok((rows, seen.expect("sampled with the seen rows")))
+}
+
+/// [`sample_tiled`], with the seen rows of [`sample_tiled_split`] when `split`. Those are
+/// sampled into one matrix with the rows: each view's row is its `W` words, then its `W` seen
+/// words (`W` words a row of the patches), so that checkpoints and the levels' parallel loop
+/// handle one matrix; it is cut in two at the end.
+fn sample_rows(
+    mesh: &Mesh,
+    tiling: &Tiling,
+    params: &SamplingParams,
+    options: &SamplingOptions,
+    split: bool,
+    progress: &dyn Progress,
+) -> Result<(VisibilityMatrix, Option<VisibilityMatrix>), SamplingError> {
     let patch_count = u32::try_from(tiling.patches.len()).expect("more than 2^32 patches");
     assert!(
         params.radius > 0.0 && params.radius.is_finite(),
@@ -167,7 +197,13 @@ pub fn sample_tiled(
         near_camera_count(params, distance);
     }
     let views = view_count(params.level);
-    let mut matrix = VisibilityMatrix::new(views, patch_count);
+    // Words of one row of the patches: the rows' prefix of the matrix's rows.
+    let words = (patch_count as usize).div_ceil(64);
+    let mut matrix = if split {
+        VisibilityMatrix::new(views, 64 * words as u32 + patch_count)
+    } else {
+        VisibilityMatrix::new(views, patch_count)
+    };
     let rendered = rendered_views(views, options.views.as_deref());
     let rendered_below = |view: u32| {
         rendered.as_ref().map_or(view, |r| {
@@ -178,7 +214,7 @@ pub fn sample_tiled(
     let hash = options
         .checkpoint
         .as_ref()
-        .map(|_| checkpoint::input_hash(mesh, tiling, params, options));
+        .map(|_| checkpoint::input_hash(mesh, tiling, params, options, split));
     let mut first_level = 0;
     if let (true, Some(path), Some(hash)) = (options.resume, &options.checkpoint, hash)
         && let Some(levels_done) = checkpoint::load(path, hash, &mut matrix)?
@@ -232,9 +268,8 @@ pub fn sample_tiled(
                     if rendered.as_ref().is_some_and(|r| !r[view as usize]) {
                         return;
                     }
-                    let hint = parents(view).map(|pair| {
-                        pair.map(|p| &done[p as usize * words_per_row..][..words_per_row])
-                    });
+                    let hint = parents(view)
+                        .map(|pair| pair.map(|p| &done[p as usize * words_per_row..][..words]));
                     context.render_view(view, hint, scratch, row);
                     progress.inc(1);
                 },
@@ -244,7 +279,19 @@ pub fn sample_tiled(
         }
     }
     progress.finish();
-    Ok(matrix)
+    if !split {
+        return Ok((matrix, None));
+    }
+    let (mut rows, mut seen) = (
+        VisibilityMatrix::new(views, patch_count),
+        VisibilityMatrix::new(views, patch_count),
+    );
+    for v in 0..views {
+        let (r, s) = matrix.row(v).split_at(words);
+        rows.row_mut(v).copy_from_slice(r);
+        seen.row_mut(v).copy_from_slice(s);
+    }
+    Ok((rows, Some(seen)))
 }
 
 /// How many of the `views` views of a pass a run with [`SamplingOptions::views`] `wanted`
@@ -497,7 +544,8 @@ impl Placer<'_, '_> {
 impl ViewContext<'_> {
     /// Renders view `index` into `row`, `hint` giving its parents' rows (`None` in the first
     /// level): the sampling view's camera, or each camera of a near view (`near.rs`), whose
-    /// rows are ORed.
+    /// rows are ORed. A `row` of twice the words of the patches gets the seen rows of
+    /// [`sample_tiled_split`] in its second half.
     fn render_view(
         &self,
         index: u32,
@@ -505,11 +553,13 @@ impl ViewContext<'_> {
         scratch: &mut WorkerScratch,
         row: &mut [u64],
     ) {
+        let (row, seen) = row.split_at_mut(scratch.camera_row.len());
+        seen.fill(0);
         let d = normalize(widen(crate::sphere::direction(index)));
         let Some(distance) = self.options.shell else {
             let camera = Camera::sampling_view(self.params, index);
             let cell = self.probe.as_ref().map(|p| p.cell(d, camera.eye()));
-            self.render_camera(&camera, cell.as_ref(), hint, scratch, row);
+            self.render_camera(&camera, cell.as_ref(), hint, scratch, row, seen);
             return;
         };
         let cameras = near_cameras(self.params, index, distance);
@@ -517,7 +567,7 @@ impl ViewContext<'_> {
         let mut part = std::mem::take(&mut scratch.camera_row);
         row.fill(0);
         for camera in cameras.iter() {
-            self.render_camera(camera, cell.as_ref(), hint, scratch, &mut part);
+            self.render_camera(camera, cell.as_ref(), hint, scratch, &mut part, seen);
             for (r, p) in row.iter_mut().zip(&part) {
                 *r |= p;
             }
@@ -526,7 +576,8 @@ impl ViewContext<'_> {
     }
 
     /// Renders `camera`'s image into `row` (and the probe pass for the cameras of `cell`, when
-    /// there is one). The patches its hints show (every patch in the first level) are drawn
+    /// there is one), and ORs what the image showed, before the probe, into `seen` (empty when
+    /// not wanted). The patches its hints show (every patch in the first level) are drawn
     /// first, except their triangles that face away from the eye, which are put off; then the
     /// occlusion tiles are built, and the put-off triangles and the other patches are drawn
     /// unless the tiles prove them hidden (patches by their bounding sphere and box, then each
@@ -539,6 +590,7 @@ impl ViewContext<'_> {
         hint: Option<[&[u64]; 2]>,
         scratch: &mut WorkerScratch,
         row: &mut [u64],
+        seen: &mut [u64],
     ) {
         let patch_count = self.mesh.patch_count();
         let near = self.options.shell.is_some();
@@ -595,6 +647,9 @@ impl ViewContext<'_> {
         self.probe_prepare(scratch);
         // Resolving empties the key buffer for the worker's next view.
         self.resolve(camera, &mut scratch.view.keys, &mut scratch.resolve, row);
+        for (s, &r) in seen.iter_mut().zip(row.iter()) {
+            *s |= r;
+        }
         if let Some(cell) = cell {
             self.probe_row(camera, cell, scratch, row);
         }

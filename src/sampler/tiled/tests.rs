@@ -418,7 +418,7 @@ fn resume_continues_from_the_checkpoint_and_refuses_a_stale_one() {
     );
     // An interrupted bake: levels 0 and 1 done, with a marker in row 0 that only a resumed
     // run keeps (a recomputed row 0 would not have every bit set).
-    let hash = checkpoint::input_hash(&mesh, &tiling, &p, &options);
+    let hash = checkpoint::input_hash(&mesh, &tiling, &p, &options, false);
     let mut partial = full.clone();
     for patch in 0..partial.patches() {
         partial.set(0, patch);
@@ -638,7 +638,7 @@ fn a_near_checkpoint_resumes_and_refuses_another_shell() {
     );
     let full = tiled(&mesh, &tiling, &p, &options);
     // Interrupted after level 1, then resumed: the rows of an uninterrupted run.
-    let hash = checkpoint::input_hash(&mesh, &tiling, &p, &options);
+    let hash = checkpoint::input_hash(&mesh, &tiling, &p, &options, false);
     checkpoint::save(&path, hash, 2, crate::sphere::view_count(1), &full).unwrap();
     let resume = SamplingOptions {
         resume: true,
@@ -736,4 +736,46 @@ fn a_band_on_the_main_pass_keeps_every_row() {
         assert_eq!(a & b, *b);
     }
     assert!(banded.count_ones() > today.count_ones());
+}
+
+#[test]
+fn split_sampling_returns_the_probed_rows_and_the_rows_before_the_probe() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = bunny();
+    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
+    let p = params_for(&mesh, 1, 64);
+    let probe = SamplingOptions {
+        probe: Some(2),
+        ..SamplingOptions::default()
+    };
+    for (i, options) in [probe.clone(), near(&p, 1.2, probe)]
+        .into_iter()
+        .enumerate()
+    {
+        let plain = SamplingOptions {
+            probe: None,
+            ..options.clone()
+        };
+        let split = |options: &SamplingOptions| {
+            sample_tiled_split(&mesh, &tiling, &p, options, &NoProgress).unwrap()
+        };
+        let (rows, seen) = split(&options);
+        assert_same(&rows, &tiled(&mesh, &tiling, &p, &options));
+        assert_same(&seen, &tiled(&mesh, &tiling, &p, &plain));
+        assert!(rows.count_ones() > seen.count_ones(), "{i}");
+        // Both go through the checkpoint: a finished one resumes to the same pair, and a
+        // plain run refuses it (its rows are not the split run's).
+        let checkpoint = SamplingOptions {
+            checkpoint: Some(dir.path().join(format!("{i}.ckpt"))),
+            ..options
+        };
+        assert_eq!(split(&checkpoint), (rows.clone(), seen.clone()));
+        let resume = SamplingOptions {
+            resume: true,
+            ..checkpoint
+        };
+        assert_eq!(split(&resume), (rows, seen));
+        let err = sample_tiled(&mesh, &tiling, &p, &resume, &NoProgress).unwrap_err();
+        assert!(matches!(err, SamplingError::Checkpoint { .. }), "{err}");
+    }
 }
