@@ -219,4 +219,8 @@ fn backend_gpu_bakes_a_file_that_verifies() {
         err.contains("--conservative-raster needs the CPU backend"),
         "{err}"
     );
+    let refused = bake(&["--backend", "gpu", "--far-views"], &[]);
+    let err = stderr(&refused.output);
+    assert_eq!(refused.output.status.code(), Some(2), "stderr: {err}");
+    assert!(err.contains("--far-views needs the CPU backend"), "{err}");
 }

@@ -183,3 +183,47 @@ fn the_split_fold_culls_at_least_the_all_corner_fold_and_misses_no_more_than_the
         "the split fold culls nothing more ({culling_split} vs {culling_all})"
     );
 }
+
+/// `--far-views`: the rows also hold what cameras beyond the sampling distance see, so at
+/// twice that distance no view misses more than the plain bake's, and the plain bake's
+/// misses there (rim it never saw) are gone.
+#[test]
+fn far_views_keep_the_rim_that_cameras_beyond_the_sampling_distance_see() {
+    let dir = TempDir::new().unwrap();
+    let mesh = format!("{ASSETS}/ant.ply");
+    let at_twice = |name: &str, flags: &[&str]| {
+        let pvis = dir.path().join(name);
+        let pvis = pvis.to_str().unwrap();
+        let mut args = vec!["bake", &mesh, "-o", pvis, "-q", "--shells", "0"];
+        args.extend(["--level", "3", "--resolution", "128", "--patches", "200"]);
+        args.extend_from_slice(flags);
+        let out = patchvis(&args);
+        assert!(out.status.success(), "{name}: {}", common::stderr(&out));
+        json(&patchvis(&[
+            "eval",
+            &mesh,
+            pvis,
+            "--views",
+            VIEWS,
+            "--seed",
+            "7",
+            "--resolution",
+            "128",
+            "--distance-scale",
+            "2",
+            "--json",
+        ]))
+    };
+    let plain = at_twice("plain.pvis", &[]);
+    let far = at_twice("far.pvis", &["--far-views"]);
+    let (plain, far) = (missed_per_view(&plain), missed_per_view(&far));
+    for (i, (f, p)) in far.iter().zip(&plain).enumerate() {
+        assert!(f <= p, "view {i}: {f} > {p}");
+    }
+    let total = |m: &[f64]| m.iter().sum::<f64>();
+    assert!(
+        total(&plain) > 0.0,
+        "the plain bake misses nothing at twice the distance"
+    );
+    assert_eq!(total(&far), 0.0, "{far:?}");
+}

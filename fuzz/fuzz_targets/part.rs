@@ -66,6 +66,7 @@ fuzz_target!(|data: &[u8]| {
         shell_level: level,
         shell_extra_levels: 0,
         shell_fold_min_pixels: 0,
+        far_views: threshold >> 6 & 1 == 1,
     };
     let words_per_row = (patches as usize).div_ceil(64);
     let mut next_bit = bits.iter().cycle();

@@ -2,7 +2,7 @@
 //! reproducible everywhere, the default) or the wgpu backend (feature `gpu`). `Auto` takes a
 //! hardware GPU when there is one and says why it did not otherwise.
 
-use super::BakeError;
+use super::{BakeError, BakeSettings};
 use crate::ooc::Mesh;
 use crate::progress::Progress;
 use crate::sampler::{self, SamplingOptions};
@@ -31,37 +31,33 @@ pub enum Backend {
     Gpu(Box<sampler::gpu::GpuSampler>),
 }
 
-/// The first option the GPU backend does not implement, if any.
-pub(crate) fn cpu_only_option(
-    conservative: bool,
-    conservative_raster: bool,
-    resume: bool,
-) -> Option<&'static str> {
-    if conservative {
+/// The first option of `settings` the GPU backend does not implement, if any.
+pub(crate) fn cpu_only_option(settings: &BakeSettings) -> Option<&'static str> {
+    if settings.conservative {
         Some("--conservative")
-    } else if conservative_raster {
+    } else if settings.conservative_raster {
         Some("--conservative-raster")
-    } else if resume {
+    } else if settings.resume {
         Some("--resume")
+    } else if settings.far_views {
+        Some("--far-views")
     } else {
         None
     }
 }
 
 impl Backend {
-    /// Opens `choice` for a bake with `conservative_raster` and `resume` (which only the CPU
-    /// implements). `Auto` falls back to the CPU and returns why as the second value (a
-    /// software rasterizer such as lavapipe is slower than the CPU backend).
+    /// Opens `choice` for a bake with `settings`, some of whose options only the CPU
+    /// implements ([`cpu_only_option`]). `Auto` falls back to the CPU and returns why as the
+    /// second value (a software rasterizer such as lavapipe is slower than the CPU backend).
     pub fn open(
         choice: BackendChoice,
-        conservative: bool,
-        conservative_raster: bool,
-        resume: bool,
+        settings: &BakeSettings,
     ) -> Result<(Backend, Option<String>), BakeError> {
         match choice {
             BackendChoice::Cpu => Ok((Backend::Cpu, None)),
             BackendChoice::Gpu => {
-                if let Some(option) = cpu_only_option(conservative, conservative_raster, resume) {
+                if let Some(option) = cpu_only_option(settings) {
                     return Err(BakeError::Settings(format!(
                         "--backend gpu: {option} needs the CPU backend (--backend cpu or auto)"
                     )));
@@ -78,9 +74,7 @@ impl Backend {
                 ))
             }
             BackendChoice::Auto => {
-                let why_cpu = if let Some(option) =
-                    cpu_only_option(conservative, conservative_raster, resume)
-                {
+                let why_cpu = if let Some(option) = cpu_only_option(settings) {
                     format!("{option} needs it")
                 } else {
                     #[cfg(feature = "gpu")]

@@ -44,8 +44,9 @@ use xxhash_rust::xxh64::xxh64;
 
 const MAGIC: &[u8; 8] = b"PVISPART";
 /// The layout's version; bumped with the sampler checkpoint's whenever the rows change, and
-/// whenever the layout does: 3 since parts carry the sampling shells' passes.
-const VERSION: u32 = 3;
+/// whenever the layout does: 3 since parts carry the sampling shells' passes, 4 since they
+/// record `--far-views` (and a conservative part carries its split fold's second passes).
+const VERSION: u32 = 4;
 const CRC_BYTES: usize = 4;
 /// What a refused part's message tells the user to do.
 const BAKE_AGAIN: &str = "bake this shard again";
@@ -89,6 +90,8 @@ pub struct PartSettings {
     pub shell_extra_levels: u32,
     /// Fold threshold of the shells' finer passes (0: no separate pass).
     pub shell_fold_min_pixels: u32,
+    /// `--far-views`.
+    pub far_views: bool,
 }
 
 impl PartSettings {
@@ -131,6 +134,7 @@ impl PartSettings {
         b.put_u32(self.shell_level);
         b.put_u32(self.shell_extra_levels);
         b.put_u32(self.shell_fold_min_pixels);
+        b.put_u8(u8::from(self.far_views));
         b
     }
 
@@ -177,6 +181,7 @@ impl PartSettings {
             shell_level: f.u32()?,
             shell_extra_levels: f.u32()?,
             shell_fold_min_pixels: f.u32()?,
+            far_views: flag(f.u8()?)?,
         };
         let in_range = settings.level <= MAX_LEVEL
             && settings.extra_levels <= MAX_LEVEL
@@ -454,6 +459,7 @@ pub(crate) mod tests {
             shell_level: 1,
             shell_extra_levels: 1,
             shell_fold_min_pixels: 0,
+            far_views: false,
         };
         let shard = Shard { index: 1, count: 3 };
         let patches = (0..70)

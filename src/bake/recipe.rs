@@ -317,6 +317,7 @@ impl Recipe {
             probe: self.probe(),
             shell: sphere.shell,
             band: sphere.band,
+            far_view: s.far_views && sphere.shell.is_none(),
         }
     }
 

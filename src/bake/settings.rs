@@ -112,6 +112,10 @@ pub struct BakeSettings {
     pub shell_min: f64,
     /// Sphere level of the shells' views (`--shell-level`); `None`: the stored level.
     pub shell_level: Option<u32>,
+    /// Each view of the sampling sphere is also rendered from far out, so that its rows hold
+    /// what cameras farther than the sampling distance see (`--far-views`,
+    /// `sampler::SamplingOptions::far_view`).
+    pub far_views: bool,
 }
 
 impl Default for BakeSettings {
@@ -138,6 +142,7 @@ impl Default for BakeSettings {
             shells: DEFAULT_SHELLS,
             shell_min: DEFAULT_SHELL_MIN,
             shell_level: None,
+            far_views: false,
         }
     }
 }
@@ -336,9 +341,12 @@ impl BakeSettings {
                 PathBuf::from(path)
             })
         };
+        // Far views render the sampling sphere's views only, not the shells'.
+        let far = self.far_views && prefix.is_empty();
         let plain = format!(
-            "{prefix}{}",
-            probe.map(|r| format!(".p{r}")).unwrap_or_default()
+            "{prefix}{}{}",
+            probe.map(|r| format!(".p{r}")).unwrap_or_default(),
+            if far { ".far" } else { "" }
         );
         let mut suffix = plain.clone();
         if supersample.extra_levels > 0 {

@@ -57,6 +57,7 @@ impl Recipe {
             shell_level: self.shell_level(),
             shell_extra_levels: self.shell_supersample.extra_levels,
             shell_fold_min_pixels: self.shell_supersample.fold_min_pixels,
+            far_views: s.far_views,
         }
     }
 

@@ -60,6 +60,7 @@ pub(super) fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
         shells: args.shells,
         shell_min: args.shell_min,
         shell_level: args.shell_level,
+        far_views: args.far_views,
     })
 }
 
@@ -92,13 +93,8 @@ pub fn run(args: BakeArgs) -> Result<()> {
         BackendArg::Gpu => BackendChoice::Gpu,
         BackendArg::Auto => BackendChoice::Auto,
     };
-    let (backend, why_cpu) = Backend::open(
-        choice,
-        args.conservative,
-        args.conservative_raster,
-        args.resume,
-    )
-    .map_err(|e| report(&args.input, e))?;
+    let (backend, why_cpu) =
+        Backend::open(choice, &recipe.settings).map_err(|e| report(&args.input, e))?;
     if let Some(why) = why_cpu {
         eprintln!("--backend auto: sampling on the CPU ({why})");
     }
@@ -194,6 +190,7 @@ impl Summary<'_> {
             "dilate": s.dilate,
             "conservative": s.conservative,
             "conservative_raster": s.conservative_raster,
+            "far_views": s.far_views,
             "view_supersample": r.supersample.extra_levels,
             "fold_min_pixels": r.supersample.fold_min_pixels,
             "backend": self.backend.describe(),

@@ -44,13 +44,8 @@ pub fn bake(args: &BakeArgs, shard: &str, recipe: &Recipe) -> Result<()> {
         )
         .into());
     }
-    let (backend, _) = Backend::open(
-        BackendChoice::Cpu,
-        args.conservative,
-        args.conservative_raster,
-        args.resume,
-    )
-    .map_err(|e| report(&args.input, e))?;
+    let (backend, _) =
+        Backend::open(BackendChoice::Cpu, &recipe.settings).map_err(|e| report(&args.input, e))?;
     let bars = Bars::new(!args.quiet);
     let start = Instant::now();
     let mut stages = Stages::new();

@@ -26,7 +26,8 @@ const MAGIC: &[u8; 8] = b"PVISCKPT";
 /// snap through the binary32 transform (`raster::snap32`), 3 since a depth tie goes to the
 /// smaller patch id instead of the smaller input triangle, 4 since the file ends in a
 /// CRC-32C, 5 since it hashes the probe pass, 6 since it hashes a near pass's shell and the
-/// band its probe spans, 7 since a pass may hold its seen rows too (`sample_tiled_split`).
+/// band its probe spans, 7 since a pass may hold its seen rows too (`sample_tiled_split`)
+/// and render far views (`SamplingOptions::far_view`).
 const VERSION: u32 = 7;
 const HEADER_BYTES: usize = 8 + 4 + 4 + 8 + 4 + 4;
 const CRC_BYTES: usize = 4;
@@ -78,6 +79,7 @@ pub(crate) fn input_hash(
         u64::from(near.to_bits()) | u64::from(far.to_bits()) << 32
     }));
     h.word(u64::from(options.band.is_some()));
+    h.word(u64::from(options.far_view));
     if let Some(views) = &options.views {
         h.word(views.len() as u64 | 1 << 63);
         for &v in views {

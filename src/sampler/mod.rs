@@ -46,7 +46,8 @@ pub use supersample::{
     split_fold, supersample_rows,
 };
 pub use tiled::{
-    SamplingError, SamplingOptions, rendered_view_count, sample_tiled, sample_tiled_split,
+    FAR_VIEW_FACTOR, SamplingError, SamplingOptions, rendered_view_count, sample_tiled,
+    sample_tiled_split,
 };
 
 mod bounding;

@@ -115,7 +115,20 @@ pub struct SamplingOptions {
     /// rows of this pass answer, with the views of the neighbouring shells (spec § Query):
     /// the probe's cells span them. `None`: the pass's own camera distance.
     pub band: Option<[f32; 2]>,
+    /// Also render each view of the sampling sphere from far out, [`FAR_VIEW_FACTOR`] times
+    /// the sampling distance along the same direction, framing the bounding sphere, and OR
+    /// the two rows: the rows then also hold the rim that cameras farther than the sampling
+    /// distance see and a camera at it sees past (`bake --far-views`). The probe, if any,
+    /// probes the far camera too, in a cell of the same angular size. Not for near passes
+    /// ([`SamplingOptions::shell`]), which ignore it.
+    pub far_view: bool,
 }
+
+/// How far out [`SamplingOptions::far_view`] renders, in sampling distances: far enough that
+/// the rim it sees is within 0.1° of the rim seen from infinitely far (`asin(1 / (256 · 2.61))`
+/// at the default field of view), near enough that depths keep their binary32 precision
+/// (about 10⁻⁴ of the bounding radius there).
+pub const FAR_VIEW_FACTOR: f64 = 256.0;
 
 /// Why tiled sampling failed: only its checkpoint file can.
 #[derive(Debug, thiserror::Error)]
@@ -560,6 +573,15 @@ impl ViewContext<'_> {
             let camera = Camera::sampling_view(self.params, index);
             let cell = self.probe.as_ref().map(|p| p.cell(d, camera.eye()));
             self.render_camera(&camera, cell.as_ref(), hint, scratch, row, seen);
+            if self.options.far_view {
+                let (far, cell) = self.far_camera(d);
+                let mut part = std::mem::take(&mut scratch.camera_row);
+                self.render_camera(&far, cell.as_ref(), hint, scratch, &mut part, seen);
+                for (r, p) in row.iter_mut().zip(&part) {
+                    *r |= p;
+                }
+                scratch.camera_row = part;
+            }
             return;
         };
         let cameras = near_cameras(self.params, index, distance);
@@ -573,6 +595,24 @@ impl ViewContext<'_> {
             }
         }
         scratch.camera_row = part;
+    }
+
+    /// The far camera of [`SamplingOptions::far_view`] along unit direction `d`, and its probe
+    /// cell (the view's, scaled with the distance).
+    fn far_camera(&self, d: [f64; 3]) -> (Camera, Option<Cell>) {
+        let distance = f64::from(self.params.distance()) * FAR_VIEW_FACTOR;
+        let fov = 2.0
+            * (f64::from(self.params.radius) / distance)
+                .asin()
+                .to_degrees();
+        let center = widen(self.params.center);
+        let eye = std::array::from_fn(|k| center[k] + d[k] * distance);
+        let camera = Camera::look_at_f64(eye, center, fov, self.params.resolution);
+        let cell = self
+            .probe
+            .as_ref()
+            .map(|p| Cell::ball(eye, p.cell_radius() * FAR_VIEW_FACTOR));
+        (camera, cell)
     }
 
     /// Renders `camera`'s image into `row` (and the probe pass for the cameras of `cell`, when

@@ -779,3 +779,57 @@ fn split_sampling_returns_the_probed_rows_and_the_rows_before_the_probe() {
         assert!(matches!(err, SamplingError::Checkpoint { .. }), "{err}");
     }
 }
+
+#[test]
+fn far_views_add_the_rim_a_far_camera_sees_and_leave_near_passes_alone() {
+    let mesh = bunny();
+    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
+    let p = params_for(&mesh, 1, 64);
+    let far = SamplingOptions {
+        far_view: true,
+        ..SamplingOptions::default()
+    };
+    let plain = tiled(&mesh, &tiling, &p, &SamplingOptions::default());
+    let with_far = tiled(&mesh, &tiling, &p, &far);
+    for v in 0..plain.views() {
+        for (a, b) in with_far.row(v).iter().zip(plain.row(v)) {
+            assert_eq!(a & b, *b, "view {v}: a far row lost a patch");
+        }
+    }
+    assert!(with_far.count_ones() > plain.count_ones());
+    // What the far camera adds is what a camera far out sees: every patch of the far rows is
+    // in the plain rows or in a sampling from (nearly) as far, framed the same way.
+    let farther = SamplingParams {
+        fov_deg: (2.0
+            * (f64::from(p.radius) / (f64::from(p.distance()) * FAR_VIEW_FACTOR))
+                .asin()
+                .to_degrees()) as f32,
+        ..p
+    };
+    let seen_far = tiled(&mesh, &tiling, &farther, &SamplingOptions::default());
+    let (mut extra, mut explained) = (0u32, 0u32);
+    for v in 0..plain.views() {
+        for ((a, b), c) in with_far
+            .row(v)
+            .iter()
+            .zip(plain.row(v))
+            .zip(seen_far.row(v))
+        {
+            extra += (a & !b).count_ones();
+            explained += (a & !b & c).count_ones();
+        }
+    }
+    // The two far cameras differ in the last bits of their placement only.
+    assert!(explained * 100 >= extra * 95, "{explained} of {extra}");
+    // A near pass has no far camera.
+    let near_far = near(&p, 1.5, far);
+    assert_same(
+        &tiled(&mesh, &tiling, &p, &near_far),
+        &tiled(
+            &mesh,
+            &tiling,
+            &p,
+            &near(&p, 1.5, SamplingOptions::default()),
+        ),
+    );
+}
