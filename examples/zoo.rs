@@ -2,13 +2,17 @@
 //! and a `--conservative` bake of every zoo model, at the bake's resolution and at twice it.
 //!
 //! `cargo run --release --example zoo -- [--views N] [--seed S] [--modes default,conservative]
-//! [--models LIST] [--triangles T] [--json OUT.json] [--keep DIR]`
+//! [--models LIST] [--triangles T] [--shells N] [--json OUT.json] [--keep DIR]`
+//!
+//! Modes: `default`, `conservative`, and two baselines measured in the same run:
+//! `thresholded` (the default before issue 20) and `conservative-all` (`--conservative` with
+//! the all-corner fold it had before the split fold).
 //!
 //! The zoo is the bundled `assets/bunny.ply` (a dense scan), `assets/ant.ply` (thin legs and
 //! antennae) and `assets/airplane.ply` (few large triangles, thin wings), plus two generated
 //! models of about `--triangles` triangles: `exposed-engine` and `truss`. Each model is baked
-//! once per mode as `patchvis bake MESH -o FILE.pvis [--conservative]` does (the library's
-//! recipe, CPU backend, the command's defaults) and evaluated as `patchvis eval MESH FILE.pvis
+//! once per mode as `patchvis bake MESH -o FILE.pvis --shells 0 [--conservative]` does (the
+//! library's recipe, CPU backend, the command's defaults but for the shells) and evaluated as `patchvis eval MESH FILE.pvis
 //! --views N --seed S --resolution R` does, at R = the bake's `--resolution` (512) and 2R: the
 //! same seeded random views on the sampling sphere for every model and mode.
 //!

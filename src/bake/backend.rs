@@ -48,7 +48,7 @@ pub(crate) fn cpu_only_option(settings: &BakeSettings) -> Option<&'static str> {
 
 impl Backend {
     /// Opens `choice` for a bake with `settings`, some of whose options only the CPU
-    /// implements ([`cpu_only_option`]). `Auto` falls back to the CPU and returns why as the
+    /// implements (`cpu_only_option`). `Auto` falls back to the CPU and returns why as the
     /// second value (a software rasterizer such as lavapipe is slower than the CPU backend).
     pub fn open(
         choice: BackendChoice,

@@ -5,7 +5,7 @@
 //! ([`SampledRows::stored`]).
 
 use super::frame::Frame;
-use super::rows::{SampledShell, SphereRows};
+use super::rows::SphereRows;
 use super::settings::{BakeSettings, PassCheckpoints, PatchOrder, Supersample};
 use super::{Backend, BakeError, SampledRows, Shard, Stages, shells};
 use crate::format::{self, BakeContents, ShellRows};
@@ -21,7 +21,6 @@ use crate::tiling::{self, Patch, PatchId, Tiling, TilingOptions};
 use crate::visibility::{SamplingParams, VisibilityMatrix};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 /// Checked settings with every default resolved ([`BakeSettings::check`]): what a bake does.
 #[derive(Clone, Debug, PartialEq)]
@@ -124,18 +123,6 @@ impl Recipe {
         self.settings
             .conservative
             .then_some(super::settings::CONSERVATIVE_PROBE_PIXELS)
-    }
-
-    /// The shells' stored sphere level (`--shell-level`, else the stored level).
-    pub fn shell_level(&self) -> u32 {
-        self.settings.shell_level.unwrap_or(self.settings.level)
-    }
-
-    /// The shells' camera distances for the sampling sphere `params`, outermost first
-    /// (`shells.rs`); a usage error if they cannot be used.
-    pub fn shell_distances(&self, params: &SamplingParams) -> Result<Vec<f32>, BakeError> {
-        shells::shell_distances(params, self.settings.shells, self.settings.shell_min)
-            .map_err(BakeError::Settings)
     }
 
     /// Every checkpoint file of this bake: the sampling sphere's, then each shell's.
@@ -367,38 +354,13 @@ impl Recipe {
                 band: bands[0],
             },
         )?;
-        let mut shells = Vec::with_capacity(distances.len());
-        for (s, &distance) in distances.iter().enumerate() {
-            let start = Instant::now();
-            let rows = self.sample_sphere(
-                mesh,
-                tiling,
-                backend,
-                progress,
-                &SphereSampling {
-                    params: SamplingParams {
-                        level: self.shell_level(),
-                        ..params
-                    },
-                    supersample: self.shell_supersample,
-                    checkpoints: self.shell_checkpoints.get(s).cloned().unwrap_or_default(),
-                    shard,
-                    shell: Some(distance),
-                    band: bands[s + 1],
-                },
-            )?;
-            shells.push(SampledShell {
-                distance,
-                rows,
-                seconds: start.elapsed().as_secs_f64(),
-            });
-        }
+        let shells = self.sample_shells(mesh, tiling, backend, progress, &params, shard)?;
         Ok(SampledRows { main, shells })
     }
 
     /// Samples one sphere of views (the sampling sphere or a shell): its stored level plainly
     /// and its finer level thresholded, or the finer level alone.
-    fn sample_sphere(
+    pub(super) fn sample_sphere(
         &self,
         mesh: &Mesh,
         tiling: &Tiling,
@@ -551,38 +513,6 @@ impl Recipe {
         )
     }
 
-    /// Bytes each shell of `baked` adds to the file, outermost first: the file encoded with
-    /// the shells up to it, less the file with those before it (one encoding per shell; for
-    /// `--stats`).
-    pub fn shell_bytes(&self, baked: &Baked, triangle_count: u32) -> Vec<u64> {
-        let rows = shell_rows(&baked.shells);
-        let mut before = self
-            .encode(
-                &baked.params,
-                triangle_count,
-                &baked.tiling,
-                &baked.visibility,
-            )
-            .len() as u64;
-        (1..=rows.len())
-            .map(|k| {
-                let bytes = if k == rows.len() {
-                    baked.bytes.len() as u64
-                } else {
-                    let encoded = self.encode_with_shells(
-                        &baked.params,
-                        triangle_count,
-                        &baked.tiling,
-                        &baked.visibility,
-                        &rows[..k],
-                    );
-                    encoded.len() as u64
-                };
-                bytes - std::mem::replace(&mut before, bytes)
-            })
-            .collect()
-    }
-
     /// Runs the whole recipe on `mesh`: tile → sample → fold → number → encode, each stage
     /// recorded in `stages` and reported to `progress`.
     pub fn run(
@@ -644,7 +574,7 @@ impl Recipe {
                     mesh.triangle_count(),
                     &tiling,
                     &visibility,
-                    &shell_rows(&shells),
+                    &shells::shell_rows(&shells),
                 )
             })
         });
@@ -741,29 +671,18 @@ impl Recipe {
 }
 
 /// How one sphere of views is sampled ([`Recipe::sample_share`]).
-struct SphereSampling {
+pub(super) struct SphereSampling {
     /// The cameras at the sphere's stored level (the sampling sphere's centre, radius and
     /// field of view).
-    params: SamplingParams,
-    supersample: Supersample,
-    checkpoints: PassCheckpoints,
+    pub(super) params: SamplingParams,
+    pub(super) supersample: Supersample,
+    pub(super) checkpoints: PassCheckpoints,
     /// The shard whose views are rendered, or every view.
-    shard: Option<Shard>,
+    pub(super) shard: Option<Shard>,
     /// A shell's camera distance (`SamplingOptions::shell`); `None`: the sampling sphere.
-    shell: Option<f32>,
+    pub(super) shell: Option<f32>,
     /// The camera distances its rows answer for (`SamplingOptions::band`).
-    band: Option<[f32; 2]>,
-}
-
-/// The shells of a bake as the writer takes them.
-fn shell_rows(shells: &[BakedShell]) -> Vec<ShellRows<'_>> {
-    shells
-        .iter()
-        .map(|s| ShellRows {
-            distance: s.distance,
-            visibility: &s.visibility,
-        })
-        .collect()
+    pub(super) band: Option<[f32; 2]>,
 }
 
 /// A byte count as `--memory` spells it: whole MiB, KiB or bytes.
