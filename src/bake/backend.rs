@@ -39,8 +39,6 @@ pub(crate) fn cpu_only_option(settings: &BakeSettings) -> Option<&'static str> {
         Some("--conservative-raster")
     } else if settings.resume {
         Some("--resume")
-    } else if settings.far_views {
-        Some("--far-views")
     } else {
         None
     }

@@ -114,7 +114,7 @@ pub struct BakeArgs {
     /// at 2× the sampling distance may miss rim patches (the bunny: 25.5 % of views
     /// identical, 52 % with --conservative); with it, 100 % at 1.5, 2 and 4×. Costs culling
     /// at the sampling distance (the bunny: 34 % instead of 45 %) and twice the sampling
-    /// sphere's sampling time (the bunny's bake without shells: 2.15×). CPU backend only.
+    /// sphere's sampling time (the bunny's bake without shells: 2.15×).
     #[arg(long)]
     pub far_views: bool,
     /// View supersampling: sample K sphere levels finer (about 4^K times the views) and fold

@@ -130,6 +130,17 @@ pub struct SamplingOptions {
 /// (about 10⁻⁴ of the bounding radius there).
 pub const FAR_VIEW_FACTOR: f64 = 256.0;
 
+/// The far camera of [`SamplingOptions::far_view`] along unit direction `d` (binary64) of a
+/// view of the sampling sphere `params`: [`FAR_VIEW_FACTOR`] sampling distances out, looking
+/// at the centre, its field of view just holding the bounding sphere. Both backends render it.
+pub(crate) fn far_view_camera(params: &SamplingParams, d: [f64; 3]) -> Camera {
+    let distance = f64::from(params.distance()) * FAR_VIEW_FACTOR;
+    let fov = 2.0 * (f64::from(params.radius) / distance).asin().to_degrees();
+    let center = widen(params.center);
+    let eye = std::array::from_fn(|k| center[k] + d[k] * distance);
+    Camera::look_at_f64(eye, center, fov, params.resolution)
+}
+
 /// Why tiled sampling failed: only its checkpoint file can.
 #[derive(Debug, thiserror::Error)]
 pub enum SamplingError {
@@ -600,18 +611,11 @@ impl ViewContext<'_> {
     /// The far camera of [`SamplingOptions::far_view`] along unit direction `d`, and its probe
     /// cell (the view's, scaled with the distance).
     fn far_camera(&self, d: [f64; 3]) -> (Camera, Option<Cell>) {
-        let distance = f64::from(self.params.distance()) * FAR_VIEW_FACTOR;
-        let fov = 2.0
-            * (f64::from(self.params.radius) / distance)
-                .asin()
-                .to_degrees();
-        let center = widen(self.params.center);
-        let eye = std::array::from_fn(|k| center[k] + d[k] * distance);
-        let camera = Camera::look_at_f64(eye, center, fov, self.params.resolution);
+        let camera = far_view_camera(self.params, d);
         let cell = self
             .probe
             .as_ref()
-            .map(|p| Cell::ball(eye, p.cell_radius() * FAR_VIEW_FACTOR));
+            .map(|p| Cell::ball(camera.eye(), p.cell_radius() * FAR_VIEW_FACTOR));
         (camera, cell)
     }
 
