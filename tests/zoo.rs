@@ -53,13 +53,36 @@ fn bake_and_eval(dir: &TempDir, mesh: &str, name: &str, flags: &[&str]) -> [serd
     })
 }
 
-fn missed_per_view(report: &serde_json::Value) -> Vec<f64> {
+/// Figure `key` of every view of an eval report.
+fn per_view(report: &serde_json::Value, key: &str) -> Vec<f64> {
     report["per_view"]
         .as_array()
         .unwrap()
         .iter()
-        .map(|v| number(v, "missed_pixels"))
+        .map(|v| number(v, key))
         .collect()
+}
+
+fn missed_per_view(report: &serde_json::Value) -> Vec<f64> {
+    per_view(report, "missed_pixels")
+}
+
+/// `patchvis gen --kind KIND` at the small settings' size into `dir`; returns its path.
+fn generated(dir: &TempDir, kind: &str) -> String {
+    let path = dir.path().join(format!("{kind}.ply"));
+    let path = path.to_str().unwrap().to_owned();
+    let out = patchvis(&[
+        "gen",
+        "--kind",
+        kind,
+        "--triangles",
+        "6000",
+        "-o",
+        &path,
+        "-q",
+    ]);
+    assert!(out.status.success(), "{kind}: {}", common::stderr(&out));
+    path
 }
 
 #[test]
@@ -70,19 +93,7 @@ fn every_zoo_model_loses_no_pixel_to_the_all_corner_fold() {
         ("airplane", format!("{ASSETS}/airplane.ply")),
     ];
     for kind in ["exposed-engine", "truss"] {
-        let path = dir.path().join(format!("{kind}.ply"));
-        let out = patchvis(&[
-            "gen",
-            "--kind",
-            kind,
-            "--triangles",
-            "6000",
-            "-o",
-            path.to_str().unwrap(),
-            "-q",
-        ]);
-        assert!(out.status.success(), "{kind}: {}", common::stderr(&out));
-        meshes.push((kind, path.to_str().unwrap().to_owned()));
+        meshes.push((kind, generated(&dir, kind)));
     }
     let (mut missed_default, mut missed_thresholded) = (0.0, 0.0);
     for (name, mesh) in &meshes {
@@ -127,22 +138,10 @@ fn every_zoo_model_loses_no_pixel_to_the_all_corner_fold() {
 #[test]
 fn the_split_fold_culls_at_least_the_all_corner_fold_and_misses_no_more_than_the_default() {
     let dir = TempDir::new().unwrap();
-    let engine = dir.path().join("exposed-engine.ply");
-    let out = patchvis(&[
-        "gen",
-        "--kind",
-        "exposed-engine",
-        "--triangles",
-        "6000",
-        "-o",
-        engine.to_str().unwrap(),
-        "-q",
-    ]);
-    assert!(out.status.success(), "{}", common::stderr(&out));
     let meshes = [
         ("ant", format!("{ASSETS}/ant.ply")),
         ("airplane", format!("{ASSETS}/airplane.ply")),
-        ("exposed-engine", engine.to_str().unwrap().to_owned()),
+        ("exposed-engine", generated(&dir, "exposed-engine")),
     ];
     let (mut culling_split, mut culling_all) = (0.0, 0.0);
     for (name, mesh) in &meshes {
@@ -163,15 +162,8 @@ fn the_split_fold_culls_at_least_the_all_corner_fold_and_misses_no_more_than_the
             {
                 assert!(*s <= d, "{name} at {resolution}: view {i} misses {s} > {d}");
             }
-            let views = |r: &serde_json::Value| {
-                r["per_view"]
-                    .as_array()
-                    .unwrap()
-                    .iter()
-                    .map(|v| number(v, "culling_rate"))
-                    .collect::<Vec<_>>()
-            };
-            for (i, (s, a)) in views(s).iter().zip(views(a)).enumerate() {
+            let culling = |r| per_view(r, "culling_rate");
+            for (i, (s, a)) in culling(s).iter().zip(culling(a)).enumerate() {
                 assert!(*s >= a, "{name} at {resolution}: view {i} culls {s} < {a}");
             }
             culling_split += number(s, "culling_rate_mean");

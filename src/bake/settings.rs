@@ -251,6 +251,7 @@ impl BakeSettings {
             ));
         }
         let fold_min_pixels = self.fold_min_pixels.unwrap_or(DEFAULT_FOLD_MIN_PIXELS);
+        // A threshold at or below the stored views' own changes nothing.
         let threshold = fold_min_pixels > self.min_pixels.max(1);
         let fold_corners = self
             .fold_corners
@@ -275,9 +276,8 @@ impl BakeSettings {
             }
         }
         let resolve = |extra_levels: u32| {
-            // A threshold at or below the stored views' own changes nothing: no extra plain
-            // pass.
-            let thresholded = extra_levels > 0 && fold_min_pixels > self.min_pixels.max(1);
+            // Without one, no extra plain pass.
+            let thresholded = extra_levels > 0 && threshold;
             Supersample {
                 extra_levels,
                 fold_min_pixels: if thresholded { fold_min_pixels } else { 0 },
