@@ -7,9 +7,10 @@
 //!
 //! Shrinking occluders also uncovers the back faces behind every silhouette, which would cost
 //! most of the culling; so a triangle is drawn only if some camera of the view's cell may see
-//! its visible side: its outward side, or its back through an opening of its component
-//! (`sampler/solid.rs`). Whole patches that face away from the cell and lie behind no opening
-//! are passed over by their normal cone.
+//! its visible side: its outward side anywhere, its back only at the pixels of an opening of
+//! its component, where its cap lies in front of the shrunk occluders (`sampler/solid.rs`).
+//! Whole patches that face away from the cell and lie behind no opening are passed over by
+//! their normal cone.
 //!
 //! The cell holds every camera whose query may use the view's row: the directions within
 //! [`CELL_PER_EDGE`] edges of the view's, at the pass's distance, or, with
@@ -27,9 +28,9 @@ use crate::sampler::camera::{Camera, SphereBounds};
 use crate::sampler::conservative::scan_triangle_conservative;
 use crate::sampler::key_buffer::KeyBuffer;
 use crate::sampler::raster::{
-    SUBPIXEL_BITS, ScreenVertex, draw_triangle, project, sphere_needs_no_clip, view_planes,
+    ScreenVertex, draw_triangle, project, sphere_needs_no_clip, view_planes,
 };
-use crate::sampler::solid::{Cell, Openings, Solids};
+use crate::sampler::solid::{Cell, Openings, Side, Solids};
 use crate::sphere::{direction, parents, view_count};
 use crate::visibility::SamplingParams;
 
@@ -154,40 +155,34 @@ impl ViewContext<'_> {
         };
         probe
             .solids
-            .openings(camera, cell, probe.radius + 1, &mut ps.openings);
+            .openings(camera, cell, probe.radius + 1, &ps.guard, &mut ps.openings);
         let guard = &ps.guard;
         let screen = &mut scratch.draw.screen;
         let projected = &mut scratch.draw.projected;
         let patch_count = self.mesh.patch_count();
-        let resolution = camera.resolution();
-        let last = resolution as i32 - 1;
-        // The pixels a screen triangle touches, for the openings' rectangles.
-        let pixels_of = |st: [ScreenVertex; 3]| {
-            let px = |f: fn(i32, i32) -> i32, v: [i32; 3]| {
-                (f(f(v[0], v[1]), v[2]) >> SUBPIXEL_BITS).clamp(0, last) as usize
-            };
-            let (xs, ys) = (st.map(|v| v.x), st.map(|v| v.y));
-            [
-                px(i32::min, xs),
-                px(i32::min, ys),
-                px(i32::max, xs),
-                px(i32::max, ys),
-            ]
-        };
-        // Whether screen triangle `st` of input triangle `t` (corners `world`) may show to
-        // the cell and has a fragment in front of the shrunk occluders.
+        let n = camera.resolution() as usize;
+        // Whether screen triangle `st` of input triangle `t` (corners `world`) has a
+        // fragment in front of the shrunk occluders where some camera of the cell may see
+        // it: anywhere for its outward side, through an opening of its component for its
+        // inward side.
         let openings = &ps.openings;
         let in_front = |t: u32, world: [[f32; 3]; 3], st: [ScreenVertex; 3]| {
-            if !probe
-                .solids
-                .may_show(t, world, pixels_of(st), cell, openings)
-                || guard.triangle_hidden(st, true)
+            let side = probe.solids.side(t, world, cell);
+            if let Side::Inward(c) = side
+                && !openings.any(c)
             {
                 return false;
             }
+            if guard.triangle_hidden(st, true) {
+                return false;
+            }
             let mut hit = false;
-            scan_triangle_conservative(st, resolution, |index, q, _| {
-                hit |= q.to_bits() > guard.depth_bits(index);
+            scan_triangle_conservative(st, n as u32, |index, q, _| {
+                hit |= q.to_bits() > guard.depth_bits(index)
+                    && match side {
+                        Side::Outward => true,
+                        Side::Inward(c) => openings.covers(c, index % n, index / n),
+                    };
             });
             hit
         };
