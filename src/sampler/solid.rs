@@ -21,6 +21,9 @@
 //! edge) by a thin strip along it; a cone from the centroid would fan across the whole part.
 //! Loops longer than [`SMALL_CAP_LOOP`] take that cone, since the triangulation costs `O(n³)`.
 //! A sheet's cap is about the sheet itself, reversed, so its back may show from its back side.
+//! A component whose capped volume is nil (a flat card, a lone triangle, a folded strip that
+//! is its own least-area cap) is taken as such a sheet outright: either side may show, and it keeps no caps, which would cost every view a
+//! pass over them for nothing.
 //!
 //! The orientation (which side is out) is the sign of the capped chain's volume, so meshes
 //! wound inwards, and mirrored parts, are handled per component. The one assumption (winding
@@ -29,7 +32,7 @@
 //!
 //! Cost: a sort of the 3·n edges (`memory::SOLIDS_BYTES_PER_TRIANGLE` bytes per triangle at
 //! the peak) and a union-find over the triangles; what stays is 5 bytes per triangle and the
-//! caps.
+//! caps of the components that are not sheets (36 bytes a cap triangle, 40 a loop).
 
 use crate::ooc::Mesh;
 use crate::sampler::camera::Camera;
@@ -41,11 +44,12 @@ use rayon::prelude::*;
 /// The solids of a mesh: per triangle its component and orientation, per component its cap.
 pub(crate) struct Solids {
     /// Per input triangle: +1 when its front side faces out of its (capped) component, −1 when
-    /// its back side does.
+    /// its back side does, 0 on a sheet.
     orientation: Vec<i8>,
     /// Per input triangle: its component.
     component: Vec<u32>,
-    /// Per component: +1 when its triangles' front sides face out, −1 when their backs do.
+    /// Per component: +1 when its triangles' front sides face out, −1 when their backs do, 0
+    /// for a sheet, either of whose sides may show.
     component_sign: Vec<i8>,
     /// Per component: the first of its boundary loops in `loops` (one more entry at the end).
     loop_start: Vec<u32>,
@@ -67,11 +71,17 @@ pub(crate) struct Loop {
 /// One triangle of a component's cap.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Cap {
-    /// Outward normal of the capped solid there (length: twice the triangle's area times the
-    /// edge's multiplicity).
-    normal: [f64; 3],
-    /// Its corners.
+    /// Its corners, wound so that the capped chain is closed.
     corners: [[f32; 3]; 3],
+}
+
+impl Cap {
+    /// The normal of its winding (length: twice its area), in `f64` from the `f32` corners.
+    /// Times the component's sign, it points out of the capped solid.
+    fn normal(&self) -> [f64; 3] {
+        let [a, b, c] = self.corners.map(widen);
+        cross(sub(b, a), sub(c, a))
+    }
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -172,64 +182,109 @@ impl Solids {
                 }
             }
         }
+        drop(weld);
         edges.par_sort_unstable_by_key(|e| (e.0, e.1));
         let mut parent: Vec<u32> = (0..n as u32).collect();
-        // Boundary edges: (first triangle, a, b, multiplicity), running a → b.
-        let mut boundary: Vec<(u32, u32, u32, i32)> = Vec::new();
-        for run in edges.chunk_by(|a, b| a.0 == b.0) {
-            let root = find(&mut parent, run[0].1);
+        // Join the triangles of each edge, and keep the boundary edges in place at the front
+        // of `edges`: (a << 32 | b, first triangle, multiplicity), running a → b.
+        let mut kept = 0;
+        let mut run = 0;
+        while run < edges.len() {
+            let (key, first, _) = edges[run];
+            let root = find(&mut parent, first);
             let mut balance = 0;
-            for &(_, t, dir) in run {
-                balance += dir;
-                let r = find(&mut parent, t);
+            let mut end = run;
+            while end < edges.len() && edges[end].0 == key {
+                balance += edges[end].2;
+                let r = find(&mut parent, edges[end].1);
                 if r != root {
                     parent[r as usize] = root;
                 }
+                end += 1;
             }
             if balance != 0 {
-                let (lo, hi) = ((run[0].0 >> 32) as u32, run[0].0 as u32);
+                let (lo, hi) = (key >> 32, key & u64::from(u32::MAX));
                 let (a, b) = if balance > 0 { (lo, hi) } else { (hi, lo) };
-                boundary.push((run[0].1, a, b, balance.abs()));
+                edges[kept] = ((a << 32) | b, first, balance.abs());
+                kept += 1;
             }
+            run = end;
         }
-        drop(edges);
+        edges.truncate(kept);
+        edges.shrink_to_fit();
+        let mut boundary = edges;
         // Number the components in order of their first triangle (deterministic).
         let mut component = vec![u32::MAX; n];
-        let mut count = 0u32;
+        let mut first_triangle = Vec::new();
         let mut id_of_root = vec![u32::MAX; n];
         for t in 0..n as u32 {
             let r = find(&mut parent, t) as usize;
             if id_of_root[r] == u32::MAX {
-                id_of_root[r] = count;
-                count += 1;
+                id_of_root[r] = first_triangle.len() as u32;
+                first_triangle.push(t);
             }
             component[t as usize] = id_of_root[r];
         }
         drop(parent);
         drop(id_of_root);
-        let components = count as usize;
+        first_triangle.shrink_to_fit();
+        let components = first_triangle.len();
         let position = |v: u32| mesh.position(v).map(f64::from);
-        // Trace the boundary into cycles, and cap each.
-        boundary.sort_unstable_by_key(|&(t, a, b, _)| (component[t as usize], a, b));
-        let mut loop_start = Vec::with_capacity(components + 1);
-        let mut loops = Vec::new();
-        let mut caps = Vec::new();
-        let mut next = 0;
-        for c in 0..components {
-            loop_start.push(loops.len() as u32);
-            let end =
-                next + boundary[next..].partition_point(|e| component[e.0 as usize] as usize == c);
-            trace_loops(&boundary[next..end], &position, &mut loops, &mut caps);
-            next = end;
-        }
-        loop_start.push(loops.len() as u32);
-        drop(boundary);
-        // Volume of each capped component (about its first vertex, for precision).
-        let mut reference = vec![None; components];
+        // Volume of each component's triangles (about its first vertex, for precision); each
+        // cap adds its own below.
+        let reference = |c: usize| position(mesh.triangle(first_triangle[c])[0]);
         let mut volume = vec![0f64; components];
         for t in 0..n as u32 {
             let c = component[t as usize] as usize;
-            // An open component's bounds, kept on its first loop.
+            let o = reference(c);
+            let [a, b, d] = mesh.triangle(t).map(|v| sub(position(v), o));
+            volume[c] += dot(a, cross(b, d));
+        }
+        // Trace each component's boundary into loops and cap them. A component whose capped
+        // volume is nil next to its size is a sheet (a card, a lone triangle): its cap lies
+        // on it, so either side may show wherever the sheet does. Sign 0 says so, and it
+        // keeps no loops, so a mesh of cards needs no room for their caps.
+        boundary.sort_unstable_by_key(|&(key, t, _)| (component[t as usize], key));
+        let mut loop_start = Vec::with_capacity(components + 1);
+        let mut sign = Vec::with_capacity(components);
+        let mut loops = Vec::new();
+        let mut caps: Vec<Cap> = Vec::new();
+        let mut next = 0;
+        for (c, volume) in volume.iter_mut().enumerate() {
+            let (first_loop, first_cap) = (loops.len(), caps.len());
+            loop_start.push(first_loop as u32);
+            let end =
+                next + boundary[next..].partition_point(|e| component[e.1 as usize] as usize == c);
+            trace_loops(&boundary[next..end], &position, &mut loops, &mut caps);
+            next = end;
+            let o = reference(c);
+            let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+            for cap in &caps[first_cap..] {
+                // det(p − o, q − o, r − o) through the normal (q − p) × (r − p).
+                *volume += dot(sub(widen(cap.corners[0]), o), cap.normal());
+                for p in cap.corners.map(widen) {
+                    lo = std::array::from_fn(|k| lo[k].min(p[k]));
+                    hi = std::array::from_fn(|k| hi[k].max(p[k]));
+                }
+            }
+            let size = sub(hi, lo);
+            if loops.len() > first_loop && volume.abs() <= FLAT_VOLUME * dot(size, size).powf(1.5) {
+                loops.truncate(first_loop);
+                caps.truncate(first_cap);
+                sign.push(0);
+            } else {
+                sign.push(if *volume >= 0.0 { 1 } else { -1 });
+            }
+        }
+        loop_start.push(loops.len() as u32);
+        drop(boundary);
+        drop(volume);
+        drop(first_triangle);
+        loops.shrink_to_fit();
+        caps.shrink_to_fit();
+        // Each open component's bounds, on every loop of it.
+        for t in 0..n as u32 {
+            let c = component[t as usize] as usize;
             if let Some(l) = loops[loop_start[c] as usize..loop_start[c + 1] as usize].first_mut() {
                 for v in mesh.triangle(t) {
                     let p = mesh.position(v);
@@ -238,36 +293,12 @@ impl Solids {
                     *hi = std::array::from_fn(|k| hi[k].max(p[k]));
                 }
             }
-            let corners = mesh.triangle(t).map(position);
-            let o = *reference[c].get_or_insert(corners[0]);
-            let [a, b, d] = corners.map(|p| sub(p, o));
-            volume[c] += dot(a, cross(b, d));
         }
         for c in 0..components {
             let range = loop_start[c] as usize..loop_start[c + 1] as usize;
             if let Some(first) = loops[range.clone()].first().map(|l| l.bounds) {
                 for l in &mut loops[range] {
                     l.bounds = first;
-                }
-            }
-            let o = reference[c].unwrap_or([0.0; 3]);
-            for l in &loops[loop_start[c] as usize..loop_start[c + 1] as usize] {
-                for cap in &caps[l.caps.clone()] {
-                    // det(p − o, q − o, r − o) through the stored normal (q − p) × (r − p).
-                    volume[c] += dot(sub(widen(cap.corners[0]), o), cap.normal);
-                }
-            }
-        }
-        let sign: Vec<i8> = volume
-            .iter()
-            .map(|&v| if v >= 0.0 { 1 } else { -1 })
-            .collect();
-        for c in 0..components {
-            if sign[c] < 0 {
-                for l in &loops[loop_start[c] as usize..loop_start[c + 1] as usize] {
-                    for cap in &mut caps[l.caps.clone()] {
-                        cap.normal = cap.normal.map(|x| -x);
-                    }
                 }
             }
         }
@@ -339,13 +370,14 @@ impl Solids {
             distance,
             pixels,
         } = openings;
-        for w in self.loop_start.windows(2) {
+        for (w, &sign) in self.loop_start.windows(2).zip(&self.component_sign) {
             start.push(loops.len() as u32);
             for l in &self.loops[w[0] as usize..w[1] as usize] {
                 pixels.clear();
                 let mut near = f64::INFINITY;
                 for cap in &self.caps[l.caps.clone()] {
-                    if !may_face(widen(cap.corners[0]), cap.normal, cell) {
+                    let outward = cap.normal().map(|x| x * f64::from(sign));
+                    if !may_face(widen(cap.corners[0]), outward, cell) {
                         continue;
                     }
                     let before = pixels.len();
@@ -418,10 +450,10 @@ impl Solids {
 
     /// Which side of input triangle `t` (corners `tri`) may show to a camera of `cell`.
     pub(crate) fn side(&self, t: u32, tri: [[f32; 3]; 3], cell: &Cell) -> Side {
+        let orientation = self.orientation[t as usize];
         let [a, b, c] = tri.map(|p| p.map(f64::from));
-        let normal =
-            cross(sub(b, a), sub(c, a)).map(|x| x * f64::from(self.orientation[t as usize]));
-        if may_face(a, normal, cell) {
+        let normal = cross(sub(b, a), sub(c, a)).map(|x| x * f64::from(orientation));
+        if orientation == 0 || may_face(a, normal, cell) {
             Side::Outward
         } else {
             Side::Inward(self.component[t as usize])
@@ -487,6 +519,9 @@ impl Solids {
             }
         }
         let c = c as usize;
+        if self.orientation_of_component(c) == 0 {
+            return false; // A sheet: either side may show.
+        }
         // Outward normals lie within the cone around `sign · axis`; the patch's points seen
         // from a ball of the cell lie within `rho` of direction `d`. All back sides show when
         // the angle between them, plus the cone's and the ball's half-angles, stays below 90°
@@ -673,38 +708,38 @@ impl Openings {
     }
 }
 
-/// Splits one component's boundary edges (`(triangle, a, b, multiplicity)`, sorted by `a`)
-/// into closed loops and caps each (see the module documentation), into `loops` and `caps`.
-/// The boundary of a triangle set is a cycle (every vertex has as many boundary edges in as
-/// out), so following unused edges from a loop's first vertex always leads back to it.
+/// Splits one component's boundary edges (`(a << 32 | b, triangle, multiplicity)`, sorted)
+/// into closed loops and caps each ([`cap_loop`]), into `loops` and `caps`. The boundary of a
+/// triangle set is a cycle (every vertex has as many boundary edges in as out), so following
+/// unused edges from a loop's first vertex always leads back to it.
 fn trace_loops(
-    boundary: &[(u32, u32, u32, i32)],
+    boundary: &[(u64, u32, i32)],
     position: &impl Fn(u32) -> [f64; 3],
     loops: &mut Vec<Loop>,
     caps: &mut Vec<Cap>,
 ) {
     let mut edges: Vec<(u32, u32)> = Vec::new();
-    for &(_, a, b, m) in boundary {
+    for &(key, _, m) in boundary {
         for _ in 0..m {
-            edges.push((a, b));
+            edges.push(((key >> 32) as u32, key as u32));
         }
     }
     edges.sort_unstable();
     let mut used = vec![false; edges.len()];
     // Per start vertex: the next edge leaving it that may be unused.
     let mut cursor: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
-    let mut vertices = Vec::new();
+    let mut points = Vec::new();
     for first in 0..edges.len() {
         if used[first] {
             continue;
         }
-        vertices.clear();
+        points.clear();
         let start = edges[first].0;
         let mut e = first;
         loop {
             used[e] = true;
             let (a, b) = edges[e];
-            vertices.push(a);
+            points.push(position(a));
             if b == start {
                 break;
             }
@@ -720,38 +755,43 @@ fn trace_loops(
             cursor.insert(b, k + 1);
             e = k;
         }
-        let points: Vec<[f64; 3]> = vertices.iter().map(|&v| position(v)).collect();
         let first_cap = caps.len();
-        // Each triangle `[i, k, j]` runs with the loop; its cap triangle runs against it, so
-        // that the cap's boundary cancels the component's.
-        let mut push = |corners: [[f64; 3]; 3]| {
-            // Loop points are mesh positions, exact in `f32`; a cone's apex is rounded, and
-            // the normal is that of the rounded triangle.
-            let corners = corners.map(|p| p.map(|x| x as f32));
-            let [a, b, c] = corners.map(widen);
-            caps.push(Cap {
-                normal: cross(sub(b, a), sub(c, a)),
-                corners,
-            })
-        };
-        if points.len() <= SMALL_CAP_LOOP {
-            for [i, k, j] in least_area_triangulation(&points) {
-                push([points[i], points[j], points[k]]);
-            }
-        } else {
-            let count = points.len() as f64;
-            let apex = points
-                .iter()
-                .fold([0.0; 3], |s, p| [s[0] + p[0], s[1] + p[1], s[2] + p[2]])
-                .map(|x| x / count);
-            for (i, &a) in points.iter().enumerate() {
-                push([apex, points[(i + 1) % points.len()], a]);
-            }
-        }
+        cap_loop(&points, caps);
         loops.push(Loop {
             caps: first_cap..caps.len(),
             bounds: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
         });
+    }
+}
+
+/// A capped component is a sheet ([`Solids::new`]) when six times its volume is at most this
+/// much of the cube of its caps' bounding box's diagonal (a sheet's boundary spans it): flat
+/// to `f32` rounding, with room.
+const FLAT_VOLUME: f64 = 1e-6;
+
+/// Caps the loop through `points` (see the module documentation), into `caps`.
+fn cap_loop(points: &[[f64; 3]], caps: &mut Vec<Cap>) {
+    // Each triangle `[i, k, j]` runs with the loop; its cap triangle runs against it, so
+    // that the cap's boundary cancels the component's. Loop points are mesh positions, exact
+    // in `f32`; a cone's apex is rounded.
+    let mut push = |corners: [[f64; 3]; 3]| {
+        caps.push(Cap {
+            corners: corners.map(|p| p.map(|x| x as f32)),
+        })
+    };
+    if points.len() <= SMALL_CAP_LOOP {
+        for [i, k, j] in least_area_triangulation(points) {
+            push([points[i], points[j], points[k]]);
+        }
+    } else {
+        let count = points.len() as f64;
+        let apex = points
+            .iter()
+            .fold([0.0; 3], |s, p| [s[0] + p[0], s[1] + p[1], s[2] + p[2]])
+            .map(|x| x / count);
+        for (i, &a) in points.iter().enumerate() {
+            push([apex, points[(i + 1) % points.len()], a]);
+        }
     }
 }
 
@@ -926,6 +966,17 @@ mod tests {
         for d in [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]] {
             assert!(shown(&solids, &m, &camera(d)).iter().all(|&s| s), "{d:?}");
         }
+        // Flat: taken as a sheet outright, with no caps to pass over.
+        assert_eq!(solids.component_sign, [0]);
+        assert!(solids.loops.is_empty() && solids.caps.is_empty());
+        // Two faces meeting at an edge are their own least-area cap: a sheet too.
+        let faces = cube_faces();
+        let bent = Solids::new(&mesh(&[faces[0], faces[2]], false));
+        assert_eq!(bent.component_sign, [0]);
+        // An open box's cap is its lid, which encloses a volume: a solid with an opening.
+        let open = Solids::new(&mesh(&faces[..5], false));
+        assert_eq!(open.component_sign, [1]);
+        assert_eq!((open.loops.len(), open.caps.len()), (1, 2));
     }
 
     #[test]
