@@ -422,15 +422,24 @@ impl Solids {
                     )
                 };
                 let ((x0, x1), (y0, y1)) = (widen_tiles(x0, x1), widen_tiles(y0, y1));
-                let width = x1 + 1 - x0;
-                let first = distance.len();
-                distance.resize(first + width * (y1 + 1 - y0), FAR_TILES);
-                let grid = &mut distance[first..];
-                for &i in pixels.iter() {
-                    let (x, y) = (i as usize % n / OPENING_TILE, i as usize / n / OPENING_TILE);
-                    grid[(y - y0) * width + (x - x0)] = 0;
-                }
-                chessboard_distances(grid, width);
+                let (width, height) = (x1 + 1 - x0, y1 + 1 - y0);
+                // Every tile of the rectangle lies within `grow` of the loop's, or the view's
+                // grids would pass their bound: the whole rectangle (a superset).
+                let first = if grow >= width.max(height)
+                    || distance.len() + width * height > GRID_TILES_PER_VIEW_TILE * tiles * tiles
+                {
+                    WHOLE_RECT
+                } else {
+                    let first = distance.len();
+                    distance.resize(first + width * height, FAR_TILES);
+                    let grid = &mut distance[first..];
+                    for &i in pixels.iter() {
+                        let (x, y) = (i as usize % n / OPENING_TILE, i as usize / n / OPENING_TILE);
+                        grid[(y - y0) * width + (x - x0)] = 0;
+                    }
+                    chessboard_distances(grid, width);
+                    first
+                };
                 loops.push(LoopOpening {
                     rect: [
                         x0 * OPENING_TILE,
@@ -563,6 +572,15 @@ fn box_corners([lo, hi]: [[f32; 3]; 2]) -> [[f32; 3]; 8] {
 /// Distances at or past this many tiles are stored as this.
 const FAR_TILES: u8 = u8::MAX;
 
+/// A view's loops keep distance grids of at most this many tiles per tile of the image (4 for
+/// 512², 64 KiB); past it, and where a loop's widening spans its whole rectangle, a loop's
+/// opening is its rectangle ([`WHOLE_RECT`]). Many open parts seen at once (a near view of a
+/// model of open shells) so cost bounded memory.
+const GRID_TILES_PER_VIEW_TILE: usize = 4;
+
+/// `LoopOpening::first` of an opening that is its whole rectangle.
+const WHOLE_RECT: usize = usize::MAX;
+
 /// What a view's openings need to bound parallax ([`Parallax::tiles`]).
 #[derive(Clone, Copy, Debug)]
 struct Parallax {
@@ -661,7 +679,7 @@ struct LoopOpening {
     tile: [usize; 2],
     /// Tiles per row.
     width: usize,
-    /// The first tile's distance in `Openings::distance`.
+    /// The first tile's distance in `Openings::distance`, or [`WHOLE_RECT`].
     first: usize,
     /// How many tiles from the cap's pixels a back face may show ([`Parallax::tiles`]).
     grow: usize,
@@ -689,7 +707,7 @@ impl Openings {
             }
             let tile = (y / OPENING_TILE - l.tile[1]) * l.width + (x / OPENING_TILE - l.tile[0]);
             // Exact below FAR_TILES; at it, `grow` is as large or the rectangle held it.
-            usize::from(self.distance[l.first + tile]) <= l.grow
+            l.first == WHOLE_RECT || usize::from(self.distance[l.first + tile]) <= l.grow
         })
     }
 
