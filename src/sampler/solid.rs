@@ -19,7 +19,9 @@
 //! fewer back faces lie behind it. A loop is capped by its least-area triangulation, which
 //! spans a hole by the hole and an open seam (a wing whose skins part along the trailing
 //! edge) by a thin strip along it; a cone from the centroid would fan across the whole part.
-//! Loops longer than [`SMALL_CAP_LOOP`] take that cone, since the triangulation costs `O(n³)`.
+//! Loops longer than [`SMALL_CAP_LOOP`] take that cone, since the triangulation costs `O(n³)`,
+//! and so do all loops once the mesh's triangulations have used [`CAP_WORK_FIXED`] and its
+//! per-triangle share.
 //! A sheet's cap is about the sheet itself, reversed, so its back may show from its back side.
 //! A component whose capped volume is nil (a flat card, a lone triangle, a folded strip that
 //! is its own least-area cap) is taken as such a sheet outright: either side may show, and it keeps no caps, which would cost every view a
@@ -249,13 +251,20 @@ impl Solids {
         let mut sign = Vec::with_capacity(components);
         let mut loops = Vec::new();
         let mut caps: Vec<Cap> = Vec::new();
+        let mut work = CAP_WORK_FIXED + CAP_WORK_PER_TRIANGLE * n as u64;
         let mut next = 0;
         for (c, volume) in volume.iter_mut().enumerate() {
             let (first_loop, first_cap) = (loops.len(), caps.len());
             loop_start.push(first_loop as u32);
             let end =
                 next + boundary[next..].partition_point(|e| component[e.1 as usize] as usize == c);
-            trace_loops(&boundary[next..end], &position, &mut loops, &mut caps);
+            trace_loops(
+                &boundary[next..end],
+                &position,
+                &mut work,
+                &mut loops,
+                &mut caps,
+            );
             next = end;
             let o = reference(c);
             let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
@@ -727,12 +736,13 @@ impl Openings {
 }
 
 /// Splits one component's boundary edges (`(a << 32 | b, triangle, multiplicity)`, sorted)
-/// into closed loops and caps each ([`cap_loop`]), into `loops` and `caps`. The boundary of a
+/// into closed loops and caps each ([`cap_loop`], drawing on `work`), into `loops` and `caps`. The boundary of a
 /// triangle set is a cycle (every vertex has as many boundary edges in as out), so following
 /// unused edges from a loop's first vertex always leads back to it.
 fn trace_loops(
     boundary: &[(u64, u32, i32)],
     position: &impl Fn(u32) -> [f64; 3],
+    work: &mut u64,
     loops: &mut Vec<Loop>,
     caps: &mut Vec<Cap>,
 ) {
@@ -774,7 +784,7 @@ fn trace_loops(
             e = k;
         }
         let first_cap = caps.len();
-        cap_loop(&points, caps);
+        cap_loop(&points, work, caps);
         loops.push(Loop {
             caps: first_cap..caps.len(),
             bounds: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
@@ -788,7 +798,7 @@ fn trace_loops(
 const FLAT_VOLUME: f64 = 1e-6;
 
 /// Caps the loop through `points` (see the module documentation), into `caps`.
-fn cap_loop(points: &[[f64; 3]], caps: &mut Vec<Cap>) {
+fn cap_loop(points: &[[f64; 3]], work: &mut u64, caps: &mut Vec<Cap>) {
     // Each triangle `[i, k, j]` runs with the loop; its cap triangle runs against it, so
     // that the cap's boundary cancels the component's. Loop points are mesh positions, exact
     // in `f32`; a cone's apex is rounded.
@@ -797,7 +807,10 @@ fn cap_loop(points: &[[f64; 3]], caps: &mut Vec<Cap>) {
             corners: corners.map(|p| p.map(|x| x as f32)),
         })
     };
-    if points.len() <= SMALL_CAP_LOOP {
+    let n = points.len() as u64;
+    let cost = n * n * n / 6;
+    if points.len() <= SMALL_CAP_LOOP && cost <= *work {
+        *work -= cost;
         for [i, k, j] in least_area_triangulation(points) {
             push([points[i], points[j], points[k]]);
         }
@@ -817,6 +830,15 @@ fn cap_loop(points: &[[f64; 3]], caps: &mut Vec<Cap>) {
 /// time, `O(n²)` memory: 2.8 million area terms and 0.5 MiB at the bound), longer ones by
 /// the cone from their centroid.
 const SMALL_CAP_LOOP: usize = 256;
+
+/// The least-area triangulations of a mesh together evaluate at most `CAP_WORK_FIXED +
+/// CAP_WORK_PER_TRIANGLE · n` area terms (`n³ / 6` a loop of `n` vertices; about 3 ns each),
+/// in loop order; loops past it take the cone. A mesh of many long open loops (a hundred
+/// thousand open tubes of 256 sides would take hours) so costs at most about 0.2 s and 0.8 µs
+/// a triangle; the zoo's loops (at most 90 vertices) use a few thousandths of it.
+const CAP_WORK_FIXED: u64 = 1 << 26;
+/// See [`CAP_WORK_FIXED`].
+const CAP_WORK_PER_TRIANGLE: u64 = 256;
 
 /// The triangulation of the closed polygon `points` (in 3D, not necessarily planar) with the
 /// least total area, as triangles `[i, k, j]`, `i < k < j`, running with the polygon. Dynamic
@@ -1120,6 +1142,22 @@ mod tests {
             })
             .sum();
         assert!((area - 0.09).abs() < 1e-9, "{area}");
+    }
+
+    #[test]
+    fn cap_work_runs_out_into_cones() {
+        let ring: Vec<[f64; 3]> = (0..12)
+            .map(|i| {
+                let a = f64::from(i) * std::f64::consts::TAU / 12.0;
+                [a.cos(), a.sin(), 0.1 * (3.0 * a).sin()]
+            })
+            .collect();
+        let (mut caps, mut work) = (Vec::new(), 12 * 12 * 12 / 6);
+        cap_loop(&ring, &mut work, &mut caps);
+        assert_eq!((caps.len(), work), (10, 0), "least area: n − 2 triangles");
+        caps.clear();
+        cap_loop(&ring, &mut work, &mut caps);
+        assert_eq!(caps.len(), 12, "no work left: the cone");
     }
 
     proptest::proptest! {
