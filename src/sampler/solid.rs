@@ -22,10 +22,11 @@
 //! Loops longer than [`SMALL_CAP_LOOP`] take that cone, since the triangulation costs `O(n³)`,
 //! and so do all loops once the mesh's triangulations have used [`CAP_WORK_FIXED`] and its
 //! per-triangle share.
+//!
 //! A sheet's cap is about the sheet itself, reversed, so its back may show from its back side.
 //! A component whose capped volume is nil (a flat card, a lone triangle, a folded strip that
-//! is its own least-area cap) is taken as such a sheet outright: either side may show, and it keeps no caps, which would cost every view a
-//! pass over them for nothing.
+//! is its own least-area cap) is taken as such a sheet outright: either side may show, and it
+//! keeps no caps, which would cost every view a pass over them for nothing.
 //!
 //! The orientation (which side is out) is the sign of the capped chain's volume, so meshes
 //! wound inwards, and mirrored parts, are handled per component. The one assumption (winding
@@ -366,6 +367,7 @@ impl Solids {
         let planes = view_planes(camera);
         let (eye, forward) = (camera.eye(), camera.forward());
         let depth = |p: [f64; 3]| dot(sub(p, eye), forward);
+        let tile_of = |i: u32| (i as usize % n / OPENING_TILE, i as usize / n / OPENING_TILE);
         openings.clear();
         let view = Parallax {
             focal: camera.focal_pixels(),
@@ -421,7 +423,7 @@ impl Solids {
                 // The loop's tiles, widened by `grow` tiles each way: its rectangle.
                 let (mut x0, mut y0, mut x1, mut y1) = (tiles, tiles, 0, 0);
                 for &i in pixels.iter() {
-                    let (x, y) = (i as usize % n / OPENING_TILE, i as usize / n / OPENING_TILE);
+                    let (x, y) = tile_of(i);
                     (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x), y1.max(y));
                 }
                 let widen_tiles = |lo: usize, hi: usize| {
@@ -443,7 +445,7 @@ impl Solids {
                     distance.resize(first + width * height, FAR_TILES);
                     let grid = &mut distance[first..];
                     for &i in pixels.iter() {
-                        let (x, y) = (i as usize % n / OPENING_TILE, i as usize / n / OPENING_TILE);
+                        let (x, y) = tile_of(i);
                         grid[(y - y0) * width + (x - x0)] = 0;
                     }
                     chessboard_distances(grid, width);
@@ -736,9 +738,9 @@ impl Openings {
 }
 
 /// Splits one component's boundary edges (`(a << 32 | b, triangle, multiplicity)`, sorted)
-/// into closed loops and caps each ([`cap_loop`], drawing on `work`), into `loops` and `caps`. The boundary of a
-/// triangle set is a cycle (every vertex has as many boundary edges in as out), so following
-/// unused edges from a loop's first vertex always leads back to it.
+/// into closed loops and caps each ([`cap_loop`], drawing on `work`), into `loops` and
+/// `caps`. The boundary of a triangle set is a cycle (every vertex has as many boundary edges
+/// in as out), so following unused edges from a loop's first vertex always leads back to it.
 fn trace_loops(
     boundary: &[(u64, u32, i32)],
     position: &impl Fn(u32) -> [f64; 3],
