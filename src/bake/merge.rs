@@ -251,7 +251,7 @@ pub fn merge(parts: &[LoadedPart]) -> Result<Merged, MergeError> {
     let distances = recipe
         .shell_distances(&params)
         .map_err(|e| MergeError::part(&parts[0].path, format!("{e}; bake this shard again")))?;
-    let (patches, visibility, shells) = match recipe.file_patch_order(&visibility) {
+    let (patches, visibility, shells) = match recipe.file_patch_order(&first.patches, &visibility) {
         Some(order) => (
             renumbered_patches(&first.patches, &order),
             visibility.with_patch_order(&order),

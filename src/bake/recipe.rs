@@ -447,7 +447,7 @@ impl Recipe {
         visibility: VisibilityMatrix,
         shells: Vec<VisibilityMatrix>,
     ) -> Result<(Tiling, VisibilityMatrix, Vec<VisibilityMatrix>, bool), BakeError> {
-        match self.file_patch_order(&visibility) {
+        match self.file_patch_order(&tiling.patches, &visibility) {
             Some(order) => {
                 let tiling = tiling.renumbered(&order).map_err(BakeError::TempFile)?;
                 let shells = shells.iter().map(|m| m.with_patch_order(&order)).collect();
@@ -457,13 +457,23 @@ impl Recipe {
         }
     }
 
-    /// The file's patch numbering of the stored rows `visibility` (file id `i` is tiling
-    /// patch `order[i]`), or `None` to keep the tiling's. [`Recipe::number`] and the merge of
-    /// a sharded bake (`merge.rs`) both number through here.
-    pub(crate) fn file_patch_order(&self, visibility: &VisibilityMatrix) -> Option<Vec<PatchId>> {
+    /// The file's patch numbering of the tiling's `patches` and their stored rows
+    /// `visibility` (file id `i` is tiling patch `order[i]`), or `None` to keep the tiling's.
+    /// Patches the file cannot tell apart stay in tiling order among themselves
+    /// ([`format::keep_equal_records_in_order`]). [`Recipe::number`] and the merge of a
+    /// sharded bake (`merge.rs`) both number through here.
+    pub(crate) fn file_patch_order(
+        &self,
+        patches: &[Patch],
+        visibility: &VisibilityMatrix,
+    ) -> Option<Vec<PatchId>> {
         match self.settings.patch_order {
             PatchOrder::Spatial => None,
-            PatchOrder::Covisibility => format::covisibility_order(visibility),
+            PatchOrder::Covisibility => {
+                let mut order = format::covisibility_order(visibility)?;
+                format::keep_equal_records_in_order(patches, &mut order);
+                Some(order)
+            }
         }
     }
 
@@ -783,7 +793,7 @@ mod tests {
         );
         assert_eq!(one.bytes, two.bytes);
         let order = recipe(PatchOrder::Covisibility)
-            .file_patch_order(&spatial.visibility)
+            .file_patch_order(&spatial.tiling.patches, &spatial.visibility)
             .expect("renumbered by co-visibility");
         assert_eq!(one.visibility, spatial.visibility.with_patch_order(&order));
         for ((a, b), s) in one.shells.iter().zip(&two.shells).zip(&spatial.shells) {

@@ -370,6 +370,13 @@ pub fn run(args: EvalArgs) -> Result<()> {
         sampling.views,
         pvis.total_bytes()
     )?;
+    if evaluator.shared_records() > 0 {
+        outln!(
+            "patches sharing their stored bounds with another: {} (matched in the order the \
+             bake keeps them in; for a file numbered otherwise, evaluate its --mesh-out mesh)",
+            evaluator.shared_records()
+        )?;
+    }
     let seeded = match views {
         Views::Random { seed, .. } => format!(", seed {seed}"),
         _ => String::new(),

@@ -14,7 +14,7 @@
 use super::metrics;
 use super::shade::{RgbImage, Shader, face_normal};
 use crate::bake::BakeError;
-use crate::format::stored_record;
+use crate::format::{RecordKey, record_key, stored_record};
 use crate::memory::MemoryBudget;
 use crate::ooc::Mesh;
 use crate::progress::Progress;
@@ -204,6 +204,8 @@ pub struct Evaluator<'m> {
     starts: Vec<u32>,
     /// The heap budget of the evaluation.
     budget: u64,
+    /// File patches matched by a record that another patch shares (see `match_tiling`).
+    shared_records: u32,
 }
 
 impl<'m> Evaluator<'m> {
@@ -250,16 +252,14 @@ impl<'m> Evaluator<'m> {
                 memory_budget: options.memory.split().tiling,
             },
         )?;
-        let order = match_tiling(&tiling, pvis)?;
+        let (order, shared_records) = match_tiling(&tiling, pvis)?;
         let tiling = tiling
             .renumbered(&order)
             .map_err(|e| EvalError::TempFile(e.to_string()))?;
-        Ok(Evaluator::with_order(
-            mesh,
-            Some(tiling.order),
-            starts,
-            budget,
-        ))
+        Ok(Evaluator {
+            shared_records,
+            ..Evaluator::with_order(mesh, Some(tiling.order), starts, budget)
+        })
     }
 
     /// An evaluator for files baked from `mesh` with `tiling`, in its numbering (unchecked:
@@ -284,7 +284,17 @@ impl<'m> Evaluator<'m> {
             order,
             starts,
             budget,
+            shared_records: 0,
         }
+    }
+
+    /// How many of the file's patches were found in a mesh tiled again by a record that
+    /// another patch shares (small patches whose quantised bounds coincide). They are matched
+    /// in tiling order, the order `patchvis bake` keeps them in, so the figures are exact for
+    /// its files; a file numbered otherwise is measured exactly only against its
+    /// `--mesh-out` mesh. 0 for a mesh in the file's order.
+    pub fn shared_records(&self) -> u32 {
+        self.shared_records
     }
 
     /// The mesh.
@@ -628,20 +638,6 @@ fn as_stored(pvis: &Pvis<'_>, patch: &Patch) -> PatchInfo {
     stored_record(pvis.quantisation(), patch)
 }
 
-/// What identifies a patch record, bit for bit: count, sphere and cone.
-type RecordKey = (u32, [u32; 3], u32, [u32; 3], u32);
-
-/// The key of record `r`.
-fn record_key(r: &PatchInfo) -> RecordKey {
-    (
-        r.triangle_count,
-        r.center.map(f32::to_bits),
-        r.radius.to_bits(),
-        r.cone_axis.map(f32::to_bits),
-        r.cone_cos.to_bits(),
-    )
-}
-
 /// Per-worker buffers.
 struct Scratch {
     rasterizer: Rasterizer,
@@ -686,9 +682,12 @@ impl Scratch {
 /// The file's numbering of the patches of `tiling`: `order[i]` is the tiling patch that the
 /// file calls `i`. Patches are matched by their records (triangle count, bounding sphere and
 /// normal cone, bit for bit), so files that renumber their patches (`bake --patch-order
-/// covisibility`, the default) match as well as files in the tiling's own numbering; equal
-/// records are matched in id order. Fails on the first file patch nothing matches.
-fn match_tiling(tiling: &Tiling, pvis: &Pvis<'_>) -> Result<Vec<PatchId>, EvalError> {
+/// covisibility`, the default) match as well as files in the tiling's own numbering. Patches
+/// of equal records are matched in id order, the order the bake keeps them in
+/// (`format::keep_equal_records_in_order`), so the match is exact for its files; a file
+/// numbered otherwise is measured exactly only against its `--mesh-out` mesh. Fails on the
+/// first file patch nothing matches. Also returns how many patches share their record.
+fn match_tiling(tiling: &Tiling, pvis: &Pvis<'_>) -> Result<(Vec<PatchId>, u32), EvalError> {
     let mut unmatched: HashMap<RecordKey, VecDeque<PatchId>> = HashMap::new();
     for (id, m) in tiling.patches.iter().enumerate() {
         unmatched
@@ -696,6 +695,11 @@ fn match_tiling(tiling: &Tiling, pvis: &Pvis<'_>) -> Result<Vec<PatchId>, EvalEr
             .or_default()
             .push_back(id as PatchId);
     }
+    let shared = unmatched
+        .values()
+        .filter(|ids| ids.len() > 1)
+        .map(|ids| ids.len() as u32)
+        .sum();
     let count = pvis.patch_count();
     let mut order = Vec::with_capacity(count as usize);
     for p in 0..count {
@@ -727,7 +731,7 @@ fn match_tiling(tiling: &Tiling, pvis: &Pvis<'_>) -> Result<Vec<PatchId>, EvalEr
             mesh: tiling.patches.len() as u32,
         });
     }
-    Ok(order)
+    Ok((order, shared))
 }
 
 /// The record that triangles `file.first_triangle..+triangle_count` of `mesh` give, as the

@@ -21,8 +21,12 @@ mod visb;
 
 pub use crate::output::write_atomic;
 pub use file::{PvisFile, PvisFileError};
-pub use patch_order::{MAX_TOUR_WORK, centre_order, covisibility_order};
-pub use ptch::{choose_with as choose_quantisation_with, quantise, stored_record};
+pub use patch_order::{
+    MAX_TOUR_WORK, centre_order, covisibility_order, keep_equal_records_in_order,
+};
+pub use ptch::{
+    RecordKey, choose_with as choose_quantisation_with, quantise, record_key, stored_record,
+};
 pub use tree::encode_tree;
 pub use visb::{encode_hierarchical, probabilities};
 

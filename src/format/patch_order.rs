@@ -19,8 +19,9 @@
 
 use rayon::prelude::*;
 
+use super::ptch::RecordKey;
 use crate::runtime::Patches;
-use crate::tiling::PatchId;
+use crate::tiling::{Patch, PatchId};
 use crate::visibility::VisibilityMatrix;
 
 /// Largest `p² · ceil(v / 64)` for which the tour is computed: 2^33 word operations, a few
@@ -51,6 +52,38 @@ pub fn centre_order(centres: &[[f32; 3]]) -> Vec<PatchId> {
         .collect();
     keyed.sort_unstable();
     keyed.into_iter().map(|(_, p)| p).collect()
+}
+
+/// Puts back in tiling order, within the places `order` gave them, the patches that the
+/// file cannot tell apart: those whose records a reader decodes bit for bit equal
+/// (`patches` in the tiling's numbering, `order[i]` the tiling patch that gets file id `i`).
+///
+/// Why: a file stores no triangle ids, only each patch's count and bounds, so `patchvis
+/// eval` finds a file's patches in the original mesh by tiling it again and matching
+/// records. Small patches can share a quantised record (the airplane: 414 of its 1,000
+/// patches share one with another), and the match takes each group in tiling order: this
+/// makes that the file's order too, so evaluating against the original mesh is exact. The
+/// groups only trade places among themselves, so the co-visibility tour keeps its shape.
+pub fn keep_equal_records_in_order(patches: &[Patch], order: &mut [PatchId]) {
+    let keys = super::ptch::writer_keys(patches);
+    // (key, place): each group of equal keys, its places ascending.
+    let mut places: Vec<(RecordKey, usize)> = order
+        .iter()
+        .enumerate()
+        .map(|(i, &p)| (keys[p as usize], i))
+        .collect();
+    places.sort_unstable();
+    let mut ids = Vec::new();
+    for group in places.chunk_by(|a, b| a.0 == b.0) {
+        if group.len() > 1 {
+            ids.clear();
+            ids.extend(group.iter().map(|&(_, i)| order[i]));
+            ids.sort_unstable();
+            for (&(_, i), &id) in group.iter().zip(&ids) {
+                order[i] = id;
+            }
+        }
+    }
 }
 
 /// A co-visibility numbering of the patches of `matrix`: `order[i]` is the patch that gets
@@ -190,6 +223,55 @@ mod tests {
                 let last = renumbered.row(v).last().copied().unwrap_or(0);
                 if patches % 64 != 0 {
                     prop_assert_eq!(last >> (patches % 64), 0);
+                }
+            }
+        }
+    }
+
+    fn patch(first: u32, center: [f32; 3]) -> Patch {
+        Patch {
+            first,
+            count: 1,
+            area: 1.0,
+            center,
+            radius: 1.0,
+            cone_axis: [0.0, 0.0, 1.0],
+            cone_cos: 0.5,
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// Patches of equal records end up in tiling order within the places the order gave
+        /// their group; every other patch keeps its place.
+        #[test]
+        fn equal_records_keep_their_tiling_order(
+            // Few distinct centres, so that many patches share a record.
+            centres in proptest::collection::vec(0u8..5, 1..60),
+            seed in any::<u64>(),
+        ) {
+            let patches: Vec<Patch> = centres
+                .iter()
+                .enumerate()
+                .map(|(i, &c)| patch(i as u32, [f32::from(c) * 10.0, 0.0, 0.0]))
+                .collect();
+            let mut order: Vec<PatchId> = (0..patches.len() as u32).collect();
+            let mut rng = crate::splitmix::SplitMix64::new(seed);
+            for i in (1..order.len()).rev() {
+                order.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
+            }
+            let before = order.clone();
+            keep_equal_records_in_order(&patches, &mut order);
+            let key = |p: PatchId| centres[p as usize];
+            for (i, (&a, &b)) in before.iter().zip(&order).enumerate() {
+                prop_assert_eq!(key(a), key(b), "place {} changed groups", i);
+            }
+            for i in 0..order.len() {
+                for j in i + 1..order.len() {
+                    if key(order[i]) == key(order[j]) {
+                        prop_assert!(order[i] < order[j], "places {} and {}", i, j);
+                    }
                 }
             }
         }

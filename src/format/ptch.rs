@@ -86,16 +86,7 @@ pub(super) fn compact(triangle_count: u64, patches: &[Patch]) -> Option<Compact>
         );
         next += u64::from(p.count);
     }
-    let (q, records) = quantise_all(
-        grid(patches, STEP_PER_MEDIAN_RADIUS, AXIS_BITS, COS_BITS),
-        patches,
-    );
-    let top = |bits: u32| ((1u64 << bits) - 1) as u32;
-    let representable = (0..3).all(|i| q.center(i, top(q.center_bits)).is_finite())
-        && q.radius(top(q.radius_bits)).is_finite();
-    if !representable {
-        return None;
-    }
+    let (q, records) = writer_records(patches)?;
     let mut out = Vec::new();
     header(&mut out, triangle_count, patches.len());
     for v in q.origin {
@@ -140,6 +131,53 @@ pub(super) fn compact(triangle_count: u64, patches: &[Patch]) -> Option<Compact>
         bytes: out,
         facing_axes,
     })
+}
+
+/// The compact table's frame and every patch's record, as [`compact`] writes them, or `None`
+/// when the patches lie too far out for the grid.
+fn writer_records(patches: &[Patch]) -> Option<(Quantisation, Vec<Record>)> {
+    let (q, records) = quantise_all(
+        grid(patches, STEP_PER_MEDIAN_RADIUS, AXIS_BITS, COS_BITS),
+        patches,
+    );
+    let top = |bits: u32| ((1u64 << bits) - 1) as u32;
+    let representable = (0..3).all(|i| q.center(i, top(q.center_bits)).is_finite())
+        && q.radius(top(q.radius_bits)).is_finite();
+    representable.then_some((q, records))
+}
+
+/// What identifies a patch record, bit for bit, once read: its triangle count, bounding
+/// sphere and normal cone (not where its range starts).
+pub type RecordKey = (u32, [u32; 3], u32, [u32; 3], u32);
+
+/// The key of a record as a reader decodes it.
+pub fn record_key(r: &PatchInfo) -> RecordKey {
+    (
+        r.triangle_count,
+        r.center.map(f32::to_bits),
+        r.radius.to_bits(),
+        r.cone_axis.map(f32::to_bits),
+        r.cone_cos.to_bits(),
+    )
+}
+
+/// Per patch, the key of the record a reader decodes from the compact table the writer
+/// would write for `patches` (in any numbering: the frame depends on the set alone), or of
+/// the patch's own values where that table cannot hold them (the writer then writes the
+/// full one). Patches of equal values have equal compact keys, so a numbering that keeps
+/// each group of equal compact keys in order keeps those of the full table in order too.
+pub(super) fn writer_keys(patches: &[Patch]) -> Vec<RecordKey> {
+    match writer_records(patches) {
+        Some((q, records)) => records
+            .iter()
+            .zip(patches)
+            .map(|(r, p)| record_key(&q.decode(r, p.first)))
+            .collect(),
+        None => patches
+            .iter()
+            .map(|p| record_key(&stored_record(None, p)))
+            .collect(),
+    }
 }
 
 /// Least-significant-bit-first packing.
