@@ -99,8 +99,8 @@ pub struct BakeArgs {
     /// sampled views, and, without --far-views, rim that only cameras farther than the
     /// sampling distance see.
     /// Measured residual (300 random views at the sampling distance, at --resolution and
-    /// twice it): ≥ 99 % of views pixel-identical on every model of the zoo at the default
-    /// level (at --level 5: 95.7 % on the airplane); BENCHMARKS.md, "Quality on the model zoo". 1.5–3× the default's bake time, CPU backend only, and
+    /// twice it): ≥ 99 % of views pixel-identical on every model of the zoo; BENCHMARKS.md,
+    /// "Quality on the model zoo". 1.5–3× the default's bake time, CPU backend only, and
     /// about 60 bytes a triangle of heap while sampling.
     #[arg(long)]
     pub conservative: bool,
