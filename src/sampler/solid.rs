@@ -35,7 +35,8 @@
 //!
 //! Cost: a sort of the 3·n edges (`memory::SOLIDS_BYTES_PER_TRIANGLE` bytes per triangle at
 //! the peak) and a union-find over the triangles; what stays is 5 bytes per triangle and the
-//! caps of the components that are not sheets (36 bytes a cap triangle, 40 a loop).
+//! caps of the components that are not sheets (36 bytes a cap triangle, 16 a loop, 24 an open
+//! component).
 
 use crate::ooc::Mesh;
 use crate::sampler::camera::Camera;
@@ -49,13 +50,19 @@ pub(crate) struct Solids {
     /// Per input triangle: +1 when its front side faces out of its (capped) component, −1 when
     /// its back side does, 0 on a sheet.
     orientation: Vec<i8>,
-    /// Per input triangle: its component.
+    /// Per input triangle: its component. The open components (those with boundary loops)
+    /// come first, so that a view's openings walk only them; then the closed ones and the
+    /// sheets. Each group is in order of the components' first triangles.
     component: Vec<u32>,
     /// Per component: +1 when its triangles' front sides face out, −1 when their backs do, 0
     /// for a sheet, either of whose sides may show.
     component_sign: Vec<i8>,
-    /// Per component: the first of its boundary loops in `loops` (one more entry at the end).
+    /// Per open component: the first of its boundary loops in `loops` (one more entry at the
+    /// end).
     loop_start: Vec<u32>,
+    /// Per open component: its bounding box `[min, max]`, everything that may show through
+    /// its openings.
+    bounds: Vec<[[f32; 3]; 2]>,
     /// Boundary loops and their caps.
     loops: Vec<Loop>,
     /// Cap triangles of every loop.
@@ -67,8 +74,6 @@ pub(crate) struct Solids {
 pub(crate) struct Loop {
     /// Its cap triangles in `Solids::caps`.
     caps: std::ops::Range<usize>,
-    /// The bounding box `[min, max]` of its component: everything that may show through it.
-    bounds: [[f32; 3]; 2],
 }
 
 /// One triangle of a component's cap.
@@ -292,32 +297,55 @@ impl Solids {
         drop(first_triangle);
         loops.shrink_to_fit();
         caps.shrink_to_fit();
-        // Each open component's bounds, on every loop of it.
+        // Open components first: their loops are already in that order.
+        let open_count = loop_start.windows(2).filter(|w| w[1] > w[0]).count();
+        let mut rank = Vec::with_capacity(components);
+        let (mut next_open, mut next_other) = (0u32, open_count as u32);
+        for w in loop_start.windows(2) {
+            let next = if w[1] > w[0] {
+                &mut next_open
+            } else {
+                &mut next_other
+            };
+            rank.push(*next);
+            *next += 1;
+        }
+        let mut component_sign = vec![0i8; components];
+        for (c, &r) in rank.iter().enumerate() {
+            component_sign[r as usize] = sign[c];
+        }
+        drop(sign);
+        for c in &mut component {
+            *c = rank[*c as usize];
+        }
+        drop(rank);
+        let mut open_start: Vec<u32> = loop_start
+            .windows(2)
+            .filter(|w| w[1] > w[0])
+            .map(|w| w[0])
+            .collect();
+        open_start.push(loops.len() as u32);
+        drop(loop_start);
+        let mut bounds = vec![[[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]]; open_count];
         for t in 0..n as u32 {
-            let c = component[t as usize] as usize;
-            if let Some(l) = loops[loop_start[c] as usize..loop_start[c + 1] as usize].first_mut() {
+            if let Some([lo, hi]) = bounds.get_mut(component[t as usize] as usize) {
                 for v in mesh.triangle(t) {
                     let p = mesh.position(v);
-                    let [lo, hi] = &mut l.bounds;
                     *lo = std::array::from_fn(|k| lo[k].min(p[k]));
                     *hi = std::array::from_fn(|k| hi[k].max(p[k]));
                 }
             }
         }
-        for c in 0..components {
-            let range = loop_start[c] as usize..loop_start[c + 1] as usize;
-            if let Some(first) = loops[range.clone()].first().map(|l| l.bounds) {
-                for l in &mut loops[range] {
-                    l.bounds = first;
-                }
-            }
-        }
-        let orientation = component.iter().map(|&c| sign[c as usize]).collect();
+        let orientation = component
+            .iter()
+            .map(|&c| component_sign[c as usize])
+            .collect();
         Solids {
             orientation,
             component,
-            component_sign: sign,
-            loop_start,
+            component_sign,
+            loop_start: open_start,
+            bounds,
             loops,
             caps,
         }
@@ -326,13 +354,13 @@ impl Solids {
     /// Number of components.
     #[cfg(test)]
     pub(crate) fn component_count(&self) -> usize {
-        self.loop_start.len() - 1
+        self.component_sign.len()
     }
 
     /// Number of closed components (no boundary loop).
     #[cfg(test)]
     pub(crate) fn closed_count(&self) -> usize {
-        self.loop_start.windows(2).filter(|w| w[0] == w[1]).count()
+        self.component_sign.len() - self.bounds.len()
     }
 
     /// Where each component may be looked into from a camera of `cell`: the pixels of
@@ -381,7 +409,8 @@ impl Solids {
             distance,
             pixels,
         } = openings;
-        for (w, &sign) in self.loop_start.windows(2).zip(&self.component_sign) {
+        for (c, w) in self.loop_start.windows(2).enumerate() {
+            let (sign, bounds) = (self.component_sign[c], self.bounds[c]);
             start.push(loops.len() as u32);
             for l in &self.loops[w[0] as usize..w[1] as usize] {
                 pixels.clear();
@@ -415,7 +444,7 @@ impl Solids {
                 if pixels.is_empty() {
                     continue;
                 }
-                let far = box_corners(l.bounds)
+                let far = box_corners(bounds)
                     .map(|p| depth(widen(p)))
                     .into_iter()
                     .fold(f64::NEG_INFINITY, f64::max);
@@ -672,7 +701,7 @@ fn chessboard_distances(grid: &mut [u8], width: usize) {
 /// that may show, as tile masks.
 #[derive(Default)]
 pub(crate) struct Openings {
-    /// Per component `c`: its loops are `loops[start[c]..start[c + 1]]`.
+    /// Per open component `c`: its loops are `loops[start[c]..start[c + 1]]`.
     start: Vec<u32>,
     loops: Vec<LoopOpening>,
     /// Every loop's tile distances.
@@ -703,9 +732,14 @@ impl Openings {
         self.distance.clear();
     }
 
+    /// The openings of `component`'s loops: none for a closed component or a sheet, which
+    /// are numbered after the open ones.
     fn of(&self, component: u32) -> &[LoopOpening] {
         let c = component as usize;
-        &self.loops[self.start[c] as usize..self.start[c + 1] as usize]
+        match (self.start.get(c), self.start.get(c + 1)) {
+            (Some(&first), Some(&end)) => &self.loops[first as usize..end as usize],
+            _ => &[],
+        }
     }
 
     /// Whether a back face of `component` at pixel `(x, y)` may show through an opening:
@@ -789,7 +823,6 @@ fn trace_loops(
         cap_loop(&points, work, caps);
         loops.push(Loop {
             caps: first_cap..caps.len(),
-            bounds: [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]],
         });
     }
 }
