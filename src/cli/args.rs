@@ -100,7 +100,7 @@ pub struct BakeArgs {
     /// sampling distance see.
     /// Measured residual (300 random views at the sampling distance, at --resolution and
     /// twice it): ≥ 99 % of views pixel-identical on every model of the zoo; BENCHMARKS.md,
-    /// "Quality on the model zoo". 1.3–2.9× the default's bake time on the zoo, CPU backend
+    /// "Quality on the model zoo". 1.2–3.1× the default's bake time on the zoo, CPU backend
     /// only, and about 60 bytes a triangle of heap while sampling.
     #[arg(long)]
     pub conservative: bool,

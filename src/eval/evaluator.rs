@@ -28,17 +28,26 @@ use std::ops::Range;
 use std::time::Instant;
 
 /// What the full render shows at a pixel, given the reconstruction's fragment there: the
-/// full render's triangle `a`, unless the reconstruction's `b` lies at exactly the same depth
-/// (a depth tie, won by `a` only through drawing order, as at the rim where a front face and
-/// the back face folded under it meet). Either is then a true picture of the mesh there,
-/// so the pixel counts as showing `b`: a tie is not a visible part culled.
+/// full render's triangle `a`, unless the reconstruction's `b` lies at the same depth within
+/// [`DEPTH_TIE_ULPS`] (a depth tie, won by `a` only through drawing order or rounding: at the
+/// rim where a front face and the back face folded under it meet, or where two parts touch
+/// along a shared plane and their interpolated depths differ in the last bits). Either is
+/// then a true picture of the mesh there, so the pixel counts as showing `b`: a tie is not a
+/// visible part culled.
 fn tie_resolved(a: u32, b: u32, a_depth: f32, b_depth: f32) -> u32 {
-    if a != b && a != NO_PATCH && b != NO_PATCH && a_depth == b_depth {
+    let tied = a_depth.to_bits().abs_diff(b_depth.to_bits()) <= DEPTH_TIE_ULPS;
+    if a != b && a != NO_PATCH && b != NO_PATCH && tied {
         b
     } else {
         a
     }
 }
+
+/// Depths (positive `f32`, so their bit patterns order like them) this many units in the
+/// last place apart or closer count as a tie. Two triangles in one plane interpolate the
+/// same pixel's depth 1–2 ulps apart; 4 ulps of a depth at the sampling distance is a few
+/// millionths of the model's size, far below any gap a model means.
+const DEPTH_TIE_ULPS: u32 = 4;
 
 /// Why a `.pvis` cannot be evaluated against a mesh.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -131,8 +140,9 @@ pub struct ViewMetrics {
     /// Pixels whose triangle differs between the full render and the reconstruction, not
     /// counting depth ties (`tied_pixels`).
     pub missed_pixels: u64,
-    /// Pixels where the reconstruction shows another triangle at exactly the full render's
-    /// depth: the full render's won the tie only by drawing order, so they count as equal.
+    /// Pixels where the reconstruction shows another triangle at the full render's depth
+    /// (within [`DEPTH_TIE_ULPS`]): the full render's won the tie only by drawing order or
+    /// rounding, so they count as equal.
     pub tied_pixels: u64,
     /// Patches the full render shows.
     pub visible_patches: u32,
@@ -816,5 +826,25 @@ pub fn sampling_params(pvis: &Pvis<'_>, resolution: u32, distance_scale: f32) ->
         // The camera distance is radius / sin(fov / 2): scaling the radius scales it. At scale
         // 1 this is the bake's own camera, bit for bit.
         radius: s.radius * distance_scale,
+    }
+}
+
+#[cfg(test)]
+mod tie_tests {
+    use super::*;
+
+    #[test]
+    fn depths_a_few_ulps_apart_tie_and_farther_ones_do_not() {
+        let d = 0.143_461_2f32;
+        let up = |k: u32| f32::from_bits(d.to_bits() + k);
+        // Exactly equal, and within the tolerance either way: the reconstruction's shows.
+        assert_eq!(tie_resolved(1, 2, d, d), 2);
+        assert_eq!(tie_resolved(1, 2, d, up(DEPTH_TIE_ULPS)), 2);
+        assert_eq!(tie_resolved(1, 2, up(DEPTH_TIE_ULPS), d), 2);
+        // One ulp past it: a different surface, the full render's counts.
+        assert_eq!(tie_resolved(1, 2, d, up(DEPTH_TIE_ULPS + 1)), 1);
+        // An empty pixel on either side is never a tie.
+        assert_eq!(tie_resolved(NO_PATCH, 2, d, d), NO_PATCH);
+        assert_eq!(tie_resolved(1, NO_PATCH, d, d), 1);
     }
 }

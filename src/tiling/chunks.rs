@@ -15,15 +15,15 @@
 
 use rayon::prelude::*;
 
-use super::aabb::Aabb;
 use super::adjacency::{edge_vertices, triangle_neighbours_in};
 use super::bounds;
-use super::greedy::Fusion;
+use super::greedy::{Fusion, Seed};
 use crate::ooc::Mesh;
 
 /// Peak heap of [`tile_chunk`] per triangle of the chunk, an upper bound with a wide margin:
-/// two chunks of 0.4M–0.5M triangles peak at 107–111 MiB, about 115 bytes per triangle
-/// (`tests/tiling_scale.rs`). The adjacency's sorted edge entries dominate (48 bytes), then
+/// two chunks of 0.4M–0.5M triangles peaked at 107–111 MiB, about 115 bytes per triangle
+/// (`tests/tiling_scale.rs`), before the fusion nodes took 24 bytes more for their normal
+/// sums. The adjacency's sorted edge entries dominate (48 bytes), then
 /// the neighbour lists and the fusion nodes. The margin covers meshes with long neighbour
 /// lists (non-manifold fans, duplicates).
 pub(crate) const CHUNK_BYTES_PER_TRIANGLE: u64 = 200;
@@ -31,8 +31,8 @@ pub(crate) const CHUNK_BYTES_PER_TRIANGLE: u64 = 200;
 /// A patch of one chunk, as the patch graph sees it.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ChunkPatch {
-    pub area: f64,
-    pub bbox: Aabb,
+    /// Area, box and normal sum, as the fusion of the patch graph starts from them.
+    pub shape: Seed,
     /// Smallest input triangle index of the patch (the tie-break of the final numbering).
     pub min_triangle: u32,
     pub count: u32,
@@ -59,15 +59,6 @@ pub(crate) fn tile_chunk(
     shared: impl Fn(u32) -> bool,
 ) -> ChunkTiling {
     let count = triangles.len() as u32;
-    let (area, bbox): (Vec<f64>, Vec<Aabb>) = triangles
-        .par_iter()
-        .map(|&t| {
-            let p = bounds::corners(mesh, t);
-            (bounds::triangle_area(p), Aabb::of_triangle(p))
-        })
-        .unzip();
-    // Summed in chunk order, so the quota does not depend on the thread count.
-    let chunk_area: f64 = area.iter().sum();
     let mut border = Vec::new();
     let neighbours = triangle_neighbours_in(
         mesh,
@@ -80,7 +71,12 @@ pub(crate) fn tile_chunk(
         },
     );
 
-    let mut fusion = Fusion::new(area, bbox, neighbours);
+    let seeds = triangles
+        .par_iter()
+        .map(|&t| Seed::of_triangle(bounds::corners(mesh, t)));
+    let mut fusion = Fusion::new(seeds, neighbours);
+    // Summed in chunk order, so the quota does not depend on the thread count.
+    let chunk_area: f64 = (0..count).map(|p| fusion.seed(p).area).sum();
     let seeds: Vec<u32> = (0..count).collect();
     fusion.fuse(&seeds, quota(chunk_area).clamp(1, count));
     drop(seeds);
@@ -96,8 +92,7 @@ pub(crate) fn tile_chunk(
         if *slot == UNSEEN {
             *slot = patches.len() as u32;
             patches.push(ChunkPatch {
-                area: fusion.area(root),
-                bbox: fusion.bbox(root),
+                shape: fusion.seed(root),
                 min_triangle: t,
                 count: 0,
             });

@@ -1,10 +1,18 @@
 //! Greedy patch fusion (Meruvia 2002, §3.1): the smallest patch fuses with the neighbour that
-//! keeps the union most compact.
+//! keeps the union most compact and flattest.
 //!
 //! Every triangle starts as a patch. Repeatedly the patch of smallest area (ties: smaller
-//! patch id) is fused with the neighbour whose union has the shortest bounding-box diagonal
-//! (ties: smaller neighbour id), until the target count remains or no patch has a neighbour
-//! left. A patch without neighbours is a whole connected component and is set aside.
+//! patch id) is fused with the neighbour whose union has the lowest cost (ties: smaller
+//! neighbour id), until the target count remains or no patch has a neighbour left. A patch
+//! without neighbours is a whole connected component and is set aside.
+//!
+//! The cost is the union's bounding-box diagonal times `1 + W · spread`, where the spread is
+//! `1 − |Σ a·n| / Σ a` over the union's triangles (areas `a`, unit normals `n`): 0 for a flat
+//! patch, 0.29 for two equal faces at a right angle. The seed paper fuses by the diagonal
+//! alone; then patches wrap around the edges of boxes, plates and fins, and a patch whose
+//! sides face several ways is seen from most directions. Keeping patches flat culls 9 points
+//! more on the zoo's exposed engine, 2–3 on the airplane and 1 on the bunny (BENCHMARKS.md,
+//! "Flat patches"); [`SPREAD_WEIGHT`] is `W`.
 //!
 //! Data structures, chosen so a run is O(n log n):
 //! - a min-priority queue of `(area, id, version)` with lazy invalidation ([`super::queue`]):
@@ -19,20 +27,72 @@
 
 use std::cmp::Ordering;
 
+use rayon::prelude::*;
+
 use super::aabb::Aabb;
 use super::queue::{FusionQueue, entry, id_and_version};
+
+/// `W` of the fusion cost (module documentation): how much a patch's normal spread lengthens
+/// its diagonal. The culling gain levels off from about 8 on the zoo's exposed engine.
+pub(crate) const SPREAD_WEIGHT: f64 = 8.0;
+
+/// The shape of a patch before fusion: what the cost reads.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Seed {
+    /// Surface area.
+    pub area: f64,
+    /// Bounding box.
+    pub bbox: Aabb,
+    /// Sum of the area-weighted normals (half the triangles' cross products).
+    pub normal: [f64; 3],
+}
+
+impl Seed {
+    /// The seed of one triangle with corners `p`.
+    pub fn of_triangle(p: [[f32; 3]; 3]) -> Seed {
+        Seed {
+            area: super::bounds::triangle_area(p),
+            bbox: Aabb::of_triangle(p),
+            normal: super::bounds::cross_normal(p).map(|c| 0.5 * c),
+        }
+    }
+}
+
+/// The cost of fusing `a` and `b` (module documentation), squared: the union's diagonal
+/// squared times `(1 + W · spread)²`.
+fn union_cost(a: &Node, b: &Node) -> f64 {
+    let diagonal_squared = a.bbox.union(&b.bbox).diagonal_squared();
+    let area = a.area + b.area;
+    let spread = if area > 0.0 {
+        (1.0 - length(add(a.normal, b.normal)) / area).max(0.0)
+    } else {
+        0.0
+    };
+    let stretch = 1.0 + SPREAD_WEIGHT * spread;
+    diagonal_squared * stretch * stretch
+}
+
+fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+fn length(v: [f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
 
 /// A list is compacted once its length exceeds twice its last compacted length plus this
 /// slack. The slack spares tiny lists from constant re-compaction; the doubling keeps the
 /// amortised cost O(1) per appended entry.
 const COMPACT_SLACK: usize = 16;
 
-/// What the greedy reads of one patch, kept together so a visit costs one cache line (as
-/// separate arrays they cost four).
+/// What the greedy reads of one patch, kept together so a visit costs two cache lines (as
+/// separate arrays they cost five).
 #[derive(Clone, Copy)]
 struct Node {
     bbox: Aabb,
     area: f64,
+    /// Sum of the triangles' area-weighted normals (half their cross products).
+    normal: [f64; 3],
     /// Union–find parent; a patch is alive when it is its own parent.
     parent: u32,
     version: u32,
@@ -48,17 +108,24 @@ pub(crate) struct Fusion {
 }
 
 impl Fusion {
-    /// One patch per triangle, with the triangles' areas, boxes and neighbour lists.
-    pub fn new(area: Vec<f64>, bbox: Vec<Aabb>, neighbours: Vec<Vec<u32>>) -> Fusion {
-        let n = area.len();
-        debug_assert!(bbox.len() == n && neighbours.len() == n);
-        let nodes = (0..n)
-            .map(|p| Node {
-                bbox: bbox[p],
-                area: area[p],
+    /// One patch per seed (a triangle, or a patch of a chunk), with the seeds' shapes and
+    /// neighbour lists. The seeds come as an iterator so that they are never held twice.
+    pub fn new(
+        seeds: impl IndexedParallelIterator<Item = Seed>,
+        neighbours: Vec<Vec<u32>>,
+    ) -> Fusion {
+        let n = neighbours.len();
+        debug_assert!(seeds.len() == n);
+        let nodes = seeds
+            .zip(neighbours.par_iter())
+            .enumerate()
+            .map(|(p, (seed, list))| Node {
+                bbox: seed.bbox,
+                area: seed.area,
+                normal: seed.normal,
                 parent: p as u32,
                 version: 0,
-                compacted_len: neighbours[p].len() as u32,
+                compacted_len: list.len() as u32,
             })
             .collect();
         Fusion {
@@ -85,9 +152,14 @@ impl Fusion {
         self.nodes[p as usize].bbox
     }
 
-    /// The area of alive patch `p`.
-    pub fn area(&self, p: u32) -> f64 {
-        self.nodes[p as usize].area
+    /// The shape of alive patch `p`.
+    pub fn seed(&self, p: u32) -> Seed {
+        let node = &self.nodes[p as usize];
+        Seed {
+            area: node.area,
+            bbox: node.bbox,
+            normal: node.normal,
+        }
     }
 
     /// The neighbours of alive patch `p`: alive ids, ascending, without duplicates.
@@ -139,12 +211,12 @@ impl Fusion {
         fusions
     }
 
-    /// The neighbour of `p` (list compacted) whose union with `p` has the smallest diagonal.
+    /// The neighbour of `p` (list compacted) whose union with `p` costs least.
     fn most_compact_neighbour(&self, p: u32) -> Option<u32> {
-        let bp = self.nodes[p as usize].bbox;
+        let np = &self.nodes[p as usize];
         let mut best: Option<(f64, u32)> = None;
         for &q in &self.neighbours[p as usize] {
-            let d = bp.union(&self.nodes[q as usize].bbox).diagonal_squared();
+            let d = union_cost(np, &self.nodes[q as usize]);
             let better = match best {
                 None => true,
                 Some((bd, bq)) => d.total_cmp(&bd).then(q.cmp(&bq)) == Ordering::Less,
@@ -173,6 +245,7 @@ impl Fusion {
         self.nodes[lu].parent = s;
         let survivor = &mut self.nodes[su];
         survivor.area += absorbed_node.area;
+        survivor.normal = add(survivor.normal, absorbed_node.normal);
         survivor.bbox = survivor.bbox.union(&absorbed_node.bbox);
         survivor.version += 1;
         let compacted_len = survivor.compacted_len as usize;

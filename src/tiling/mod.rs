@@ -1,8 +1,9 @@
 //! Tiling: grouping triangles into compact, edge-connected patches (Meruvia 2002, §3.1).
 //!
 //! Every triangle starts as a patch; the smallest patch by area repeatedly fuses with the
-//! edge-adjacent patch that keeps the union's bounding-box diagonal shortest, until the target
-//! count remains (`greedy.rs`). Connectivity comes from shared edges, built by sorting
+//! edge-adjacent patch that keeps the union's bounding-box diagonal shortest, lengthened by
+//! the spread of the union's normals so that patches stay flat, until the target count
+//! remains (`greedy.rs`). Connectivity comes from shared edges, built by sorting
 //! (`adjacency.rs`). Patches never span connected components unless there are more components
 //! than patches asked for; then whole components fuse along Morton-order proximity links
 //! (`components.rs`). Final ids follow a Z-order curve and triangles are reordered patch by
@@ -45,16 +46,16 @@ use rayon::prelude::*;
 use crate::ooc::Mesh;
 pub(crate) use aabb::Aabb;
 pub(crate) use bounds::{bounding_sphere, corners, cross_normal, first_with_area, patch_bounds};
-use greedy::Fusion;
+use greedy::{Fusion, Seed};
 pub(crate) use morton::morton_code;
 pub use quality::TilingQuality;
 pub use renumber::renumbered_patches;
 pub use triangle_map::TriangleMap;
 
-/// Peak heap of the in-core tiling per triangle, an upper bound with margin: measured 111 to
-/// 117 bytes with a counting allocator on 0.4M–1.6M-triangle meshes (`tests/tiling_scale.rs`
-/// asserts it): the sorted edge entries, the neighbour lists, the fusion state and the two
-/// output maps. [`TilingMode::Auto`] tiles in core when this times the triangle count fits.
+/// Peak heap of the in-core tiling per triangle, an upper bound with margin: measured 136 to
+/// 140 bytes with a counting allocator on 1.0M–1.6M-triangle meshes (`tests/tiling_scale.rs`
+/// asserts it): the sorted edge entries, the neighbour lists, the fusion state (96 bytes a
+/// patch with its normal sum) and the two output maps. [`TilingMode::Auto`] tiles in core when this times the triangle count fits.
 pub const IN_CORE_BYTES_PER_TRIANGLE: u64 = 160;
 
 /// Index of a patch, `0..patch_count`.
@@ -201,17 +202,13 @@ pub fn tile(mesh: &Mesh, target: u32) -> Result<Tiling, TilingError> {
     }
     let target = target.min(n);
 
-    let (area, bbox): (Vec<f64>, Vec<Aabb>) = (0..n)
-        .into_par_iter()
-        .map(|t| {
-            let p = bounds::corners(mesh, t);
-            (bounds::triangle_area(p), Aabb::of_triangle(p))
-        })
-        .unzip();
     let neighbours = adjacency::triangle_neighbours(mesh);
     let components = components::count_components(&neighbours);
 
-    let mut fusion = Fusion::new(area, bbox, neighbours);
+    let seeds = (0..n)
+        .into_par_iter()
+        .map(|t| Seed::of_triangle(bounds::corners(mesh, t)));
+    let mut fusion = Fusion::new(seeds, neighbours);
     let seeds: Vec<u32> = (0..n).collect();
     fusion.fuse(&seeds, target);
 

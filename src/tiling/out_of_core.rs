@@ -120,9 +120,7 @@ pub(crate) fn tile(mesh: &Mesh, target: u32, budget: u64) -> Result<Tiling, Tili
     drop(marks);
 
     let components = components::count_components(&graph);
-    let area = patches.iter().map(|p| p.area).collect();
-    let bbox = patches.iter().map(|p| p.bbox).collect();
-    let mut fusion = Fusion::new(area, bbox, graph);
+    let mut fusion = Fusion::new(patches.par_iter().map(|p| p.shape), graph);
     let seeds: Vec<u32> = (0..patches.len() as u32).collect();
     fusion.fuse(&seeds, target);
     let merged_components = merge_components(&mut fusion, target);

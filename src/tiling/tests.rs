@@ -380,6 +380,30 @@ fn flat_grid_gives_compact_patches() {
 }
 
 #[test]
+fn patches_do_not_wrap_around_a_crease() {
+    // A 40 × 10 plate with a flange 2 high along one long edge: rows past y = 10 are bent up
+    // at a right angle. The most compact patches would take a piece of the flange each; a
+    // patch facing two ways is seen from most directions, so each patch must stay on one side
+    // of the crease (greedy.rs: the spread lengthens the diagonal).
+    let mut soup = grid(40, 12, 0.0, 1, |_, _| false);
+    for p in &mut soup.positions {
+        if p[1] > 10.0 {
+            *p = [p[0], 10.0, p[1] - 10.0];
+        }
+    }
+    let mesh = soup.mesh();
+    for target in [4, 8, 16] {
+        let t = tile_and_check(&mesh, target);
+        for p in &t.patches {
+            assert!(
+                p.cone_cos > 0.999,
+                "target {target}: a patch wraps the crease: {p:?}"
+            );
+        }
+    }
+}
+
+#[test]
 fn sphere_patches_are_compact_and_have_narrow_cones() {
     let mesh = icosphere(4).mesh(); // 5120 triangles
     let t = tile_and_check(&mesh, 64);
