@@ -810,7 +810,8 @@ fn patch_mismatch(patch: u32, file: &PatchInfo, mesh: &PatchInfo, in_file_order:
         "patch {patch} of the file ({record}): {found}; evaluate the exact mesh file that was \
          baked (another export of the same model, e.g. .glb against .ply, can hold other \
          triangles, vertices or order), or the bake's --mesh-out mesh, with the bake's \
-         --memory and --tiling"
+         --memory and --tiling (a file baked by another patchvis version may hold other \
+         patches: the tiling changes between versions; its --mesh-out mesh still matches)"
     )
 }
 
