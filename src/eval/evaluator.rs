@@ -141,8 +141,8 @@ pub struct ViewMetrics {
     /// counting depth ties (`tied_pixels`).
     pub missed_pixels: u64,
     /// Pixels where the reconstruction shows another triangle at the full render's depth
-    /// (within [`DEPTH_TIE_ULPS`]): the full render's won the tie only by drawing order or
-    /// rounding, so they count as equal.
+    /// (within 4 units in the last place): the full render's won the tie only by drawing
+    /// order or rounding, so they count as equal.
     pub tied_pixels: u64,
     /// Patches the full render shows.
     pub visible_patches: u32,
