@@ -17,7 +17,7 @@ use rayon::prelude::*;
 
 use super::adjacency::{edge_vertices, triangle_neighbours_in};
 use super::bounds;
-use super::greedy::{Fusion, Seed};
+use super::greedy::{Fusion, Shape};
 use crate::ooc::Mesh;
 
 /// Peak heap of [`tile_chunk`] per triangle of the chunk, an upper bound with a wide margin:
@@ -32,7 +32,7 @@ pub(crate) const CHUNK_BYTES_PER_TRIANGLE: u64 = 200;
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ChunkPatch {
     /// Area, box and normal sum, as the fusion of the patch graph starts from them.
-    pub shape: Seed,
+    pub shape: Shape,
     /// Smallest input triangle index of the patch (the tie-break of the final numbering).
     pub min_triangle: u32,
     pub count: u32,
@@ -73,10 +73,10 @@ pub(crate) fn tile_chunk(
 
     let seeds = triangles
         .par_iter()
-        .map(|&t| Seed::of_triangle(bounds::corners(mesh, t)));
+        .map(|&t| Shape::of_triangle(bounds::corners(mesh, t)));
     let mut fusion = Fusion::new(seeds, neighbours);
     // Summed in chunk order, so the quota does not depend on the thread count.
-    let chunk_area: f64 = (0..count).map(|p| fusion.seed(p).area).sum();
+    let chunk_area: f64 = (0..count).map(|p| fusion.shape(p).area).sum();
     let seeds: Vec<u32> = (0..count).collect();
     fusion.fuse(&seeds, quota(chunk_area).clamp(1, count));
     drop(seeds);
@@ -92,7 +92,7 @@ pub(crate) fn tile_chunk(
         if *slot == UNSEEN {
             *slot = patches.len() as u32;
             patches.push(ChunkPatch {
-                shape: fusion.seed(root),
+                shape: fusion.shape(root),
                 min_triangle: t,
                 count: 0,
             });

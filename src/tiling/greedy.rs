@@ -36,9 +36,9 @@ use super::queue::{FusionQueue, entry, id_and_version};
 /// its diagonal. The culling gain levels off from about 8 on the zoo's exposed engine.
 pub(crate) const SPREAD_WEIGHT: f64 = 8.0;
 
-/// The shape of a patch before fusion: what the cost reads.
+/// What the fusion cost reads of a patch: a seed (a triangle, or a chunk's patch) or a union.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Seed {
+pub(crate) struct Shape {
     /// Surface area.
     pub area: f64,
     /// Bounding box.
@@ -47,10 +47,10 @@ pub(crate) struct Seed {
     pub normal: [f64; 3],
 }
 
-impl Seed {
-    /// The seed of one triangle with corners `p`.
-    pub fn of_triangle(p: [[f32; 3]; 3]) -> Seed {
-        Seed {
+impl Shape {
+    /// The shape of one triangle with corners `p`.
+    pub fn of_triangle(p: [[f32; 3]; 3]) -> Shape {
+        Shape {
             area: super::bounds::triangle_area(p),
             bbox: Aabb::of_triangle(p),
             normal: super::bounds::cross_normal(p).map(|c| 0.5 * c),
@@ -111,7 +111,7 @@ impl Fusion {
     /// One patch per seed (a triangle, or a patch of a chunk), with the seeds' shapes and
     /// neighbour lists. The seeds come as an iterator so that they are never held twice.
     pub fn new(
-        seeds: impl IndexedParallelIterator<Item = Seed>,
+        seeds: impl IndexedParallelIterator<Item = Shape>,
         neighbours: Vec<Vec<u32>>,
     ) -> Fusion {
         let n = neighbours.len();
@@ -153,9 +153,9 @@ impl Fusion {
     }
 
     /// The shape of alive patch `p`.
-    pub fn seed(&self, p: u32) -> Seed {
+    pub fn shape(&self, p: u32) -> Shape {
         let node = &self.nodes[p as usize];
-        Seed {
+        Shape {
             area: node.area,
             bbox: node.bbox,
             normal: node.normal,

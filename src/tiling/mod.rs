@@ -46,7 +46,7 @@ use rayon::prelude::*;
 use crate::ooc::Mesh;
 pub(crate) use aabb::Aabb;
 pub(crate) use bounds::{bounding_sphere, corners, cross_normal, first_with_area, patch_bounds};
-use greedy::{Fusion, Seed};
+use greedy::{Fusion, Shape};
 pub(crate) use morton::morton_code;
 pub use quality::TilingQuality;
 pub use renumber::renumbered_patches;
@@ -207,7 +207,7 @@ pub fn tile(mesh: &Mesh, target: u32) -> Result<Tiling, TilingError> {
 
     let seeds = (0..n)
         .into_par_iter()
-        .map(|t| Seed::of_triangle(bounds::corners(mesh, t)));
+        .map(|t| Shape::of_triangle(bounds::corners(mesh, t)));
     let mut fusion = Fusion::new(seeds, neighbours);
     let seeds: Vec<u32> = (0..n).collect();
     fusion.fuse(&seeds, target);
