@@ -51,7 +51,7 @@ pub(crate) fn first_with_area(mesh: &Mesh) -> Option<u32> {
     (0..mesh.triangle_count()).find(|&t| cross_normal(corners(mesh, t)).iter().any(|&c| c != 0.0))
 }
 
-fn length(v: [f64; 3]) -> f64 {
+pub(crate) fn length(v: [f64; 3]) -> f64 {
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
 }
 

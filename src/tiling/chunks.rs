@@ -23,9 +23,9 @@ use crate::ooc::Mesh;
 /// Peak heap of [`tile_chunk`] per triangle of the chunk, an upper bound with a wide margin:
 /// two chunks of 0.4M–0.5M triangles peaked at 107–111 MiB, about 115 bytes per triangle
 /// (`tests/tiling_scale.rs`), before the fusion nodes took 24 bytes more for their normal
-/// sums. The adjacency's sorted edge entries dominate (48 bytes), then
-/// the neighbour lists and the fusion nodes. The margin covers meshes with long neighbour
-/// lists (non-manifold fans, duplicates).
+/// sums. The adjacency's sorted edge entries dominate (48 bytes), then the neighbour lists
+/// and the fusion nodes. The margin covers meshes with long neighbour lists (non-manifold
+/// fans, duplicates).
 pub(crate) const CHUNK_BYTES_PER_TRIANGLE: u64 = 200;
 
 /// A patch of one chunk, as the patch graph sees it.
@@ -92,7 +92,7 @@ pub(crate) fn tile_chunk(
         if *slot == UNSEEN {
             *slot = patches.len() as u32;
             patches.push(ChunkPatch {
-                shape: fusion.shape(root),
+                shape: *fusion.shape(root),
                 min_triangle: t,
                 count: 0,
             });

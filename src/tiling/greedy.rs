@@ -30,6 +30,7 @@ use std::cmp::Ordering;
 use rayon::prelude::*;
 
 use super::aabb::Aabb;
+use super::bounds::{cross_normal, length};
 use super::queue::{FusionQueue, entry, id_and_version};
 
 /// `W` of the fusion cost (module documentation): how much a patch's normal spread lengthens
@@ -48,19 +49,21 @@ pub(crate) struct Shape {
 }
 
 impl Shape {
-    /// The shape of one triangle with corners `p`.
+    /// The shape of one triangle with corners `p` (its area as
+    /// [`super::bounds::triangle_area`] gives it).
     pub fn of_triangle(p: [[f32; 3]; 3]) -> Shape {
+        let cross = cross_normal(p);
         Shape {
-            area: super::bounds::triangle_area(p),
+            area: 0.5 * length(cross),
             bbox: Aabb::of_triangle(p),
-            normal: super::bounds::cross_normal(p).map(|c| 0.5 * c),
+            normal: cross.map(|c| 0.5 * c),
         }
     }
 }
 
 /// The cost of fusing `a` and `b` (module documentation), squared: the union's diagonal
 /// squared times `(1 + W · spread)²`.
-fn union_cost(a: &Node, b: &Node) -> f64 {
+fn union_cost(a: &Shape, b: &Shape) -> f64 {
     let diagonal_squared = a.bbox.union(&b.bbox).diagonal_squared();
     let area = a.area + b.area;
     let spread = if area > 0.0 {
@@ -76,10 +79,6 @@ fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
-fn length(v: [f64; 3]) -> f64 {
-    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
-}
-
 /// A list is compacted once its length exceeds twice its last compacted length plus this
 /// slack. The slack spares tiny lists from constant re-compaction; the doubling keeps the
 /// amortised cost O(1) per appended entry.
@@ -89,10 +88,7 @@ const COMPACT_SLACK: usize = 16;
 /// separate arrays they cost five).
 #[derive(Clone, Copy)]
 struct Node {
-    bbox: Aabb,
-    area: f64,
-    /// Sum of the triangles' area-weighted normals (half their cross products).
-    normal: [f64; 3],
+    shape: Shape,
     /// Union–find parent; a patch is alive when it is its own parent.
     parent: u32,
     version: u32,
@@ -119,10 +115,8 @@ impl Fusion {
         let nodes = seeds
             .zip(neighbours.par_iter())
             .enumerate()
-            .map(|(p, (seed, list))| Node {
-                bbox: seed.bbox,
-                area: seed.area,
-                normal: seed.normal,
+            .map(|(p, (shape, list))| Node {
+                shape,
                 parent: p as u32,
                 version: 0,
                 compacted_len: list.len() as u32,
@@ -149,17 +143,12 @@ impl Fusion {
 
     /// The bounding box of alive patch `p`.
     pub fn bbox(&self, p: u32) -> Aabb {
-        self.nodes[p as usize].bbox
+        self.nodes[p as usize].shape.bbox
     }
 
     /// The shape of alive patch `p`.
-    pub fn shape(&self, p: u32) -> Shape {
-        let node = &self.nodes[p as usize];
-        Shape {
-            area: node.area,
-            bbox: node.bbox,
-            normal: node.normal,
-        }
+    pub fn shape(&self, p: u32) -> &Shape {
+        &self.nodes[p as usize].shape
     }
 
     /// The neighbours of alive patch `p`: alive ids, ascending, without duplicates.
@@ -187,7 +176,7 @@ impl Fusion {
                 .iter()
                 .map(|&p| {
                     let node = &self.nodes[p as usize];
-                    entry(node.area, p, node.version)
+                    entry(node.shape.area, p, node.version)
                 })
                 .collect(),
         );
@@ -205,7 +194,7 @@ impl Fusion {
             };
             let s = self.unite(p, q);
             let node = &self.nodes[s as usize];
-            queue.push(entry(node.area, s, node.version));
+            queue.push(entry(node.shape.area, s, node.version));
             fusions += 1;
         }
         fusions
@@ -216,7 +205,7 @@ impl Fusion {
         let np = &self.nodes[p as usize];
         let mut best: Option<(f64, u32)> = None;
         for &q in &self.neighbours[p as usize] {
-            let d = union_cost(np, &self.nodes[q as usize]);
+            let d = union_cost(&np.shape, &self.nodes[q as usize].shape);
             let better = match best {
                 None => true,
                 Some((bd, bq)) => d.total_cmp(&bd).then(q.cmp(&bq)) == Ordering::Less,
@@ -244,9 +233,10 @@ impl Fusion {
         let absorbed_node = self.nodes[lu];
         self.nodes[lu].parent = s;
         let survivor = &mut self.nodes[su];
-        survivor.area += absorbed_node.area;
-        survivor.normal = add(survivor.normal, absorbed_node.normal);
-        survivor.bbox = survivor.bbox.union(&absorbed_node.bbox);
+        let (shape, absorbed) = (&mut survivor.shape, &absorbed_node.shape);
+        shape.area += absorbed.area;
+        shape.normal = add(shape.normal, absorbed.normal);
+        shape.bbox = shape.bbox.union(&absorbed.bbox);
         survivor.version += 1;
         let compacted_len = survivor.compacted_len as usize;
         let absorbed = std::mem::take(&mut self.neighbours[lu]);

@@ -55,7 +55,8 @@ pub use triangle_map::TriangleMap;
 /// Peak heap of the in-core tiling per triangle, an upper bound with margin: measured 136 to
 /// 140 bytes with a counting allocator on 1.0M–1.6M-triangle meshes (`tests/tiling_scale.rs`
 /// asserts it): the sorted edge entries, the neighbour lists, the fusion state (96 bytes a
-/// patch with its normal sum) and the two output maps. [`TilingMode::Auto`] tiles in core when this times the triangle count fits.
+/// patch with its normal sum) and the two output maps. [`TilingMode::Auto`] tiles in core
+/// when this times the triangle count fits.
 pub const IN_CORE_BYTES_PER_TRIANGLE: u64 = 160;
 
 /// Index of a patch, `0..patch_count`.
