@@ -29,7 +29,7 @@
 
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{Parser, ValueEnum};
-use patchvis::bake::{Backend, BakeSettings, MemoryBudget, Outputs, Stages};
+use patchvis::bake::{Backend, BakeSettings, MemoryBudget, Outputs, Probe, Stages};
 use patchvis::eval::views::random_directions;
 use patchvis::eval::{EvalOptions, EvalSummary, Evaluator, sampling_params};
 use patchvis::generate::exposed::ExposedEngine;
@@ -79,6 +79,8 @@ enum Mode {
     ConservativeAll,
     /// `--fold-min-pixels 4 --fold-corners one`.
     Thresholded,
+    /// `--probe off`: the default before the probe pass was.
+    Plain,
 }
 
 impl Mode {
@@ -88,6 +90,7 @@ impl Mode {
             Mode::Conservative => "conservative",
             Mode::ConservativeAll => "conservative-all",
             Mode::Thresholded => "thresholded",
+            Mode::Plain => "plain",
         }
     }
 }
@@ -260,11 +263,15 @@ fn bake_and_eval(
 ) -> Result<Vec<Row>> {
     let recipe = BakeSettings {
         conservative: matches!(mode, Mode::Conservative | Mode::ConservativeAll),
+        probe: match mode {
+            Mode::Thresholded | Mode::Plain => Probe::Off,
+            Mode::Default | Mode::Conservative | Mode::ConservativeAll => Probe::Default,
+        },
         fold_min_pixels: (mode == Mode::Thresholded).then_some(4),
         fold_corners: match mode {
             Mode::Thresholded => Some(FoldCorners::One),
             Mode::ConservativeAll => Some(FoldCorners::All),
-            Mode::Default | Mode::Conservative => None,
+            Mode::Default | Mode::Conservative | Mode::Plain => None,
         },
         shells,
         memory,

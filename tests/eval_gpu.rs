@@ -192,7 +192,9 @@ fn eval_file(pvis: &Path) -> Value {
 fn sweep_bakes_what_bake_writes_in_each_mode() {
     // The sweep bakes no sampling shells: it evaluates at the sampling distance.
     let default = eval_file(&bake_small(&["--shells", "0"]).pvis);
-    let plain = eval_file(&bake_small(&["--view-supersample", "0", "--shells", "0"]).pvis);
+    let plain = eval_file(
+        &bake_small(&["--view-supersample", "0", "--probe", "off", "--shells", "0"]).pvis,
+    );
     for (mode, file) in [("default", &default), ("plain", &plain)] {
         let point = sweep_point(mode);
         // Same bytes in the file (the rows compress to the same size only when they are the

@@ -2,8 +2,9 @@
 //! file keeps the stored level's views, each row contains the plain bake's row of that view,
 //! the rows are exactly the fold of a plain bake at the finer level (with `--fold-min-pixels`:
 //! of a thresholded one into the plain stored rows), the default is the flag combination it is
-//! documented as, `--conservative`'s rows hold the default's, the stats record it, and
-//! out-of-range values are usage errors.
+//! documented as, `--conservative`'s rows hold those of the default without its probe pass,
+//! the stats record it, and out-of-range values are usage errors. The fold's tests sample
+//! plainly (`--probe off`) unless they ask for a probe: the fold is what they check.
 
 mod common;
 
@@ -15,14 +16,26 @@ use patchvis::sampler::{
 use patchvis::sphere::view_count;
 
 /// The bake of the bunny in 100 patches at 64 px (unless `extra` sets `--resolution`) with
-/// `extra` flags. Patches keep the tiling's numbering, so that rows of bakes with different
-/// options compare patch for patch.
+/// `extra` flags, and `--probe off` unless `extra` has `--probe` or `--conservative`
+/// ([`bake_default`] keeps the default's probe). Patches keep the tiling's numbering, so that
+/// rows of bakes with different options compare patch for patch.
 fn bake_with(extra: &[&str]) -> Bake {
+    let probe = extra.contains(&"--probe") || extra.contains(&"--conservative");
+    bake_flags(extra, if probe { &[] } else { &["--probe", "off"] })
+}
+
+/// The default bake (its probe pass included) at [`bake_with`]'s settings.
+fn bake_default(extra: &[&str]) -> Baked {
+    bake_flags(extra, &[]).run()
+}
+
+fn bake_flags(extra: &[&str], probe: &[&str]) -> Bake {
     let mut flags = vec!["--patches", "100", "--patch-order", "spatial", "-q"];
     if !extra.contains(&"--resolution") {
         flags.extend_from_slice(&["--resolution", "64"]);
     }
     flags.extend_from_slice(extra);
+    flags.extend_from_slice(probe);
     Bake::new(&flags)
 }
 
@@ -139,12 +152,16 @@ fn one_fold_corner_folds_each_finer_row_into_one_stored_view() {
 
 #[test]
 fn defaults_and_conservative_are_the_documented_flag_combinations() {
-    // Default: one level of view supersampling, every finer patch folded into every corner.
+    // Default: one level of view supersampling, the probe pass at 1 pixel, the cover fold.
+    let default = bake_default(&["--level", "1"]);
+    let spelled = bake_default(&[&folded_level_1("0", "cover")[..], &["--probe", "1"]].concat());
+    assert_eq!(default.bytes(), spelled.bytes());
+    // Without the probe: every finer patch folded into every corner.
     let default = bake(&["--level", "1"]);
     let spelled = bake(&folded_level_1("0", "all"));
     assert_eq!(default.bytes(), spelled.bytes());
-    // --conservative: the default plus the probe pass, at the same resolution. Every row
-    // holds the default's, and the probe finds more on the bunny.
+    // --conservative: the probe pass at 2 pixels, at the same resolution. Every row holds
+    // the all-corner fold's, and the probe finds more on the bunny.
     let conservative = bake(&["--level", "1", "--conservative"]);
     assert_eq!(
         Pvis::parse(&conservative.bytes())
@@ -163,6 +180,13 @@ fn defaults_and_conservative_are_the_documented_flag_combinations() {
         );
     }
     assert!(probed.count_ones() > plain.count_ones());
+    // --probe 2 with the split fold is --conservative, byte for byte; --probe alone folds
+    // with the cover fold, which keeps fewer bits than the split fold of the same rows.
+    let spelled = bake(&["--level", "1", "--probe", "2", "--fold-corners", "split"]);
+    assert_eq!(spelled.bytes(), conservative.bytes());
+    let covered = bake(&["--level", "1", "--probe", "2"]);
+    let (_, covered) = rows(&covered);
+    assert!(covered.count_ones() < probed.count_ones());
 }
 
 #[test]

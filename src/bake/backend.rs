@@ -35,6 +35,8 @@ pub enum Backend {
 pub(crate) fn cpu_only_option(settings: &BakeSettings) -> Option<&'static str> {
     if settings.conservative {
         Some("--conservative")
+    } else if matches!(settings.probe, super::Probe::Pixels(_)) {
+        Some("--probe")
     } else if settings.conservative_raster {
         Some("--conservative-raster")
     } else if settings.resume {

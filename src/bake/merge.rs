@@ -13,7 +13,7 @@
 
 use super::part::Part;
 use super::rows::SphereRows;
-use super::settings::Supersample;
+use super::settings::{Probe, Supersample};
 use super::{BakeError, BakeSettings, Recipe};
 use crate::format::ShellRows;
 use crate::runtime::Pvis;
@@ -302,7 +302,7 @@ fn recipe_of(part: &Part) -> Result<Recipe, String> {
         min_pixels: s.min_pixels,
         dilate: s.dilate,
         always_visible: s.always_visible.clone(),
-        conservative: s.probe.is_some(),
+        probe: s.probe.map_or(Probe::Off, Probe::Pixels),
         conservative_raster: s.conservative_raster,
         view_supersample: Some(s.extra_levels),
         fold_min_pixels: Some(s.fold_min_pixels),

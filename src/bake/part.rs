@@ -114,6 +114,7 @@ impl PartSettings {
             FoldCorners::All => 0,
             FoldCorners::One => 1,
             FoldCorners::Split => 2,
+            FoldCorners::Cover => 3,
         });
         b.put_u8(match self.patch_order {
             PatchOrder::Covisibility => 0,
@@ -158,6 +159,7 @@ impl PartSettings {
                 0 => FoldCorners::All,
                 1 => FoldCorners::One,
                 2 => FoldCorners::Split,
+                3 => FoldCorners::Cover,
                 _ => return None,
             },
             patch_order: match f.u8()? {

@@ -37,6 +37,11 @@ pub struct Recipe {
     pub fine_checkpoint: Option<PathBuf>,
     /// Checkpoints of each shell's passes, outermost first (`OUT.pvis.shellS….ckpt`).
     pub shell_checkpoints: Vec<PassCheckpoints>,
+    /// The probe pass's occluder shrink in pixels, or `None` ([`Recipe::probe`]).
+    pub(super) probe: Option<u32>,
+    /// Whether `probe` is the default bake's, which [`Recipe::for_mesh`] turns off where it
+    /// cannot run.
+    pub(super) default_probe: bool,
 }
 
 /// The result of [`Recipe::run`]: the file's bytes and what they were made of.
@@ -44,6 +49,10 @@ pub struct Recipe {
 pub struct Baked {
     /// Where the sampling cameras were (the stored level).
     pub params: SamplingParams,
+    /// The probe pass it ran ([`Recipe::probe`] after [`Recipe::for_mesh`]).
+    pub probe: Option<u32>,
+    /// The fold it folded with.
+    pub fold_corners: crate::sampler::FoldCorners,
     /// The tiling, in the file's patch numbering.
     pub tiling: Tiling,
     /// The stored rows, in the file's patch numbering.
@@ -118,11 +127,54 @@ impl Recipe {
         self.settings.resolution
     }
 
-    /// The probe pass's occluder shrink in pixels (`--conservative`), or `None`.
+    /// The probe pass's occluder shrink in pixels, or `None`: [`BakeSettings::probe`], as
+    /// [`Recipe::for_mesh`] leaves it.
     pub fn probe(&self) -> Option<u32> {
-        self.settings
-            .conservative
-            .then_some(super::settings::CONSERVATIVE_PROBE_PIXELS)
+        self.probe
+    }
+
+    /// This recipe for a mesh of `triangles` triangles sampled on the CPU backend (`cpu`) or
+    /// not, and why it differs, when it does: the default bake's probe pass, and with it the
+    /// cover fold unless `--fold-corners` was given, is off past
+    /// [`crate::memory::DEFAULT_PROBE_MAX_TRIANGLES`] (so that a mesh gets the same file on
+    /// every machine whatever the memory it defaults to), where its solids do not fit
+    /// `--memory`, and on the GPU backend, which has no probe pass. `--probe PX` and
+    /// `--conservative` are never turned off: they fail with the budget or the backend
+    /// instead. The checkpoints keep their names (their hash tells the rows apart).
+    pub fn for_mesh(&self, triangles: u32, cpu: bool) -> Option<(Recipe, String)> {
+        if !self.default_probe {
+            return None;
+        }
+        let why = if triangles > crate::memory::DEFAULT_PROBE_MAX_TRIANGLES {
+            format!(
+                "{triangles} triangles, past the {} it runs on whatever the memory \
+                 (--probe {} asks for it within --memory)",
+                crate::memory::DEFAULT_PROBE_MAX_TRIANGLES,
+                super::settings::DEFAULT_PROBE_PIXELS
+            )
+        } else if !self.memory().fits_solids(triangles) {
+            format!(
+                "the solids of {triangles} triangles take more than half of --memory {} MiB",
+                self.memory().total() >> 20
+            )
+        } else if !cpu {
+            "the GPU backend has none".to_string()
+        } else {
+            return None;
+        };
+        let mut recipe = self.clone();
+        recipe.probe = None;
+        recipe.default_probe = false;
+        if self.settings.fold_corners.is_none() {
+            recipe.supersample.fold_corners = super::settings::DEFAULT_FOLD_CORNERS;
+            recipe.shell_supersample.fold_corners = super::settings::DEFAULT_FOLD_CORNERS;
+        }
+        Some((
+            recipe,
+            format!(
+                "the default's probe pass is off: {why}; --probe off asks for this without a note"
+            ),
+        ))
     }
 
     /// Every checkpoint file of this bake: the sampling sphere's, then each shell's.
@@ -206,9 +258,13 @@ impl Recipe {
                 self.memory().total() >> 20
             )));
         }
-        if self.probe().is_some() && !self.memory().fits_solids(mesh.triangle_count()) {
+        // The default's probe is turned off instead (`for_mesh`).
+        if self.probe().is_some()
+            && !self.default_probe
+            && !self.memory().fits_solids(mesh.triangle_count())
+        {
             return Err(BakeError::Budget(format!(
-                "--conservative finds the mesh's solids in about {} MiB for {} triangles, \
+                "the probe pass (--conservative, --probe) finds the mesh's solids in about {} MiB for {} triangles, \
                  more than half of --memory {} MiB; raise --memory",
                 (u64::from(mesh.triangle_count()) * crate::memory::SOLIDS_BYTES_PER_TRIANGLE) >> 20,
                 mesh.triangle_count(),
@@ -334,6 +390,10 @@ impl Recipe {
         shard: Option<Shard>,
         progress: &dyn Progress,
     ) -> Result<SampledRows, BakeError> {
+        if let Some((recipe, why)) = self.for_mesh(mesh.triangle_count(), backend.is_cpu()) {
+            progress.warn(&why);
+            return recipe.sample_share(mesh, tiling, backend, shard, progress);
+        }
         let params = self.sampling_params(mesh);
         let distances = self.shell_distances(&params)?;
         let bands = shells::bands(params.distance(), &distances);
@@ -532,6 +592,12 @@ impl Recipe {
         progress: &dyn Progress,
         stages: &mut Stages,
     ) -> Result<Baked, BakeError> {
+        if let Some((recipe, why)) = self.for_mesh(mesh.triangle_count(), backend.is_cpu()) {
+            // A usage error first, alone.
+            self.check_mesh(mesh)?;
+            progress.warn(&why);
+            return recipe.run(mesh, backend, progress, stages);
+        }
         let frame = self.prepare(mesh, progress)?;
         let local = match &frame {
             Some(frame) => Some(stages.run("frame", || frame.apply(mesh))?),
@@ -593,6 +659,8 @@ impl Recipe {
             .map_err(|e| BakeError::Internal(format!("the written file does not parse: {e}")))?;
         Ok(Baked {
             params,
+            probe: self.probe,
+            fold_corners: self.supersample.fold_corners,
             tiling,
             visibility,
             renumbered,
@@ -737,9 +805,67 @@ fn write_mesh_tmp(path: &Path, mesh: &Mesh, tiling: &Tiling) -> Result<AtomicFil
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bake::Probe;
     use crate::progress::NoProgress;
     use crate::sphere::view_count;
     use crate::test_kit::bunny::bunny;
+
+    #[test]
+    fn the_default_probe_turns_itself_off_where_it_cannot_run() {
+        use crate::memory::DEFAULT_PROBE_MAX_TRIANGLES;
+        use crate::sampler::FoldCorners;
+        let recipe = |f: fn(&mut BakeSettings)| {
+            let mut s = BakeSettings {
+                memory: MemoryBudget::new(256 << 20),
+                ..BakeSettings::default()
+            };
+            f(&mut s);
+            s.check().unwrap()
+        };
+        let default = recipe(|_| {});
+        assert_eq!(default.probe(), Some(1));
+        assert_eq!(default.supersample.fold_corners, FoldCorners::Cover);
+        // Up to the bound on the CPU: as it is, on every machine (256 MiB is the smallest
+        // default budget, and the bound's solids fit it).
+        assert!(
+            default
+                .for_mesh(DEFAULT_PROBE_MAX_TRIANGLES, true)
+                .is_none()
+        );
+        for (triangles, cpu, why) in [
+            (DEFAULT_PROBE_MAX_TRIANGLES + 1, true, "past the 2236962"),
+            (1000, false, "the GPU backend"),
+        ] {
+            let (off, message) = default.for_mesh(triangles, cpu).unwrap();
+            assert!(message.contains(why), "{message}");
+            assert_eq!(off.probe(), None);
+            assert_eq!(off.supersample.fold_corners, FoldCorners::All);
+            assert_eq!(off.shell_supersample.fold_corners, FoldCorners::All);
+            assert_eq!(off.checkpoints().count(), default.checkpoints().count());
+            assert!(off.for_mesh(triangles, cpu).is_none());
+        }
+        // A smaller --memory than its solids need.
+        let small = recipe(|s| s.memory = MemoryBudget::new(16 << 20));
+        let (off, message) = small.for_mesh(1_000_000, true).unwrap();
+        assert!(message.contains("--memory 16 MiB"), "{message}");
+        assert_eq!(off.probe(), None);
+        // An explicit fold stays; what was asked for is never turned off.
+        let cover = recipe(|s| s.fold_corners = Some(FoldCorners::Cover));
+        let (off, _) = cover.for_mesh(1000, false).unwrap();
+        assert_eq!(off.supersample.fold_corners, FoldCorners::Cover);
+        for asked in [
+            recipe(|s| s.probe = Probe::Pixels(1)),
+            recipe(|s| s.conservative = true),
+            recipe(|s| s.fold_corners = Some(FoldCorners::Split)),
+            recipe(|s| s.probe = Probe::Off),
+        ] {
+            assert!(
+                asked.for_mesh(u32::MAX, false).is_none(),
+                "{:?}",
+                asked.settings
+            );
+        }
+    }
 
     /// The default bake's shells lie at the documented radii, are sampled like the
     /// sampling sphere (its supersampling), the same on one thread and two, and follow the
@@ -816,6 +942,7 @@ mod tests {
                 level: 1,
                 resolution: 32,
                 fold_min_pixels: Some(4),
+                probe: Probe::Off,
                 shells: 2,
                 checkpoint: Some(out.clone()),
                 resume,

@@ -31,12 +31,23 @@ pub const DEFAULT_FOLD_CORNERS: FoldCorners = FoldCorners::All;
 /// zoo than [`FoldCorners::All`], every model still ≥ 99 % identical (BENCHMARKS.md,
 /// "Quality on the model zoo").
 pub const CONSERVATIVE_FOLD_CORNERS: FoldCorners = FoldCorners::Split;
+/// `--fold-corners` unless given, with `--probe`: one stored view per face holding the finer
+/// view, chosen over the whole sphere. At `--probe 1`, 1.7 points more culling on the bunny
+/// than [`FoldCorners::Split`] (44.4 against 42.7 %) for misses of at most 0.4 pixels a view
+/// on the zoo (BENCHMARKS.md, "The probe with the cover fold").
+pub const PROBE_FOLD_CORNERS: FoldCorners = FoldCorners::Cover;
 /// `--conservative`'s probe pass shrinks each view's occluders by this many pixels
 /// (`sampler/tiled/probe.rs`). 0 catches sub-pixel parts only; more also the parts about to
 /// come out from behind an edge. The generated exposed engine's views at 2× the resolution
 /// are 97.3 % identical at 0, 98.7 % at 1 and 99.3 % at 2, for 1.3 points of culling from 1
 /// to 2 (BENCHMARKS.md, "Quality on the model zoo").
 pub const CONSERVATIVE_PROBE_PIXELS: u32 = 2;
+/// The default bake's probe pass shrinks occluders by this many pixels. With the cover fold,
+/// every zoo model misses at most 0.4 pixels a view on average at 1× and 2× the resolution
+/// (p99 ≤ 2), the bunny culls 44.4 % (45.4 % without the probe, 42.7 % with the split fold),
+/// and the bunny's bake takes 1.41× the thresholded bake's time; at 0 pixels the exposed
+/// engine misses 2.1 pixels a view at 2× (BENCHMARKS.md, "The probe with the cover fold").
+pub const DEFAULT_PROBE_PIXELS: u32 = 1;
 
 /// Smallest `--resolution`: coarser ID buffers miss nearly every patch. Measured on the
 /// bunny in 1,000 patches at level 2: a view sees 43.8 % of the patches at 256 px, 40.9 % at
@@ -47,6 +58,22 @@ pub const MIN_RESOLUTION: u32 = 16;
 /// Below this sampled resolution a bake warns ([`Recipe::resolution_warning`]): it keeps less
 /// than half of the visible patches on the bunny (see [`MIN_RESOLUTION`]).
 pub const WARN_RESOLUTION: u32 = 32;
+
+/// The probe pass of a bake (`--probe`, `sampler/tiled/probe.rs`): after each view, the patches
+/// it did not show are drawn again, conservatively, against its occluders shrunk by some
+/// pixels, and added where they may show to a camera near the view.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Probe {
+    /// [`DEFAULT_PROBE_PIXELS`] with the cover fold on the CPU backend for meshes of up to
+    /// [`crate::memory::DEFAULT_PROBE_MAX_TRIANGLES`] triangles whose solids fit the budget,
+    /// else off ([`Recipe::for_mesh`]); [`CONSERVATIVE_PROBE_PIXELS`] with `--conservative`.
+    #[default]
+    Default,
+    /// No probe pass (`--probe off`): what each view shows, and nothing more.
+    Off,
+    /// Occluders shrunk by this many pixels (`--probe PX`), on any mesh the budget holds.
+    Pixels(u32),
+}
 
 /// How the patches of the file are numbered (`--patch-order`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -78,8 +105,11 @@ pub struct BakeSettings {
     /// Patches never culled, in the tiling's spatial numbering (`--always-visible`).
     pub always_visible: Vec<PatchId>,
     /// The default bake plus the probe pass, with occluders shrunk by
-    /// [`CONSERVATIVE_PROBE_PIXELS`] (`--conservative`).
+    /// [`CONSERVATIVE_PROBE_PIXELS`], and the split fold (`--conservative`).
     pub conservative: bool,
+    /// The probe pass (`--probe`): the default's, off, or with occluders shrunk by a number of
+    /// pixels; only the default with `conservative`.
+    pub probe: Probe,
     /// A triangle marks every pixel it touches (`--conservative-raster`).
     pub conservative_raster: bool,
     /// Extra sphere levels sampled and folded into the stored ones (`--view-supersample`);
@@ -129,6 +159,7 @@ impl Default for BakeSettings {
             dilate: false,
             always_visible: Vec::new(),
             conservative: false,
+            probe: Probe::Default,
             conservative_raster: false,
             view_supersample: None,
             fold_min_pixels: None,
@@ -208,6 +239,18 @@ impl Supersample {
 }
 
 impl BakeSettings {
+    /// The probe pass's occluder shrink in pixels, `None` for none: `--probe`'s,
+    /// [`CONSERVATIVE_PROBE_PIXELS`] with `--conservative`, else [`DEFAULT_PROBE_PIXELS`]
+    /// (which [`Recipe::for_mesh`] may turn off).
+    pub fn probe(&self) -> Option<u32> {
+        match self.probe {
+            Probe::Off => None,
+            Probe::Pixels(pixels) => Some(pixels),
+            Probe::Default if self.conservative => Some(CONSERVATIVE_PROBE_PIXELS),
+            Probe::Default => Some(DEFAULT_PROBE_PIXELS),
+        }
+    }
+
     /// Checks every value and resolves the defaults.
     pub fn check(self) -> Result<Recipe, SettingsError> {
         let fail = |message: String| Err(SettingsError(message));
@@ -250,6 +293,14 @@ impl BakeSettings {
                 self.level
             ));
         }
+        if self.conservative && self.probe != Probe::Default {
+            return fail(
+                "--probe with --conservative: expected one of them (--conservative is the probe \
+                 pass at 2 pixels with the split fold)"
+                    .into(),
+            );
+        }
+        let probe = self.probe();
         let fold_min_pixels = self.fold_min_pixels.unwrap_or(DEFAULT_FOLD_MIN_PIXELS);
         // A threshold at or below the stored views' own changes nothing.
         let threshold = fold_min_pixels > self.min_pixels.max(1);
@@ -257,14 +308,16 @@ impl BakeSettings {
             .fold_corners
             .unwrap_or(if self.conservative && !threshold {
                 CONSERVATIVE_FOLD_CORNERS
+            } else if probe.is_some() {
+                PROBE_FOLD_CORNERS
             } else {
                 DEFAULT_FOLD_CORNERS
             });
         if fold_corners == FoldCorners::Split {
-            if !self.conservative {
+            if probe.is_none() {
                 return fail(
-                    "--fold-corners split: expected --conservative (it folds the probe pass's \
-                     additions apart from what the views showed)"
+                    "--fold-corners split: expected --conservative or --probe (it folds the \
+                     probe pass's additions apart from what the views showed)"
                         .into(),
                 );
             }
@@ -309,15 +362,25 @@ impl BakeSettings {
         // The shells' supersampling is the stored level's, capped at the finest level.
         let shell_level = self.shell_level.unwrap_or(self.level);
         let shell_supersample = resolve(extra_levels.min(MAX_LEVEL - shell_level));
-        let probe = self.conservative.then_some(CONSERVATIVE_PROBE_PIXELS);
-        let main = self.pass_checkpoints("", supersample, probe);
+        // Split needs the probe's rows: asking for it makes the probe a must.
+        let default_probe = self.probe == Probe::Default
+            && !self.conservative
+            && fold_corners != FoldCorners::Split;
+        // Checkpoints are named after what was asked for: the default's probe, on or off
+        // (`Recipe::for_mesh`), names none (their hash tells the rows apart).
+        let named_probe = if default_probe { None } else { probe };
+        let main = self.pass_checkpoints("", supersample, named_probe);
         Ok(Recipe {
+            probe,
+            default_probe,
             supersample,
             shell_supersample,
             coarse_checkpoint: main.coarse,
             fine_checkpoint: main.fine,
             shell_checkpoints: (1..=self.shells)
-                .map(|s| self.pass_checkpoints(&format!(".shell{s}"), shell_supersample, probe))
+                .map(|s| {
+                    self.pass_checkpoints(&format!(".shell{s}"), shell_supersample, named_probe)
+                })
                 .collect(),
             settings: self,
         })
@@ -391,11 +454,13 @@ mod tests {
                 Supersample {
                     extra_levels: DEFAULT_VIEW_SUPERSAMPLE,
                     fold_min_pixels: 0,
-                    fold_corners: FoldCorners::All
+                    fold_corners: FoldCorners::Cover
                 },
                 512
             )
         );
+        // The probe pass at 1 pixel, and the cover fold.
+        assert_eq!(c.probe(), Some(DEFAULT_PROBE_PIXELS));
         // One pass: the finer views' rows hold the stored ones as their prefix.
         assert_eq!(c.fine_checkpoint, Some("out.pvis.vs1.ckpt".into()));
         assert_eq!(c.coarse_checkpoint, None);
@@ -435,9 +500,17 @@ mod tests {
         assert!(!c.settings.conservative_raster);
         assert_eq!(c.supersample.fold_corners, FoldCorners::Split);
         assert_eq!(c.pass_levels()[..2], [5, 5]);
-        // Asked for without --conservative, or with a fold threshold: refused.
-        let err = check(|s| s.fold_corners = Some(FoldCorners::Split)).unwrap_err();
-        assert!(err.0.contains("expected --conservative"), "{}", err.0);
+        // Asked for without the probe, or with a fold threshold: refused.
+        let err = check(|s| {
+            s.probe = Probe::Off;
+            s.fold_corners = Some(FoldCorners::Split)
+        })
+        .unwrap_err();
+        assert!(
+            err.0.contains("expected --conservative or --probe"),
+            "{}",
+            err.0
+        );
         let err = check(|s| {
             s.conservative = true;
             s.fold_min_pixels = Some(4);
@@ -445,7 +518,35 @@ mod tests {
         })
         .unwrap_err();
         assert!(err.0.contains("no fold threshold"), "{}", err.0);
-        assert_eq!(check(|_| {}).unwrap().probe(), None);
+        let c = check(|s| s.probe = Probe::Off).unwrap();
+        assert_eq!(
+            (c.probe(), c.supersample.fold_corners),
+            (None, DEFAULT_FOLD_CORNERS)
+        );
+        // Named as the default's: neither names its probe.
+        assert_eq!(c.fine_checkpoint, Some("out.pvis.vs1.ckpt".into()));
+        // --probe: the probe pass alone, with the cover fold and one pass; not with
+        // --conservative, and the split fold is its own to ask for.
+        let c = check(|s| s.probe = Probe::Pixels(1)).unwrap();
+        assert_eq!(c.probe(), Some(1));
+        assert_eq!(c.supersample.fold_corners, FoldCorners::Cover);
+        assert_eq!(c.pass_levels(), check(|_| {}).unwrap().pass_levels());
+        assert_eq!(c.fine_checkpoint, Some("out.pvis.p1.vs1.ckpt".into()));
+        let err = check(|s| {
+            s.probe = Probe::Pixels(1);
+            s.conservative = true
+        })
+        .unwrap_err();
+        assert!(err.0.contains("--probe with --conservative"), "{}", err.0);
+        let c = check(|s| {
+            s.probe = Probe::Pixels(0);
+            s.fold_corners = Some(FoldCorners::Split)
+        })
+        .unwrap();
+        assert_eq!(
+            (c.probe(), c.pass_levels()[..2].to_vec()),
+            (Some(0), vec![5, 5])
+        );
         // A threshold at or below --min-pixels changes nothing: no extra plain pass.
         let c = check(|s| {
             s.min_pixels = 4;

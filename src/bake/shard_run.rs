@@ -89,6 +89,12 @@ impl Recipe {
                 backend.describe()
             )));
         }
+        if let Some((recipe, why)) = self.for_mesh(mesh.triangle_count(), true) {
+            // A usage error first, alone.
+            self.check_mesh(mesh)?;
+            progress.warn(&why);
+            return recipe.run_shard(mesh, tiling, shard, backend, progress, stages);
+        }
         let frame = self.prepare(mesh, progress)?;
         let mesh_hash = stages.run("hash", || mesh_hash(mesh));
         let local = match &frame {

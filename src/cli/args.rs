@@ -2,6 +2,7 @@
 //! resolved settings; nothing else reads these structs.
 
 use clap::{Parser, Subcommand};
+use patchvis::bake::Probe;
 use std::path::PathBuf;
 
 /// Bake precomputed patch visibility for huge triangle meshes, and query it.
@@ -86,10 +87,11 @@ pub struct BakeArgs {
     /// which a bake with `--patch-order spatial --mesh-out M.ply` shows.
     #[arg(long, value_name = "IDS|FILE")]
     pub always_visible: Option<String>,
-    /// Conservative mode: the default bake plus a probe pass. After each sampled view (the
-    /// stored level and the folded finer one), every patch the view did not show is drawn
-    /// again with conservative rasterization (any part of a pixel, not only its centre)
-    /// against the view's depths shrunk by 2 pixels, and added if a fragment lies in front.
+    /// Conservative mode: the default bake's probe pass at 2 pixels, with the split fold, on
+    /// any mesh --memory holds. After each sampled view (the stored level and the folded finer
+    /// one), every patch the view did not show is drawn again with conservative rasterization
+    /// (any part of a pixel, not only its centre) against the view's depths shrunk by 2
+    /// pixels, and added if a fragment lies in front.
     /// Only triangles whose visible side may face a camera within 0.6 of a sphere-face edge of
     /// the view are drawn: the outside of their solid, or its inside through an opening.
     /// What it guarantees: every patch that touches a pixel of a sampled view, or lies within
@@ -100,10 +102,21 @@ pub struct BakeArgs {
     /// sampling distance see.
     /// Measured residual (300 random views at the sampling distance, at --resolution and
     /// twice it): ≥ 99 % of views pixel-identical on every model of the zoo; BENCHMARKS.md,
-    /// "Quality on the model zoo". 1.2–3.1× the default's bake time on the zoo, CPU backend
+    /// "Quality on the model zoo". 1.05–1.25× the default's bake time on the zoo, CPU backend
     /// only, and about 60 bytes a triangle of heap while sampling.
     #[arg(long)]
     pub conservative: bool,
+    /// The probe pass: after each view, every patch it did not show is drawn again with
+    /// conservative rasterization against its occluders shrunk by PX pixels, and added where
+    /// a camera near the view may see it; then each patch a finer view holds goes to one stored
+    /// view per sphere face holding the view, chosen over the whole sphere (the cover fold).
+    /// The default bake runs it at 1 pixel on the CPU backend for meshes of up to 2,236,962
+    /// triangles (whose solids, about 60 bytes a triangle, fit any default --memory) and
+    /// leaves it off past that, where --memory is too small, and on the GPU backend, saying
+    /// so; `--probe 1` asks for it on any mesh --memory holds, `--probe off` turns it off.
+    /// [default: 1, within those bounds]
+    #[arg(long, value_name = "PX|off", value_parser = parse_probe, conflicts_with = "conservative")]
+    pub probe: Option<Probe>,
     /// Conservative rasterization: a triangle marks every pixel square it touches, at its
     /// nearest depth there (one winner per pixel). Measured no better than point sampling.
     #[arg(long)]
@@ -133,7 +146,8 @@ pub struct BakeArgs {
     /// that every sphere face holding it shares (all), or to just one of them (one: still
     /// covers every finer sample of a face, culls more, misses more), or, with
     /// --conservative, what the view showed to all of them and what only the probe pass added
-    /// to one (split). [default: all; split with --conservative]
+    /// to one (split), or to one per sphere face holding it, chosen over the whole sphere
+    /// (cover). [default: all; split with --conservative; cover with --probe]
     #[arg(long, value_enum, value_name = "WHICH")]
     pub fold_corners: Option<FoldCornersArg>,
     /// Sampling shells for near cameras: N nested spheres of near views between the sampling
@@ -228,6 +242,9 @@ pub enum FoldCornersArg {
     /// With --conservative (its default there): what a finer view showed to all of them,
     /// what only the probe pass added to the one whose faces gain the fewest new answers.
     Split,
+    /// One stored view per face holding the finer view, chosen for the whole sphere so that
+    /// the fewest other faces answer the patch.
+    Cover,
 }
 
 /// `--tiling`.
@@ -539,9 +556,10 @@ pub struct EvalArgs {
 /// `eval --sweep-mode`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum SweepModeArg {
-    /// What a default `patchvis bake` writes: view supersampling with its default fold.
+    /// What a default `patchvis bake` writes: view supersampling, the probe pass and their
+    /// default fold.
     Default,
-    /// The stored views' own patches only (`bake --view-supersample 0`).
+    /// The stored views' own patches only (`bake --view-supersample 0 --probe off`).
     Plain,
 }
 
@@ -608,6 +626,23 @@ pub fn parse_size(s: &str) -> Result<u64, String> {
         return Err(format!("'{s}': expected a size of at least 1 byte"));
     }
     Ok(bytes as u64)
+}
+
+/// The largest `--probe PX`: occluders shrunk further than this hide nothing near an edge
+/// (`--conservative` shrinks by 2).
+const MAX_PROBE_PIXELS: u32 = 16;
+
+/// `--probe PX|off`.
+fn parse_probe(s: &str) -> Result<Probe, String> {
+    if s == "off" {
+        return Ok(Probe::Off);
+    }
+    match s.parse::<u32>() {
+        Ok(pixels) if pixels <= MAX_PROBE_PIXELS => Ok(Probe::Pixels(pixels)),
+        _ => Err(format!(
+            "expected `off` or pixels from 0 to {MAX_PROBE_PIXELS}, got `{s}`"
+        )),
+    }
 }
 
 #[cfg(test)]

@@ -11,8 +11,8 @@ use super::out::{StdoutError, outln};
 use super::progress::Bars;
 use anyhow::{Context, Result, anyhow};
 use patchvis::bake::{
-    BakeSettings, DEFAULT_FOLD_CORNERS, DEFAULT_FOLD_MIN_PIXELS, DEFAULT_VIEW_SUPERSAMPLE,
-    MemoryBudget, Stages,
+    BakeSettings, DEFAULT_FOLD_MIN_PIXELS, DEFAULT_PROBE_PIXELS, DEFAULT_VIEW_SUPERSAMPLE,
+    MemoryBudget, PROBE_FOLD_CORNERS, Probe, Stages,
 };
 use patchvis::eval::plot::{self, Axis, Chart, Series};
 use patchvis::eval::shade::RgbImage;
@@ -22,6 +22,7 @@ use patchvis::eval::{
     sampling_params,
 };
 use patchvis::format::{PvisFile, write_atomic};
+use patchvis::memory::DEFAULT_PROBE_MAX_TRIANGLES;
 use patchvis::ooc::Mesh;
 use patchvis::output::{NamedPath, check_outputs};
 use patchvis::runtime::Pvis;
@@ -747,11 +748,15 @@ fn run_sweep(args: &EvalArgs, distance_scale: f32) -> Result<()> {
         bake: BakeSettings {
             resolution: args.resolution.unwrap_or(DEFAULT_SWEEP_RESOLUTION),
             fov_deg: args.fov,
-            // Plain: the stored views' own patches (`bake --view-supersample 0`); default:
-            // what a default `patchvis bake` writes at every level.
+            // Plain: the stored views' own patches (`bake --view-supersample 0 --probe off`);
+            // default: what a default `patchvis bake` writes at every level.
             view_supersample: match args.sweep_mode {
                 SweepModeArg::Plain => Some(0),
                 SweepModeArg::Default => None,
+            },
+            probe: match args.sweep_mode {
+                SweepModeArg::Plain => Probe::Off,
+                SweepModeArg::Default => Probe::Default,
             },
             tiling: args.tiling.into(),
             memory,
@@ -764,11 +769,12 @@ fn run_sweep(args: &EvalArgs, distance_scale: f32) -> Result<()> {
     let mode_name = match args.sweep_mode {
         SweepModeArg::Plain => "plain".to_string(),
         SweepModeArg::Default => format!(
-            "as bake's default (--view-supersample {DEFAULT_VIEW_SUPERSAMPLE} --fold-min-pixels {DEFAULT_FOLD_MIN_PIXELS} --fold-corners {})",
-            match DEFAULT_FOLD_CORNERS {
+            "as bake's default (--view-supersample {DEFAULT_VIEW_SUPERSAMPLE} --fold-min-pixels {DEFAULT_FOLD_MIN_PIXELS} --probe {DEFAULT_PROBE_PIXELS} --fold-corners {}, the probe off past {DEFAULT_PROBE_MAX_TRIANGLES} triangles)",
+            match PROBE_FOLD_CORNERS {
                 FoldCorners::All => "all",
                 FoldCorners::One => "one",
                 FoldCorners::Split => "split",
+                FoldCorners::Cover => "cover",
             }
         ),
     };

@@ -42,8 +42,8 @@ pub use id_buffer::{IdBuffer, NO_PATCH};
 pub use near::{MAX_NEAR_CAMERAS, NearCameras, near_camera_count, near_cameras};
 pub use raster::{Rasterizer, SUBPIXEL_BITS, render_ids, render_ids_filtered};
 pub use supersample::{
-    FoldCorners, FoldTargets, MAX_VIEW_SUPERSAMPLE, fold_into, fold_into_with, fold_targets,
-    split_fold, supersample_rows,
+    FoldCorners, FoldTargets, MAX_VIEW_SUPERSAMPLE, cover_fold, fold_into, fold_into_with,
+    fold_targets, split_fold, supersample_rows,
 };
 pub use tiled::{
     FAR_VIEW_FACTOR, SamplingError, SamplingOptions, rendered_view_count, sample_tiled,

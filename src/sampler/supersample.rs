@@ -158,6 +158,10 @@ pub enum FoldCorners {
     /// added, and that none of the targets holds yet, goes to the one target whose faces gain
     /// the fewest new answers.
     Split,
+    /// Each patch a finer view shows, and no face holding it answers yet, goes to one stored
+    /// view per face, chosen across the whole sphere so that the fewest faces that do not
+    /// need it answer it ([`cover_fold`]).
+    Cover,
 }
 
 /// [`supersample_rows`] with the coarse views' rows given separately: returns `coarse` with
@@ -203,12 +207,16 @@ pub fn fold_into_with(
         "the coarse matrix must have one row per view of level {level}"
     );
     assert_eq!(coarse.patches(), fine.patches(), "patch counts differ");
+    if corners == FoldCorners::Cover {
+        return cover_fold(coarse, fine, fine_level, level);
+    }
     for u in view_count(level)..fine.views() {
         let row = fine.row(u);
         let targets = fold_targets(u, level);
         let chosen = match corners {
             FoldCorners::All | FoldCorners::Split => targets.views(),
             FoldCorners::One => &targets.views()[..1],
+            FoldCorners::Cover => unreachable!("the cover fold returned above"),
         };
         for &corner in chosen {
             for (dst, &src) in coarse.row_mut(corner).iter_mut().zip(row) {
@@ -279,6 +287,119 @@ pub fn split_fold(
                     .copied()
                     .min_by_key(|&t| (cost(t), t))
                     .expect("a fold has a target");
+                coarse.row_mut(best)[w] |= bit;
+            }
+        }
+    }
+    coarse
+}
+
+/// The leaf faces of `level` by their corner views, and for every stored view the indices of
+/// the faces it is a corner of.
+fn faces_around(level: u32) -> (Vec<[ViewIndex; 3]>, Vec<Vec<u32>>) {
+    let mut faces = root_faces().to_vec();
+    for _ in 0..level {
+        faces = faces.iter().flat_map(children).collect();
+    }
+    let faces: Vec<[ViewIndex; 3]> = faces.iter().map(|f| f.views).collect();
+    let mut around = vec![Vec::new(); view_count(level) as usize];
+    for (i, face) in faces.iter().enumerate() {
+        for &corner in face {
+            around[corner as usize].push(i as u32);
+        }
+    }
+    (faces, around)
+}
+
+/// The cover fold ([`FoldCorners::Cover`]): `coarse` (the stored views' own rows) with, for
+/// every patch, the fewest-waste set of stored views added that makes every closed face at
+/// `level` answer every patch a finer view (of `fine`, level `fine_level`) lying in it shows.
+///
+/// A face *needs* a patch when a finer view in the closed face shows it and none of its
+/// corners holds it. Patch by patch, each face still needing it (in index order) gets it
+/// added to the one corner that serves the most faces needing it per face made to answer it
+/// for nothing (`needing / (wasted + ½)`, ties: the smaller view index); the faces around
+/// that corner then answer it. So coverage is [`FoldCorners::One`]'s — a face's corners
+/// together hold the row of every finer view in the face — while the corners are chosen for
+/// all the faces at once: on the zoo's plain rows this keeps within 0.7 points the culling of
+/// per-face rows, where folding into every shared corner loses 3–7 points (BENCHMARKS.md,
+/// "The cover fold").
+///
+/// Deterministic: patches, faces and candidate corners are taken in index order. Holds one
+/// row per leaf face while folding (about twice the stored rows). Panics under
+/// [`fold_into`]'s caller contracts.
+pub fn cover_fold(
+    mut coarse: VisibilityMatrix,
+    fine: &VisibilityMatrix,
+    fine_level: u32,
+    level: u32,
+) -> VisibilityMatrix {
+    let (faces, around) = faces_around(level);
+    let words = coarse.words_per_row();
+    // What each face needs: the OR of its finer views' rows.
+    let mut need = vec![0u64; faces.len() * words];
+    for u in view_count(level)..view_count(fine_level) {
+        let targets = fold_targets(u, level);
+        let targets = targets.views();
+        let row = fine.row(u);
+        for &f in &around[targets[0] as usize] {
+            if targets.iter().all(|t| faces[f as usize].contains(t)) {
+                let dst = &mut need[f as usize * words..][..words];
+                for (d, &s) in dst.iter_mut().zip(row) {
+                    *d |= s;
+                }
+            }
+        }
+    }
+    let mut pending: [Vec<u32>; 64] = core::array::from_fn(|_| Vec::new());
+    for w in 0..words {
+        let answered = |coarse: &VisibilityMatrix, f: u32| {
+            faces[f as usize]
+                .iter()
+                .fold(0u64, |a, &c| a | coarse.row(c)[w])
+        };
+        for list in &mut pending {
+            list.clear();
+        }
+        for f in 0..faces.len() as u32 {
+            let mut missing = need[f as usize * words + w] & !answered(&coarse, f);
+            while missing != 0 {
+                let b = missing.trailing_zeros();
+                missing &= missing - 1;
+                pending[b as usize].push(f);
+            }
+        }
+        for (b, list) in pending.iter().enumerate() {
+            let bit = 1u64 << b;
+            for &f in list {
+                if answered(&coarse, f) & bit != 0 {
+                    continue;
+                }
+                // (needing, wasted) of adding the patch to corner `c`.
+                let score = |coarse: &VisibilityMatrix, c: ViewIndex| {
+                    let (mut needing, mut wasted) = (0u64, 0u64);
+                    for &g in &around[c as usize] {
+                        if answered(coarse, g) & bit == 0 {
+                            if need[g as usize * words + w] & bit != 0 {
+                                needing += 1;
+                            } else {
+                                wasted += 1;
+                            }
+                        }
+                    }
+                    (needing, wasted)
+                };
+                let mut corners = faces[f as usize];
+                corners.sort_unstable();
+                let mut best = corners[0];
+                let (mut best_needing, mut best_wasted) = score(&coarse, best);
+                for &c in &corners[1..] {
+                    let (needing, wasted) = score(&coarse, c);
+                    // needing / (wasted + ½) larger, compared without division.
+                    if needing * (2 * best_wasted + 1) > best_needing * (2 * wasted + 1) {
+                        (best, best_needing, best_wasted) = (c, needing, wasted);
+                    }
+                }
                 coarse.row_mut(best)[w] |= bit;
             }
         }
@@ -537,6 +658,81 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The OR of `rows`' rows of `face`'s corners.
+    fn answer_of(rows: &VisibilityMatrix, face: &Face) -> Vec<u64> {
+        let mut answer = vec![0u64; rows.words_per_row()];
+        for c in face.views {
+            for (a, &w) in answer.iter_mut().zip(rows.row(c)) {
+                *a |= w;
+            }
+        }
+        answer
+    }
+
+    #[test]
+    fn the_cover_fold_covers_every_face_with_fewer_bits_than_every_corner() {
+        for (level, fine_level) in [(0, 1), (1, 2), (2, 3), (1, 3), (2, 4)] {
+            let views = view_count(fine_level);
+            // Sparse rows (1/64 of the bits), as real rows are away from the silhouettes.
+            let mut fine = VisibilityMatrix::new(views, 150);
+            let mut rng = Rng::new(23 + u64::from(fine_level));
+            for v in 0..views {
+                for p in 0..150 {
+                    if rng.next_u64().is_multiple_of(64) {
+                        fine.set(v, p);
+                    }
+                }
+            }
+            let own = fine.prefix(view_count(level));
+            let cover = fold_into_with(own.clone(), &fine, fine_level, level, FoldCorners::Cover);
+            let all = fold_into(own.clone(), &fine, fine_level, level);
+            for v in 0..view_count(level) {
+                assert!(row_contains(cover.row(v), own.row(v)), "view {v}");
+            }
+            for face in leaves(level) {
+                let answer = answer_of(&cover, &face);
+                for u in 0..views {
+                    if in_closed_face(&face, direction(u), 1e-5) {
+                        assert!(row_contains(&answer, fine.row(u)), "{:?} {u}", face.views);
+                    }
+                }
+            }
+            // Fewer bits in the rows, and fewer (face, patch) answers.
+            let answers = |rows: &VisibilityMatrix| -> u32 {
+                leaves(level)
+                    .iter()
+                    .map(|f| {
+                        answer_of(rows, f)
+                            .iter()
+                            .map(|w| w.count_ones())
+                            .sum::<u32>()
+                    })
+                    .sum()
+            };
+            assert!(
+                cover.count_ones() < all.count_ones(),
+                "{level}/{fine_level}: {} against {}",
+                cover.count_ones(),
+                all.count_ones()
+            );
+            assert!(answers(&cover) < answers(&all), "{level}/{fine_level}");
+        }
+    }
+
+    #[test]
+    fn the_cover_fold_adds_nothing_a_face_already_answers() {
+        // Every fine view shows only what the coarse corners of its faces already show: the
+        // fold has nothing to add.
+        let (level, fine_level) = (1, 3);
+        let mut fine = VisibilityMatrix::new(view_count(fine_level), 70);
+        for v in 0..view_count(fine_level) {
+            fine.set(v, 5);
+            fine.set(v, 69);
+        }
+        let own = fine.prefix(view_count(level));
+        assert_eq!(cover_fold(own.clone(), &fine, fine_level, level), own);
     }
 
     #[test]
