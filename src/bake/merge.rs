@@ -316,6 +316,14 @@ fn recipe_of(part: &Part) -> Result<Recipe, String> {
     }
     .check()
     .map_err(|e| format!("its settings do not check: {e}; bake this shard again"))
+    .map(|mut recipe| {
+        // The shells' probe and fold as the shards resolved them: the default's probe
+        // leaves the shells out, which no flag asks for alone (`Recipe::shell_probe`).
+        recipe.shell_probe = s.shell_probe;
+        recipe.shell_supersample.fold_corners = s.shell_fold_corners;
+        recipe.default_probe = false;
+        recipe
+    })
     .and_then(|recipe| {
         if recipe.part_settings() == *s && part.params.level == s.level {
             Ok(recipe)

@@ -23,7 +23,7 @@
 //! fov bits, `min_pixels`, `dilate`, `conservative_raster`, extra levels, fold threshold,
 //! fold corners, patch order, encoding, the probe pass (0, or its radius + 1), the
 //! always-visible ids, and the sampling shells (count, `--shell-min` as binary64 bits, level,
-//! extra levels and fold threshold). The shells' distances follow from the camera and those
+//! extra levels, fold threshold, `--far-views`, then their probe pass and fold corners). The shells' distances follow from the camera and those
 //! (`shells.rs`), so the merge computes them as the bake does. The camera and patch
 //! records are the original mesh's (a mesh baked in a working frame gets them as
 //! `Recipe::run` computes them). As the sampler's checkpoint does (`sampler/checkpoint.rs`),
@@ -45,8 +45,30 @@ use xxhash_rust::xxh64::xxh64;
 const MAGIC: &[u8; 8] = b"PVISPART";
 /// The layout's version; bumped with the sampler checkpoint's whenever the rows change, and
 /// whenever the layout does: 3 since parts carry the sampling shells' passes, 4 since they
-/// record `--far-views` (and a conservative part carries its split fold's second passes).
-const VERSION: u32 = 4;
+/// record `--far-views` (and a conservative part carries its split fold's second passes), 5
+/// since they record the shells' probe and fold apart from the sampling sphere's.
+const VERSION: u32 = 5;
+
+/// A fold's code in the settings block.
+fn fold_code(corners: FoldCorners) -> u8 {
+    match corners {
+        FoldCorners::All => 0,
+        FoldCorners::One => 1,
+        FoldCorners::Split => 2,
+        FoldCorners::Cover => 3,
+    }
+}
+
+/// [`fold_code`]'s fold, or `None` for no fold's code.
+fn fold_of(code: u8) -> Option<FoldCorners> {
+    Some(match code {
+        0 => FoldCorners::All,
+        1 => FoldCorners::One,
+        2 => FoldCorners::Split,
+        3 => FoldCorners::Cover,
+        _ => return None,
+    })
+}
 const CRC_BYTES: usize = 4;
 /// What a refused part's message tells the user to do.
 const BAKE_AGAIN: &str = "bake this shard again";
@@ -66,8 +88,10 @@ pub struct PartSettings {
     pub dilate: bool,
     /// `--conservative-raster`.
     pub conservative_raster: bool,
-    /// The probe pass's occluder shrink (`--conservative`), or `None`.
+    /// The probe pass's occluder shrink, or `None`.
     pub probe: Option<u32>,
+    /// The shells' (`Recipe::shell_probe`).
+    pub shell_probe: Option<u32>,
     /// Always-visible patches (the tiling's numbering).
     pub always_visible: Vec<u32>,
     /// Extra levels sampled and folded.
@@ -92,6 +116,8 @@ pub struct PartSettings {
     pub shell_fold_min_pixels: u32,
     /// `--far-views`.
     pub far_views: bool,
+    /// Which stored shell views receive a finer view's patches.
+    pub shell_fold_corners: FoldCorners,
 }
 
 impl PartSettings {
@@ -110,12 +136,7 @@ impl PartSettings {
         b.put_u8(u8::from(self.conservative_raster));
         b.put_u32(self.extra_levels);
         b.put_u32(self.fold_min_pixels);
-        b.put_u8(match self.fold_corners {
-            FoldCorners::All => 0,
-            FoldCorners::One => 1,
-            FoldCorners::Split => 2,
-            FoldCorners::Cover => 3,
-        });
+        b.put_u8(fold_code(self.fold_corners));
         b.put_u8(match self.patch_order {
             PatchOrder::Covisibility => 0,
             PatchOrder::Spatial => 1,
@@ -136,6 +157,8 @@ impl PartSettings {
         b.put_u32(self.shell_extra_levels);
         b.put_u32(self.shell_fold_min_pixels);
         b.put_u8(u8::from(self.far_views));
+        b.put_u32(self.shell_probe.map_or(0, |r| r + 1));
+        b.put_u8(fold_code(self.shell_fold_corners));
         b
     }
 
@@ -155,13 +178,7 @@ impl PartSettings {
             conservative_raster: flag(f.u8()?)?,
             extra_levels: f.u32()?,
             fold_min_pixels: f.u32()?,
-            fold_corners: match f.u8()? {
-                0 => FoldCorners::All,
-                1 => FoldCorners::One,
-                2 => FoldCorners::Split,
-                3 => FoldCorners::Cover,
-                _ => return None,
-            },
+            fold_corners: fold_of(f.u8()?)?,
             patch_order: match f.u8()? {
                 0 => PatchOrder::Covisibility,
                 1 => PatchOrder::Spatial,
@@ -184,6 +201,8 @@ impl PartSettings {
             shell_extra_levels: f.u32()?,
             shell_fold_min_pixels: f.u32()?,
             far_views: flag(f.u8()?)?,
+            shell_probe: f.u32()?.checked_sub(1),
+            shell_fold_corners: fold_of(f.u8()?)?,
         };
         let in_range = settings.level <= MAX_LEVEL
             && settings.extra_levels <= MAX_LEVEL
@@ -207,19 +226,25 @@ impl PartSettings {
 
     /// The pass levels of the sampling sphere, and of one shell.
     pub(crate) fn sphere_pass_levels(&self) -> (Vec<u32>, Vec<u32>) {
-        let passes = |extra_levels, fold_min_pixels, level| {
+        let passes = |extra_levels, fold_min_pixels, fold_corners, level| {
             Supersample {
                 extra_levels,
                 fold_min_pixels,
-                fold_corners: self.fold_corners,
+                fold_corners,
             }
             .pass_levels(level)
         };
         (
-            passes(self.extra_levels, self.fold_min_pixels, self.level),
+            passes(
+                self.extra_levels,
+                self.fold_min_pixels,
+                self.fold_corners,
+                self.level,
+            ),
             passes(
                 self.shell_extra_levels,
                 self.shell_fold_min_pixels,
+                self.shell_fold_corners,
                 self.shell_level,
             ),
         )
@@ -450,6 +475,7 @@ pub(crate) mod tests {
             dilate: false,
             conservative_raster: false,
             probe: None,
+            shell_probe: None,
             always_visible: vec![3],
             extra_levels: 1,
             fold_min_pixels: 4,
@@ -462,6 +488,7 @@ pub(crate) mod tests {
             shell_extra_levels: 1,
             shell_fold_min_pixels: 0,
             far_views: false,
+            shell_fold_corners: FoldCorners::All,
         };
         let shard = Shard { index: 1, count: 3 };
         let patches = (0..70)

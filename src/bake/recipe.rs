@@ -39,6 +39,8 @@ pub struct Recipe {
     pub shell_checkpoints: Vec<PassCheckpoints>,
     /// The probe pass's occluder shrink in pixels, or `None` ([`Recipe::probe`]).
     pub(super) probe: Option<u32>,
+    /// The shells' ([`Recipe::shell_probe`]).
+    pub(super) shell_probe: Option<u32>,
     /// Whether `probe` is the default bake's, which [`Recipe::for_mesh`] turns off where it
     /// cannot run.
     pub(super) default_probe: bool,
@@ -133,6 +135,13 @@ impl Recipe {
         self.probe
     }
 
+    /// The sampling shells' probe pass: the same as the sampling sphere's, but none for the
+    /// default's (their near views, a cube map each, would take 2.5× their plain time on the
+    /// bunny; BENCHMARKS.md, "The probe with the cover fold").
+    pub fn shell_probe(&self) -> Option<u32> {
+        self.shell_probe
+    }
+
     /// This recipe for a mesh of `triangles` triangles sampled on the CPU backend (`cpu`) or
     /// not, and why it differs, when it does: the default bake's probe pass, and with it the
     /// cover fold unless `--fold-corners` was given, is off past
@@ -167,7 +176,6 @@ impl Recipe {
         recipe.default_probe = false;
         if self.settings.fold_corners.is_none() {
             recipe.supersample.fold_corners = super::settings::DEFAULT_FOLD_CORNERS;
-            recipe.shell_supersample.fold_corners = super::settings::DEFAULT_FOLD_CORNERS;
         }
         Some((
             recipe,
@@ -259,7 +267,7 @@ impl Recipe {
             )));
         }
         // The default's probe is turned off instead (`for_mesh`).
-        if self.probe().is_some()
+        if (self.probe.is_some() || self.shell_probe.is_some())
             && !self.default_probe
             && !self.memory().fits_solids(mesh.triangle_count())
         {
@@ -357,9 +365,19 @@ impl Recipe {
             resume: s.resume,
             memory_budget: Some(self.memory().split().sampling),
             views,
-            probe: self.probe(),
+            probe: match sphere.shell {
+                Some(_) => self.shell_probe,
+                None => self.probe,
+            },
             shell: sphere.shell,
-            band: sphere.band,
+            // The default's probe covers the cameras at the pass's own distance: those between
+            // two spheres of views are answered by both (spec § Query), and a cell spanning
+            // the band would cost the bunny 5 points of culling at the sampling distance.
+            band: if self.default_probe {
+                None
+            } else {
+                sphere.band
+            },
             far_view: s.far_views && sphere.shell.is_none(),
         }
     }

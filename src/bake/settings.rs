@@ -361,17 +361,26 @@ impl BakeSettings {
         }
         // The shells' supersampling is the stored level's, capped at the finest level.
         let shell_level = self.shell_level.unwrap_or(self.level);
-        let shell_supersample = resolve(extra_levels.min(MAX_LEVEL - shell_level));
         // Split needs the probe's rows: asking for it makes the probe a must.
         let default_probe = self.probe == Probe::Default
             && !self.conservative
             && fold_corners != FoldCorners::Split;
+        // The default's probe leaves the shells out: they fold as without it.
+        let shell_probe = if default_probe { None } else { probe };
+        let shell_supersample = Supersample {
+            fold_corners: match self.fold_corners {
+                None if default_probe => DEFAULT_FOLD_CORNERS,
+                _ => fold_corners,
+            },
+            ..resolve(extra_levels.min(MAX_LEVEL - shell_level))
+        };
         // Checkpoints are named after what was asked for: the default's probe, on or off
         // (`Recipe::for_mesh`), names none (their hash tells the rows apart).
         let named_probe = if default_probe { None } else { probe };
         let main = self.pass_checkpoints("", supersample, named_probe);
         Ok(Recipe {
             probe,
+            shell_probe,
             default_probe,
             supersample,
             shell_supersample,
@@ -623,7 +632,21 @@ mod tests {
     #[test]
     fn every_shell_has_checkpoints_of_its_own_and_the_stored_levels_fold() {
         let c = check(|_| {}).unwrap();
-        assert_eq!(c.shell_supersample, c.supersample);
+        // The default's probe leaves the shells out: no probe there, and the all-corner fold.
+        assert_eq!(
+            c.shell_supersample,
+            Supersample {
+                fold_corners: DEFAULT_FOLD_CORNERS,
+                ..c.supersample
+            }
+        );
+        assert_eq!(
+            (c.probe(), c.shell_probe()),
+            (Some(DEFAULT_PROBE_PIXELS), None)
+        );
+        let asked = check(|s| s.probe = Probe::Pixels(1)).unwrap();
+        assert_eq!(asked.shell_supersample, asked.supersample);
+        assert_eq!(asked.shell_probe(), Some(1));
         assert_eq!(c.shell_level(), 4);
         assert_eq!(
             c.shell_checkpoints,

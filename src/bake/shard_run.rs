@@ -46,6 +46,7 @@ impl Recipe {
             dilate: s.dilate,
             conservative_raster: s.conservative_raster,
             probe: self.probe(),
+            shell_probe: self.shell_probe(),
             always_visible: s.always_visible.clone(),
             extra_levels: self.supersample.extra_levels,
             fold_min_pixels: self.supersample.fold_min_pixels,
@@ -58,6 +59,7 @@ impl Recipe {
             shell_extra_levels: self.shell_supersample.extra_levels,
             shell_fold_min_pixels: self.shell_supersample.fold_min_pixels,
             far_views: s.far_views,
+            shell_fold_corners: self.shell_supersample.fold_corners,
         }
     }
 
