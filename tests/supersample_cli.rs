@@ -155,7 +155,10 @@ fn defaults_and_conservative_are_the_documented_flag_combinations() {
     // Default: one level of view supersampling, the probe pass at 1 pixel, the cover fold,
     // over the sampling sphere (its shells sample as without the probe: no shells here).
     let default = bake_default(&["--level", "1", "--shells", "0"]);
-    let flags = [&folded_level_1("0", "cover")[..], &["--probe", "1", "--shells", "0"]];
+    let flags = [
+        &folded_level_1("0", "cover")[..],
+        &["--probe", "1", "--shells", "0"],
+    ];
     assert_eq!(default.bytes(), bake_default(&flags.concat()).bytes());
     // Without the probe: every finer patch folded into every corner.
     let default = bake(&["--level", "1"]);
