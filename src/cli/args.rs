@@ -558,7 +558,8 @@ pub struct EvalArgs {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum SweepModeArg {
     /// What a default `patchvis bake` writes: view supersampling, the probe pass and their
-    /// default fold.
+    /// default fold. Levels below the finest are cut from the finest level's sampling, whose
+    /// probe cells are smaller than a bake at that level draws.
     Default,
     /// The stored views' own patches only (`bake --view-supersample 0 --probe off`).
     Plain,
