@@ -67,6 +67,8 @@ fuzz_target!(|data: &[u8]| {
         shell_extra_levels: 0,
         shell_fold_min_pixels: 0,
         far_views: threshold >> 6 & 1 == 1,
+        shell_probe: (threshold >> 7 & 1 == 1).then_some(1),
+        shell_fold_corners: FoldCorners::All,
     };
     let words_per_row = (patches as usize).div_ceil(64);
     let mut next_bit = bits.iter().cycle();
