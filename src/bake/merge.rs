@@ -321,7 +321,6 @@ fn recipe_of(part: &Part) -> Result<Recipe, String> {
         // leaves the shells out, which no flag asks for alone (`Recipe::shell_probe`).
         recipe.shell_probe = s.shell_probe;
         recipe.shell_supersample.fold_corners = s.shell_fold_corners;
-        recipe.default_probe = false;
         recipe
     })
     .and_then(|recipe| {

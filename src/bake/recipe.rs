@@ -136,8 +136,8 @@ impl Recipe {
     }
 
     /// The sampling shells' probe pass: the same as the sampling sphere's, but none for the
-    /// default's (their near views, a cube map each, would take 2.5× their plain time on the
-    /// bunny; BENCHMARKS.md, "The probe with the cover fold").
+    /// default's (their near views, a cube map each, would take 2.0–2.6× their plain time on
+    /// the bunny; BENCHMARKS.md, "The probe with the cover fold").
     pub fn shell_probe(&self) -> Option<u32> {
         self.shell_probe
     }
@@ -372,7 +372,7 @@ impl Recipe {
             shell: sphere.shell,
             // The default's probe covers the cameras at the pass's own distance: those between
             // two spheres of views are answered by both (spec § Query), and a cell spanning
-            // the band would cost the bunny 5 points of culling at the sampling distance.
+            // the band cost the bunny 3.5 points of culling at the sampling distance.
             band: if self.default_probe {
                 None
             } else {

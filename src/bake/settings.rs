@@ -45,7 +45,8 @@ pub const CONSERVATIVE_PROBE_PIXELS: u32 = 2;
 /// The default bake's probe pass shrinks occluders by this many pixels. With the cover fold,
 /// every zoo model misses at most 0.4 pixels a view on average at 1× and 2× the resolution
 /// (p99 ≤ 2), the bunny culls 44.4 % (45.4 % without the probe, 42.7 % with the split fold),
-/// and the bunny's bake takes 1.41× the thresholded bake's time; at 0 pixels the exposed
+/// and the bunny's bake takes 1.41× the thresholded bake's time with `--shells 0` (0.98× with
+/// its shells, which the default's probe leaves out); at 0 pixels the exposed
 /// engine misses 2.1 pixels a view at 2× (BENCHMARKS.md, "The probe with the cover fold").
 pub const DEFAULT_PROBE_PIXELS: u32 = 1;
 
@@ -64,7 +65,8 @@ pub const WARN_RESOLUTION: u32 = 32;
 /// pixels, and added where they may show to a camera near the view.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Probe {
-    /// [`DEFAULT_PROBE_PIXELS`] with the cover fold on the CPU backend for meshes of up to
+    /// [`DEFAULT_PROBE_PIXELS`] over the sampling sphere (not the shells), with the cover
+    /// fold, on the CPU backend for meshes of up to
     /// [`crate::memory::DEFAULT_PROBE_MAX_TRIANGLES`] triangles whose solids fit the budget,
     /// else off ([`Recipe::for_mesh`]); [`CONSERVATIVE_PROBE_PIXELS`] with `--conservative`.
     #[default]
@@ -104,7 +106,7 @@ pub struct BakeSettings {
     pub dilate: bool,
     /// Patches never culled, in the tiling's spatial numbering (`--always-visible`).
     pub always_visible: Vec<PatchId>,
-    /// The default bake plus the probe pass, with occluders shrunk by
+    /// The probe pass over every sphere of views, with occluders shrunk by
     /// [`CONSERVATIVE_PROBE_PIXELS`], and the split fold (`--conservative`).
     pub conservative: bool,
     /// The probe pass (`--probe`): the default's, off, or with occluders shrunk by a number of

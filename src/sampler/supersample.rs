@@ -259,16 +259,7 @@ pub fn split_fold(
     );
     let mut coarse = fold_into_with(coarse, seen, fine_level, level, FoldCorners::All);
     // The closed faces around every stored view.
-    let mut faces = root_faces().to_vec();
-    for _ in 0..level {
-        faces = faces.iter().flat_map(children).collect();
-    }
-    let mut around: Vec<Vec<[ViewIndex; 3]>> = vec![Vec::new(); view_count(level) as usize];
-    for face in &faces {
-        for &corner in &face.views {
-            around[corner as usize].push(face.views);
-        }
-    }
+    let (faces, around) = faces_around(level);
     for u in view_count(level)..full.views() {
         let targets = fold_targets(u, level);
         let targets = targets.views();
@@ -280,8 +271,13 @@ pub fn split_fold(
             while missing != 0 {
                 let bit = 1u64 << missing.trailing_zeros();
                 missing &= !bit;
-                let answers = |f: &[ViewIndex; 3]| f.iter().any(|&c| coarse.row(c)[w] & bit != 0);
-                let cost = |t: ViewIndex| around[t as usize].iter().filter(|f| !answers(f)).count();
+                let answers = |f: u32| {
+                    faces[f as usize]
+                        .iter()
+                        .any(|&c| coarse.row(c)[w] & bit != 0)
+                };
+                let cost =
+                    |t: ViewIndex| around[t as usize].iter().filter(|&&f| !answers(f)).count();
                 let best = targets
                     .iter()
                     .copied()
@@ -323,7 +319,7 @@ fn faces_around(level: u32) -> (Vec<[ViewIndex; 3]>, Vec<Vec<u32>>) {
 /// together hold the row of every finer view in the face — while the corners are chosen for
 /// all the faces at once: on the zoo's plain rows this keeps within 0.7 points the culling of
 /// per-face rows, where folding into every shared corner loses 3–7 points (BENCHMARKS.md,
-/// "The cover fold").
+/// "The probe with the cover fold").
 ///
 /// Deterministic: patches, faces and candidate corners are taken in index order. Holds one
 /// row per leaf face while folding (about twice the stored rows). Panics under
