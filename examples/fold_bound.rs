@@ -2,8 +2,9 @@
 //!
 //! `cargo run --release --example fold_bound -- FINE.pvis LEVEL [FINE_LEVEL]`
 //!
-//! `FINE.pvis` is a plain bake at a fine level (`patchvis bake M -o FINE.pvis --level 7
-//! --view-supersample 0 --probe off --shells 0`): each view's row is what that view shows.
+//! `FINE.pvis` is a plain bake at a fine level with its rows as sampled (`patchvis bake M -o
+//! FINE.pvis --level 7 --view-supersample 0 --probe off --shells 0 --sampled-rows`): each
+//! view's row is what that view shows.
 //! For 300 random directions (seed 1, as `eval`) it prints the culling, averaged, of three
 //! answers for the sphere face of `LEVEL` holding the direction, from the views of
 //! `FINE_LEVEL` (the file's level unless given) that lie in the closed face:

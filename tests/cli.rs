@@ -617,11 +617,12 @@ fn default_bakes_sample_three_shells_and_shells_0_writes_the_version_4_bytes() {
     }
     // The sampling sphere's own, as before shells.
     assert_eq!(stats["sampled_views"], 258);
-    // That file predates the probe pass of the default bake. Without the probe, the
+    // That file predates the probe pass of the default bake and saturated rows (hence
+    // `--sampled-rows`). Without the probe, the
     // sampling sphere's rows do not depend on the shells (the probe's cells span the
     // camera distances the sphere answers for, which the shells bound).
     let none = Bake::new(&SHELL_FLAGS)
-        .args(&["--shells", "0", "--probe", "off"])
+        .args(&["--shells", "0", "--probe", "off", "--sampled-rows"])
         .stats()
         .run();
     assert!(
@@ -630,7 +631,7 @@ fn default_bakes_sample_three_shells_and_shells_0_writes_the_version_4_bytes() {
     );
     assert_eq!(none.stats()["shells"], serde_json::json!([]));
     let plain = Bake::new(&SHELL_FLAGS)
-        .args(&["--probe", "off"])
+        .args(&["--probe", "off", "--sampled-rows"])
         .stats()
         .run();
     let plain_shells = plain.stats()["shells"].as_array().unwrap().clone();

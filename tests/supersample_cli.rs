@@ -4,21 +4,22 @@
 //! of a thresholded one into the plain stored rows), the default is the flag combination it is
 //! documented as, `--conservative`'s rows hold those of the default without its probe pass,
 //! the stats record it, and out-of-range values are usage errors. The fold's tests sample
-//! plainly (`--probe off`) unless they ask for a probe: the fold is what they check.
+//! plainly (`--probe off`) unless they ask for a probe, and keep the rows as sampled
+//! (`--sampled-rows`): the fold is what they check. The default's rows are those saturated.
 
 mod common;
 
 use common::{Bake, Baked, stderr};
 use patchvis::runtime::Pvis;
 use patchvis::sampler::{
-    FoldCorners, VisibilityMatrix, fold_into, fold_into_with, supersample_rows,
+    FoldCorners, VisibilityMatrix, fold_into, fold_into_with, saturate, supersample_rows,
 };
 use patchvis::sphere::view_count;
 
 /// The bake of the bunny in 100 patches at 64 px (unless `extra` sets `--resolution`) with
 /// `extra` flags, and `--probe off` unless `extra` has `--probe` or `--conservative`
-/// ([`bake_default`] keeps the default's probe). Patches keep the tiling's numbering, so that
-/// rows of bakes with different options compare patch for patch.
+/// ([`bake_default`] keeps the default's probe), and the rows as sampled. Patches keep the
+/// tiling's numbering, so that rows of bakes with different options compare patch for patch.
 fn bake_with(extra: &[&str]) -> Bake {
     let probe = extra.contains(&"--probe") || extra.contains(&"--conservative");
     bake_flags(extra, if probe { &[] } else { &["--probe", "off"] })
@@ -30,7 +31,14 @@ fn bake_default(extra: &[&str]) -> Baked {
 }
 
 fn bake_flags(extra: &[&str], probe: &[&str]) -> Bake {
-    let mut flags = vec!["--patches", "100", "--patch-order", "spatial", "-q"];
+    let mut flags = vec![
+        "--patches",
+        "100",
+        "--patch-order",
+        "spatial",
+        "--sampled-rows",
+        "-q",
+    ];
     if !extra.contains(&"--resolution") {
         flags.extend_from_slice(&["--resolution", "64"]);
     }
@@ -97,6 +105,41 @@ fn supersampled_rows_contain_the_plain_rows_and_fold_the_finer_bake() {
     assert_eq!(report["views"], view_count(1));
     // The fine pass's checkpoint is removed once the output is complete.
     assert!(!ss.file("bunny.pvis.vs1.ckpt").exists());
+}
+
+/// Without `--sampled-rows` a bake stores its rows saturated: each view's row is its row as
+/// sampled plus every patch all the sphere faces around the view already answer, so every
+/// query answers the same, and the file is smaller.
+#[test]
+fn default_rows_are_the_sampled_rows_saturated() {
+    let flags = [
+        "--patches",
+        "100",
+        "--patch-order",
+        "spatial",
+        "--resolution",
+        "64",
+        "--level",
+        "2",
+        "-q",
+    ];
+    let saturated = Bake::new(&flags).stats().run();
+    let sampled = Bake::new(&flags).args(&["--sampled-rows"]).stats().run();
+    let (level, sampled_rows) = rows(&sampled);
+    let (_, saturated_rows) = rows(&saturated);
+    assert_eq!(saturate(sampled_rows.clone(), level), saturated_rows);
+    assert!(
+        saturated_rows.count_ones() > sampled_rows.count_ones(),
+        "saturating added nothing"
+    );
+    assert!(
+        saturated.bytes().len() < sampled.bytes().len(),
+        "{} bytes saturated, {} as sampled",
+        saturated.bytes().len(),
+        sampled.bytes().len()
+    );
+    assert_eq!(saturated.stats()["sampled_rows"], false);
+    assert_eq!(sampled.stats()["sampled_rows"], true);
 }
 
 #[test]

@@ -69,6 +69,7 @@ fuzz_target!(|data: &[u8]| {
         far_views: threshold >> 6 & 1 == 1,
         shell_probe: (threshold >> 7 & 1 == 1).then_some(1),
         shell_fold_corners: FoldCorners::All,
+        sampled_rows: index >> 7 & 1 == 1,
     };
     let words_per_row = (patches as usize).div_ceil(64);
     let mut next_bit = bits.iter().cycle();

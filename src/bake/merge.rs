@@ -231,6 +231,7 @@ pub fn merge(parts: &[LoadedPart]) -> Result<Merged, MergeError> {
             fine: if passes == 2 { matrices.next() } else { None },
             params,
             supersample,
+            saturate: !recipe.settings.sampled_rows,
         }
     };
     // What `Recipe::run` does after sampling, on the records instead of the tiling.
@@ -312,6 +313,7 @@ fn recipe_of(part: &Part) -> Result<Recipe, String> {
         shells: s.shells,
         shell_min: s.shell_min,
         shell_level: Some(s.shell_level),
+        sampled_rows: s.sampled_rows,
         ..BakeSettings::default()
     }
     .check()

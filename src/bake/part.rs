@@ -23,7 +23,8 @@
 //! fov bits, `min_pixels`, `dilate`, `conservative_raster`, extra levels, fold threshold,
 //! fold corners, patch order, encoding, the probe pass (0, or its radius + 1), the
 //! always-visible ids, and the sampling shells (count, `--shell-min` as binary64 bits, level,
-//! extra levels, fold threshold, `--far-views`, then their probe pass and fold corners). The shells' distances follow from the camera and those
+//! extra levels, fold threshold, `--far-views`, then their probe pass and fold corners), and
+//! `--sampled-rows`. The shells' distances follow from the camera and those
 //! (`shells.rs`), so the merge computes them as the bake does. The camera and patch
 //! records are the original mesh's (a mesh baked in a working frame gets them as
 //! `Recipe::run` computes them). As the sampler's checkpoint does (`sampler/checkpoint.rs`),
@@ -46,8 +47,9 @@ const MAGIC: &[u8; 8] = b"PVISPART";
 /// The layout's version; bumped with the sampler checkpoint's whenever the rows change, and
 /// whenever the layout does: 3 since parts carry the sampling shells' passes, 4 since they
 /// record `--far-views` (and a conservative part carries its split fold's second passes), 5
-/// since they record the shells' probe and fold apart from the sampling sphere's.
-const VERSION: u32 = 5;
+/// since they record the shells' probe and fold apart from the sampling sphere's, 6 since they
+/// record `--sampled-rows`.
+const VERSION: u32 = 6;
 
 /// A fold's code in the settings block.
 fn fold_code(corners: FoldCorners) -> u8 {
@@ -118,6 +120,8 @@ pub struct PartSettings {
     pub far_views: bool,
     /// Which stored shell views receive a finer view's patches.
     pub shell_fold_corners: FoldCorners,
+    /// `--sampled-rows`: the merged file keeps the rows as sampled, unsaturated.
+    pub sampled_rows: bool,
 }
 
 impl PartSettings {
@@ -159,6 +163,7 @@ impl PartSettings {
         b.put_u8(u8::from(self.far_views));
         b.put_u32(self.shell_probe.map_or(0, |r| r + 1));
         b.put_u8(fold_code(self.shell_fold_corners));
+        b.put_u8(u8::from(self.sampled_rows));
         b
     }
 
@@ -203,6 +208,7 @@ impl PartSettings {
             far_views: flag(f.u8()?)?,
             shell_probe: f.u32()?.checked_sub(1),
             shell_fold_corners: fold_of(f.u8()?)?,
+            sampled_rows: flag(f.u8()?)?,
         };
         let in_range = settings.level <= MAX_LEVEL
             && settings.extra_levels <= MAX_LEVEL
@@ -489,6 +495,7 @@ pub(crate) mod tests {
             shell_fold_min_pixels: 0,
             far_views: false,
             shell_fold_corners: FoldCorners::All,
+            sampled_rows: false,
         };
         let shard = Shard { index: 1, count: 3 };
         let patches = (0..70)

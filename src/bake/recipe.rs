@@ -501,6 +501,7 @@ impl Recipe {
             fine,
             params,
             supersample,
+            saturate: !self.settings.sampled_rows,
         })
     }
 

@@ -10,10 +10,11 @@
 //! one, the finer pass holds the stored views' rows as its prefix and is sampled alone; with
 //! the split fold of `--conservative` it also keeps its rows before the probe pass, as a
 //! second pass. A shell's rows are folded the same way, at the shell's own level
-//! (`shells.rs`).
+//! (`shells.rs`). The folded rows are then saturated (`sampler::saturate`: every bit no
+//! query's answer depends on is set), unless the bake keeps the rows as sampled.
 
 use super::Supersample;
-use crate::sampler::{fold_into_with, split_fold};
+use crate::sampler::{fold_into_with, saturate, split_fold};
 use crate::sphere::{MAX_LEVEL, view_count};
 use crate::visibility::{SamplingParams, VisibilityMatrix};
 
@@ -52,6 +53,9 @@ pub(crate) struct SphereRows {
     /// computed once, for every level cut from these rows).
     pub(crate) params: SamplingParams,
     pub(crate) supersample: Supersample,
+    /// Whether the stored rows are saturated (`sampler::saturate`; off with
+    /// `bake --sampled-rows`).
+    pub(crate) saturate: bool,
 }
 
 impl SphereRows {
@@ -72,6 +76,16 @@ impl SphereRows {
 
     /// The stored matrix at `level` (see [`SampledRows::stored`]).
     pub(crate) fn stored(&self, level: u32) -> VisibilityMatrix {
+        let rows = self.folded(level);
+        if self.saturate {
+            saturate(rows, level)
+        } else {
+            rows
+        }
+    }
+
+    /// The level's own rows with the finer views folded in, as sampled.
+    fn folded(&self, level: u32) -> VisibilityMatrix {
         assert!(
             level <= self.params.level,
             "level {level} is finer than the sampled level {}",
@@ -133,7 +147,8 @@ impl SampledRows {
     }
 
     /// The matrix a bake at `level` (at most [`SampledRows::level`]) stores: the level's own
-    /// rows, with the finer views of `level + K` (capped at the finest sphere level) folded in.
+    /// rows, with the finer views of `level + K` (capped at the finest sphere level) folded in,
+    /// saturated unless the bake keeps the rows as sampled.
     ///
     /// Panics (caller contract) if `level` is finer than the sampled level.
     pub fn stored(&self, level: u32) -> VisibilityMatrix {

@@ -148,6 +148,9 @@ pub struct BakeSettings {
     /// what cameras farther than the sampling distance see (`--far-views`,
     /// `sampler::SamplingOptions::far_view`).
     pub far_views: bool,
+    /// Store each view's row as sampled and folded (`--sampled-rows`); by default a bake also
+    /// sets every bit that no query's answer depends on (`sampler::saturate`).
+    pub sampled_rows: bool,
 }
 
 impl Default for BakeSettings {
@@ -176,6 +179,7 @@ impl Default for BakeSettings {
             shell_min: DEFAULT_SHELL_MIN,
             shell_level: None,
             far_views: false,
+            sampled_rows: false,
         }
     }
 }

@@ -60,6 +60,7 @@ impl Recipe {
             shell_fold_min_pixels: self.shell_supersample.fold_min_pixels,
             far_views: s.far_views,
             shell_fold_corners: self.shell_supersample.fold_corners,
+            sampled_rows: s.sampled_rows,
         }
     }
 

@@ -63,6 +63,7 @@ pub(super) fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
         shell_min: args.shell_min,
         shell_level: args.shell_level,
         far_views: args.far_views,
+        sampled_rows: args.sampled_rows,
     })
 }
 
@@ -194,6 +195,7 @@ impl Summary<'_> {
             "probe": b.probe,
             "conservative_raster": s.conservative_raster,
             "far_views": s.far_views,
+            "sampled_rows": s.sampled_rows,
             "view_supersample": r.supersample.extra_levels,
             "fold_min_pixels": r.supersample.fold_min_pixels,
             "backend": self.backend.describe(),

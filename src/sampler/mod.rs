@@ -28,6 +28,7 @@ mod patch_box;
 mod patch_graph;
 mod patch_mesh;
 mod raster;
+mod saturate;
 mod solid;
 mod supersample;
 #[cfg(test)]
@@ -41,6 +42,7 @@ pub use checkpoint::{decode as decode_checkpoint, encode as encode_checkpoint};
 pub use id_buffer::{IdBuffer, NO_PATCH};
 pub use near::{MAX_NEAR_CAMERAS, NearCameras, near_camera_count, near_cameras};
 pub use raster::{Rasterizer, SUBPIXEL_BITS, render_ids, render_ids_filtered};
+pub use saturate::saturate;
 pub use supersample::{
     FoldCorners, FoldTargets, MAX_VIEW_SUPERSAMPLE, cover_fold, fold_into, fold_into_with,
     fold_targets, split_fold, supersample_rows,

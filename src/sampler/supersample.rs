@@ -292,7 +292,7 @@ pub fn split_fold(
 
 /// The leaf faces of `level` by their corner views, and for every stored view the indices of
 /// the faces it is a corner of.
-fn faces_around(level: u32) -> (Vec<[ViewIndex; 3]>, Vec<Vec<u32>>) {
+pub(super) fn faces_around(level: u32) -> (Vec<[ViewIndex; 3]>, Vec<Vec<u32>>) {
     let mut faces = root_faces().to_vec();
     for _ in 0..level {
         faces = faces.iter().flat_map(children).collect();
