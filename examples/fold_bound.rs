@@ -21,7 +21,7 @@ use anyhow::{Context, Result, bail};
 use patchvis::eval::views::random_directions;
 use patchvis::runtime::Pvis;
 use patchvis::sampler::{FoldCorners, VisibilityMatrix, fold_into_with, fold_targets};
-use patchvis::sphere::{Face, children, locate, root_faces, view_count};
+use patchvis::sphere::{Face, leaf_faces, locate, view_count};
 use std::collections::HashMap;
 
 fn main() -> Result<()> {
@@ -50,10 +50,7 @@ fn main() -> Result<()> {
     let own = fine.prefix(view_count(level));
 
     // Each face's own row: its corners' rows and those of the finer views lying in it.
-    let mut faces: Vec<Face> = root_faces().to_vec();
-    for _ in 0..level {
-        faces = faces.iter().flat_map(children).collect();
-    }
+    let faces: Vec<Face> = leaf_faces(level);
     let index: HashMap<[u32; 3], usize> = faces
         .iter()
         .enumerate()

@@ -86,14 +86,28 @@ pub struct BakedShell {
 }
 
 impl Baked {
-    /// The fraction of (view, patch) pairs marked visible.
+    /// The fraction of the patches a query answers, averaged over the leaf faces of the
+    /// sampling sphere (each answers the OR of its corners' rows). Not the rows' own
+    /// fraction: folded and saturated rows hold patches no single view showed.
     pub fn visible_fraction(&self) -> f64 {
-        let pairs = f64::from(self.visibility.views()) * f64::from(self.visibility.patches());
+        let rows = &self.visibility;
+        let faces = crate::sphere::leaf_faces(self.params.level);
+        let pairs = faces.len() as f64 * f64::from(rows.patches());
         if pairs == 0.0 {
-            0.0
-        } else {
-            self.visibility.count_ones() as f64 / pairs
+            return 0.0;
         }
+        let answered: u64 = faces
+            .iter()
+            .map(|f| {
+                (0..rows.words_per_row())
+                    .map(|w| {
+                        let word = f.views.iter().fold(0u64, |a, &c| a | rows.row(c)[w]);
+                        u64::from(word.count_ones())
+                    })
+                    .sum::<u64>()
+            })
+            .sum();
+        answered as f64 / pairs
     }
 }
 

@@ -275,7 +275,7 @@ impl Summary<'_> {
             )?;
         }
         outln!(
-            "sampling: {} views (level {}) at {}x{} px, fov {}°; a view sees {:.1}% of patches on average ({:.2} s)",
+            "sampling: {} views (level {}) at {}x{} px, fov {}°; a query answers {:.1}% of the patches on average ({:.2} s)",
             b.visibility.views(),
             s.level,
             r.resolution(),

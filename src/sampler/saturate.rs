@@ -54,16 +54,8 @@ pub fn saturate(mut rows: VisibilityMatrix, level: u32) -> VisibilityMatrix {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sphere::{Face, children, root_faces};
+    use crate::sphere::{Face, leaf_faces};
     use proptest::prelude::*;
-
-    fn leaves(level: u32) -> Vec<Face> {
-        let mut faces = root_faces().to_vec();
-        for _ in 0..level {
-            faces = faces.iter().flat_map(children).collect();
-        }
-        faces
-    }
 
     fn answer(rows: &VisibilityMatrix, face: &Face) -> Vec<u64> {
         let mut a = vec![0u64; rows.words_per_row()];
@@ -99,7 +91,7 @@ mod tests {
         ) {
             let rows = matrix(level, patches, density, seed);
             let full = saturate(rows.clone(), level);
-            let faces = leaves(level);
+            let faces = leaf_faces(level);
             for face in &faces {
                 prop_assert_eq!(answer(&full, face), answer(&rows, face));
             }

@@ -54,8 +54,7 @@
 
 use super::VisibilityMatrix;
 use crate::sphere::{
-    LatticePoint, ViewIndex, children, direction, lattice_point, locate, root_faces, view_count,
-    view_index,
+    LatticePoint, ViewIndex, direction, lattice_point, leaf_faces, locate, view_count, view_index,
 };
 
 /// The finest extra level [`supersample_rows`] is meant for: `K = 2` already samples 16× the
@@ -293,11 +292,7 @@ pub fn split_fold(
 /// The leaf faces of `level` by their corner views, and for every stored view the indices of
 /// the faces it is a corner of.
 pub(super) fn faces_around(level: u32) -> (Vec<[ViewIndex; 3]>, Vec<Vec<u32>>) {
-    let mut faces = root_faces().to_vec();
-    for _ in 0..level {
-        faces = faces.iter().flat_map(children).collect();
-    }
-    let faces: Vec<[ViewIndex; 3]> = faces.iter().map(|f| f.views).collect();
+    let faces: Vec<[ViewIndex; 3]> = leaf_faces(level).iter().map(|f| f.views).collect();
     let mut around = vec![Vec::new(); view_count(level) as usize];
     for (i, face) in faces.iter().enumerate() {
         for &corner in face {
@@ -406,7 +401,7 @@ pub fn cover_fold(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sphere::{Face, children, root_faces};
+    use crate::sphere::Face;
     use crate::test_kit::rng::Rng;
     use proptest::prelude::*;
 
@@ -422,14 +417,6 @@ mod tests {
             }
         }
         m
-    }
-
-    fn leaves(level: u32) -> Vec<Face> {
-        let mut faces = root_faces().to_vec();
-        for _ in 0..level {
-            faces = faces.iter().flat_map(children).collect();
-        }
-        faces
     }
 
     fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
@@ -492,7 +479,7 @@ mod tests {
         // exactly the coarse views that are corners of every closed leaf face containing it
         // (1 face inside a face, the 2 faces of an edge: their 2 shared endpoints).
         for (level, fine_level) in [(0, 1), (0, 2), (1, 2), (1, 3), (2, 3), (2, 4), (3, 5)] {
-            let faces = leaves(level);
+            let faces = leaf_faces(level);
             let (mut on_edges, mut inside) = (0, 0);
             for u in view_count(level)..view_count(fine_level) {
                 let holding: Vec<&Face> = faces
@@ -567,7 +554,7 @@ mod tests {
                 bits_all += all.row(v).iter().map(|w| w.count_ones()).sum::<u32>();
             }
             assert!(smaller > 0 && bits_one < bits_all);
-            for face in leaves(level) {
+            for face in leaf_faces(level) {
                 let mut answer = vec![0u64; 2];
                 for c in face.views {
                     for (a, &w) in answer.iter_mut().zip(one.row(c)) {
@@ -640,7 +627,7 @@ mod tests {
                     );
                 }
             }
-            for face in leaves(level) {
+            for face in leaf_faces(level) {
                 let mut answer = vec![0u64; 2];
                 for c in face.views {
                     for (a, &w) in answer.iter_mut().zip(split.row(c)) {
@@ -687,7 +674,7 @@ mod tests {
             for v in 0..view_count(level) {
                 assert!(row_contains(cover.row(v), own.row(v)), "view {v}");
             }
-            for face in leaves(level) {
+            for face in leaf_faces(level) {
                 let answer = answer_of(&cover, &face);
                 for u in 0..views {
                     if in_closed_face(&face, direction(u), 1e-5) {
@@ -697,7 +684,7 @@ mod tests {
             }
             // Fewer bits in the rows, and fewer (face, patch) answers.
             let answers = |rows: &VisibilityMatrix| -> u32 {
-                leaves(level)
+                leaf_faces(level)
                     .iter()
                     .map(|f| {
                         answer_of(rows, f)
@@ -739,7 +726,7 @@ mod tests {
         for (level, fine_level) in [(0, 1), (0, 2), (1, 2), (2, 3), (2, 4), (3, 5)] {
             let fine = random_matrix(view_count(fine_level), 70, 99 + u64::from(fine_level));
             let coarse = supersample_rows(&fine, fine_level, level);
-            for face in leaves(level) {
+            for face in leaf_faces(level) {
                 let mut answer = vec![0u64; 2];
                 for c in face.views {
                     for (a, &w) in answer.iter_mut().zip(coarse.row(c)) {

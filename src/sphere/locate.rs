@@ -63,6 +63,17 @@ pub fn children(face: &Face) -> [Face; 4] {
     core::array::from_fn(|k| child(face, k, mids))
 }
 
+/// Every leaf face of `level` (`8 · 4^level` of them): the root faces split by [`children`]
+/// `level` times, in that order.
+#[cfg(any(feature = "std", test))]
+pub fn leaf_faces(level: u32) -> std::vec::Vec<Face> {
+    let mut faces = root_faces().to_vec();
+    for _ in 0..level {
+        faces = faces.iter().flat_map(children).collect();
+    }
+    faces
+}
+
 /// The directions of the midpoints of `face`'s edges `ab`, `bc` and `ca`.
 fn midpoints(face: &Face) -> [[f32; 3]; 3] {
     let [da, db, dc] = face.directions;
@@ -142,14 +153,6 @@ mod tests {
     use crate::test_kit::rng::Rng;
     use proptest::prelude::*;
 
-    fn leaves(level: u32) -> Vec<Face> {
-        let mut faces: Vec<Face> = root_faces().to_vec();
-        for _ in 0..level {
-            faces = faces.iter().flat_map(children).collect();
-        }
-        faces
-    }
-
     fn inside(face: &Face, d: [f32; 3], slack: f32) -> bool {
         let [a, b, c] = face.directions;
         dot(d, cross(a, b)) >= -slack
@@ -160,7 +163,7 @@ mod tests {
     #[test]
     fn hierarchy_covers_every_view_and_matches_numbering() {
         for level in 0..=5 {
-            let faces = leaves(level);
+            let faces = leaf_faces(level);
             assert_eq!(faces.len() as u32, face_count(level));
             let mut used = vec![false; view_count(level) as usize];
             for f in &faces {
@@ -184,7 +187,7 @@ mod tests {
 
     #[test]
     fn children_midpoints_split_parent_edges() {
-        for f in leaves(3) {
+        for f in leaf_faces(3) {
             let kids = children(&f);
             let mab = kids[0].views[1];
             assert_eq!(
@@ -257,7 +260,7 @@ mod tests {
             prop_assert!(inside(&face, normalize(d), 1e-5));
             // Exactly one leaf contains it (away from edges, within rounding).
             if level <= 3 {
-                let containing = leaves(level).iter().filter(|f| inside(f, normalize(d), -1e-5)).count();
+                let containing = leaf_faces(level).iter().filter(|f| inside(f, normalize(d), -1e-5)).count();
                 prop_assert!(containing <= 1);
             }
         }

@@ -14,6 +14,8 @@ mod locate;
 mod numbering;
 mod sqrt;
 
+#[cfg(any(feature = "std", test))]
+pub use locate::leaf_faces;
 pub use locate::{Face, children, locate, root_face, root_faces};
 pub use numbering::{LatticePoint, direction, lattice_point, level_of, parents, view_index};
 pub use sqrt::{sqrtf, sqrtf_digits};

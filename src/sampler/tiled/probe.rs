@@ -167,14 +167,17 @@ impl ViewContext<'_> {
         // it: anywhere for its outward side, through an opening of its component for its
         // inward side.
         let openings = &ps.openings;
+        // The screen test first: it rejects most triangles of a hidden patch, and costs less
+        // than the facing test's look-ups by triangle and square root (a 1,000,000-triangle
+        // bunny grid's default bake: 0.86× the CPU time with this order, BENCHMARKS.md).
         let in_front = |t: u32, world: [[f32; 3]; 3], st: [ScreenVertex; 3]| {
+            if guard.triangle_hidden(st, true) {
+                return false;
+            }
             let side = probe.solids.side(t, world, cell);
             if let Side::Inward(c) = side
                 && !openings.any(c)
             {
-                return false;
-            }
-            if guard.triangle_hidden(st, true) {
                 return false;
             }
             let mut hit = false;
