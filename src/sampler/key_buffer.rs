@@ -92,7 +92,7 @@ impl KeyBuffer {
 
     /// Makes this buffer the occluders of `source` shrunk by `radius` pixels: every pixel
     /// takes the farthest depth of `source` within the `(2 · radius + 1)`² square around it
-    /// (an empty pixel there empties it), then the tiles are rebuilt. A fragment nearer than
+    /// (an empty pixel there empties it), with its tiles. A fragment nearer than
     /// a pixel of the shrunk buffer may show from a camera that moves the occluders by up
     /// to `radius` pixels.
     pub(crate) fn shrink_from(&mut self, source: &KeyBuffer, radius: usize, rows: &mut Vec<u32>) {
@@ -102,6 +102,9 @@ impl KeyBuffer {
         // whole-row loops over contiguous slices, which the compiler turns into SIMD.
         rows.clear();
         rows.extend(source.keys.iter().map(|&k| (k >> 32) as u32));
+        // One more row of scratch, after the image.
+        rows.resize(n * n + n, 0);
+        let (rows, scratch) = rows.split_at_mut(n * n);
         let radius = radius.min(n.saturating_sub(1));
         for row in rows.chunks_exact_mut(n) {
             // Widen by one pixel at a time: after d steps, each pixel holds its window of d.
@@ -115,22 +118,38 @@ impl KeyBuffer {
                 row[n - 1] = row[n - 1].min(left);
             }
         }
-        for (y, out) in self.keys.chunks_exact_mut(n).enumerate() {
+        // The column minimum in 32-bit depths in the scratch row, then one pass writing the
+        // keys and the tiles' column minima (as `build_tiles` would find them in the keys).
+        let KeyBuffer {
+            keys,
+            tiles_per_row,
+            tile_far,
+            column_far,
+            ..
+        } = self;
+        let columns = &mut column_far[..n];
+        for (y, out) in keys.chunks_exact_mut(n).enumerate() {
             let (a, b) = (y.saturating_sub(radius), (y + radius).min(n - 1));
-            let first = &rows[a * n..(a + 1) * n];
-            for (x, o) in out.iter_mut().enumerate() {
-                *o = u64::from(first[x]);
-            }
+            scratch.copy_from_slice(&rows[a * n..(a + 1) * n]);
             for yy in a + 1..=b {
-                for (o, &d) in out.iter_mut().zip(&rows[yy * n..(yy + 1) * n]) {
-                    *o = (*o).min(u64::from(d));
+                for (c, &d) in scratch.iter_mut().zip(&rows[yy * n..(yy + 1) * n]) {
+                    *c = (*c).min(d);
                 }
             }
-            for o in out.iter_mut() {
-                *o = if *o == 0 { 0 } else { (*o << 32) | 1 };
+            if y % TILE == 0 {
+                columns.fill(i32::MAX);
+            }
+            for ((o, &c), far) in out.iter_mut().zip(&*scratch).zip(columns.iter_mut()) {
+                *o = if c == 0 { 0 } else { (u64::from(c) << 32) | 1 };
+                *far = (*far).min(c as i32);
+            }
+            if y % TILE == TILE - 1 || y == n - 1 {
+                let tiles = &mut tile_far[y / TILE * *tiles_per_row..][..*tiles_per_row];
+                for (t, c) in tiles.iter_mut().zip(columns.chunks(TILE)) {
+                    *t = c.iter().copied().min().unwrap_or(0) as u32;
+                }
             }
         }
-        self.build_tiles();
     }
 
     /// The depth bits of pixel `index` (0: empty).
@@ -344,6 +363,15 @@ mod tests {
                     );
                 }
             }
+            // Keys of low half 1 (0 where empty), and the tiles `build_tiles` makes of them
+            // (23 pixels: the last band and column of tiles are partial).
+            for &k in &shrunk.keys {
+                assert_eq!(k as u32, u32::from(k != 0), "radius {radius}");
+            }
+            let mut rebuilt = KeyBuffer::new(n as u32);
+            rebuilt.keys.copy_from_slice(&shrunk.keys);
+            rebuilt.build_tiles();
+            assert_eq!(rebuilt.tile_far, shrunk.tile_far, "radius {radius}");
         }
     }
 
