@@ -4,14 +4,14 @@
 //! § Query), never one row alone. So a view's row may hold any patch that every leaf face
 //! around the view already answers through its corners: setting that bit changes no face's
 //! answer. [`saturate`] sets all such bits. The result is the largest matrix with the same
-//! answers, and the same whatever the rows were before among those with these answers.
+//! answers; it depends on the answers alone (a bit a view held is one its faces answer).
 //!
 //! Why: the folds decide which corner of a face holds a patch (the cover fold one corner per
 //! face, chosen over the whole sphere; the split fold one for the probe's guesses), which
 //! leaves each patch's views a scattered subset of the region whose faces answer it. The
 //! VISB coders predict a view's bits from its two parents' (spec/FORMAT.md, encodings 1 and
-//! 2), and a scattered subset predicts poorly. Saturated, a patch's views are the region
-//! whose every surrounding face answers it: one connected piece where its faces are. Measured
+//! 2), and a scattered subset predicts poorly. Saturated, a patch's views are all those
+//! whose every surrounding face answers it: a region, as its answering faces are. Measured
 //! on the model zoo (BENCHMARKS.md, "Saturated rows"): every mode's file is smaller, the
 //! default's by 4–45 %, with the same answers to every query.
 //!

@@ -169,7 +169,7 @@ impl ViewContext<'_> {
         let openings = &ps.openings;
         // The screen test first: it rejects most triangles of a hidden patch, and costs less
         // than the facing test's look-ups by triangle and square root (a 1,000,000-triangle
-        // bunny grid's default bake: 0.86× the CPU time with this order, BENCHMARKS.md).
+        // bunny grid's default bake: 0.87× the CPU time with this order, BENCHMARKS.md).
         let in_front = |t: u32, world: [[f32; 3]; 3], st: [ScreenVertex; 3]| {
             if guard.triangle_hidden(st, true) {
                 return false;
