@@ -57,12 +57,7 @@ fn main() -> Result<()> {
         .map(|(i, f)| (sorted(f.views), i))
         .collect();
     let words = fine.words_per_row();
-    let mut face_rows = vec![0u64; faces.len() * words];
-    for (i, face) in faces.iter().enumerate() {
-        for &c in &face.views {
-            or_into(&mut face_rows[i * words..][..words], own.row(c));
-        }
-    }
+    let mut face_rows: Vec<u64> = faces.iter().flat_map(|f| own.or_rows(&f.views)).collect();
     for u in view_count(level)..fine.views() {
         let targets = fold_targets(u, level);
         for (i, face) in faces.iter().enumerate() {
@@ -85,13 +80,7 @@ fn main() -> Result<()> {
             .sum();
         1.0 - drawn as f64 / total
     };
-    let corners = |rows: &VisibilityMatrix, face: &Face| {
-        let mut answer = vec![0u64; words];
-        for &c in &face.views {
-            or_into(&mut answer, rows.row(c));
-        }
-        answer
-    };
+    let corners = |rows: &VisibilityMatrix, face: &Face| rows.or_rows(&face.views);
     let directions = random_directions(300, 1);
     let (mut face_sum, mut all_sum, mut cover_sum) = (0.0, 0.0, 0.0);
     for &d in &directions {

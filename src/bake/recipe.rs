@@ -98,14 +98,8 @@ impl Baked {
         }
         let answered: u64 = faces
             .iter()
-            .map(|f| {
-                (0..rows.words_per_row())
-                    .map(|w| {
-                        let word = f.views.iter().fold(0u64, |a, &c| a | rows.row(c)[w]);
-                        u64::from(word.count_ones())
-                    })
-                    .sum::<u64>()
-            })
+            .flat_map(|f| rows.or_rows(&f.views))
+            .map(|w| u64::from(w.count_ones()))
             .sum();
         answered as f64 / pairs
     }

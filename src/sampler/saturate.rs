@@ -41,7 +41,7 @@ pub fn saturate(mut rows: VisibilityMatrix, level: u32) -> VisibilityMatrix {
     // gained bit is one every face around the view already answers).
     for w in 0..rows.words_per_row() {
         for (a, face) in answer.iter_mut().zip(&faces) {
-            *a = face.iter().fold(0, |a, &c| a | rows.row(c)[w]);
+            *a = rows.or_word(face, w);
         }
         for (v, faces) in around.iter().enumerate() {
             let all = faces.iter().fold(!0u64, |a, &f| a & answer[f as usize]);
@@ -58,13 +58,7 @@ mod tests {
     use proptest::prelude::*;
 
     fn answer(rows: &VisibilityMatrix, face: &Face) -> Vec<u64> {
-        let mut a = vec![0u64; rows.words_per_row()];
-        for c in face.views {
-            for (a, &w) in a.iter_mut().zip(rows.row(c)) {
-                *a |= w;
-            }
-        }
-        a
+        rows.or_rows(&face.views)
     }
 
     /// Rows whose bits are set with probability `density / 256`, from `seed`.

@@ -344,11 +344,7 @@ pub fn cover_fold(
     }
     let mut pending: [Vec<u32>; 64] = core::array::from_fn(|_| Vec::new());
     for w in 0..words {
-        let answered = |coarse: &VisibilityMatrix, f: u32| {
-            faces[f as usize]
-                .iter()
-                .fold(0u64, |a, &c| a | coarse.row(c)[w])
-        };
+        let answered = |coarse: &VisibilityMatrix, f: u32| coarse.or_word(&faces[f as usize], w);
         for list in &mut pending {
             list.clear();
         }
@@ -555,12 +551,7 @@ mod tests {
             }
             assert!(smaller > 0 && bits_one < bits_all);
             for face in leaf_faces(level) {
-                let mut answer = vec![0u64; 2];
-                for c in face.views {
-                    for (a, &w) in answer.iter_mut().zip(one.row(c)) {
-                        *a |= w;
-                    }
-                }
+                let answer = answer_of(&one, &face);
                 for u in 0..view_count(fine_level) {
                     if in_closed_face(&face, direction(u), 1e-5) {
                         assert!(
@@ -628,12 +619,7 @@ mod tests {
                 }
             }
             for face in leaf_faces(level) {
-                let mut answer = vec![0u64; 2];
-                for c in face.views {
-                    for (a, &w) in answer.iter_mut().zip(split.row(c)) {
-                        *a |= w;
-                    }
-                }
+                let answer = answer_of(&split, &face);
                 for u in 0..views {
                     if in_closed_face(&face, direction(u), 1e-5) {
                         assert!(row_contains(&answer, full.row(u)), "{:?} {u}", face.views);
@@ -645,13 +631,7 @@ mod tests {
 
     /// The OR of `rows`' rows of `face`'s corners.
     fn answer_of(rows: &VisibilityMatrix, face: &Face) -> Vec<u64> {
-        let mut answer = vec![0u64; rows.words_per_row()];
-        for c in face.views {
-            for (a, &w) in answer.iter_mut().zip(rows.row(c)) {
-                *a |= w;
-            }
-        }
-        answer
+        rows.or_rows(&face.views)
     }
 
     #[test]
@@ -727,12 +707,7 @@ mod tests {
             let fine = random_matrix(view_count(fine_level), 70, 99 + u64::from(fine_level));
             let coarse = supersample_rows(&fine, fine_level, level);
             for face in leaf_faces(level) {
-                let mut answer = vec![0u64; 2];
-                for c in face.views {
-                    for (a, &w) in answer.iter_mut().zip(coarse.row(c)) {
-                        *a |= w;
-                    }
-                }
+                let answer = answer_of(&coarse, &face);
                 let mut covered = 0;
                 for u in 0..view_count(fine_level) {
                     if in_closed_face(&face, direction(u), 1e-5) {
@@ -765,12 +740,7 @@ mod tests {
             let fine = random_matrix(view_count(fine_level), 90, 5);
             let coarse = supersample_rows(&fine, fine_level, level);
             let face = locate([x, y, z], level);
-            let mut answer = vec![0u64; 2];
-            for c in face.views {
-                for (a, &w) in answer.iter_mut().zip(coarse.row(c)) {
-                    *a |= w;
-                }
-            }
+            let answer = answer_of(&coarse, &face);
             for u in 0..view_count(fine_level) {
                 let du = direction(u);
                 if locate(du, level).views == face.views || in_closed_face(&face, du, 1e-5) {

@@ -71,6 +71,17 @@ impl VisibilityMatrix {
         let start = view as usize * self.words_per_row;
         &mut self.bits[start..start + self.words_per_row]
     }
+    /// Word `word` of the OR of the rows of `views`: with a leaf face's three corners, that
+    /// word of the answer of a query in the face (spec § Query).
+    pub fn or_word(&self, views: &[u32], word: usize) -> u64 {
+        views.iter().fold(0, |a, &v| a | self.row(v)[word])
+    }
+    /// The OR of the rows of `views` ([`Self::or_word`] for every word).
+    pub fn or_rows(&self, views: &[u32]) -> Vec<u64> {
+        (0..self.words_per_row)
+            .map(|w| self.or_word(views, w))
+            .collect()
+    }
     /// Whether `view` sees `patch`.
     pub fn get(&self, view: u32, patch: PatchId) -> bool {
         self.row(view)[patch as usize / 64] >> (patch % 64) & 1 == 1
