@@ -21,7 +21,7 @@
 //! | eval | whole | per-triangle maps bounded by a check, pixels per worker |
 //!
 //! **The minimum.** Some needs do not shrink with the budget: the sampler's per-worker ID
-//! buffers, the batch of the patch-ordered mesh it builds, the visibility rows, and the
+//! buffers (and the probe pass's shrunk occluders beside them), the batch of the patch-ordered mesh it builds, the visibility rows, and the
 //! out-of-core tiling's merge buffers and small patch graph. [`MemoryBudget::minimum`] adds
 //! them up for one bake (constants measured with `--stats` on the bunny and a 400K-triangle
 //! mesh, with margin), and the bake refuses a budget below it before any work, naming the
@@ -67,6 +67,13 @@ const SAMPLING_BATCH_TRIANGLES: u64 = 1 << 19;
 /// 128 to 1024 pixels.
 pub const SAMPLING_BYTES_PER_PIXEL: u64 = 12;
 
+/// Heap of each sampling worker per ID-buffer pixel for the probe pass (the default bake's
+/// and `--conservative`'s), at most: its shrunk occluders, a 4-byte depth
+/// (`sampler::key_buffer`'s `DepthBuffer`); the pixels where one boundary loop's cap lies in
+/// front of them, up to 4 bytes each when the cap fills the image; the openings' distance
+/// grids, a quarter of a byte; the tiles and a ring of a few rows.
+pub const PROBE_BYTES_PER_PIXEL: u64 = 9;
+
 /// Heap a bake takes whatever its budget: the out-of-core tiling's merge buffers and patch
 /// graph (3.0 to 4.0 MB measured on the bunny and a 400K-triangle mesh at budgets of 1 to
 /// 8 MiB), per-patch records and the allocator's slack.
@@ -86,6 +93,8 @@ pub struct FixedNeeds {
     pub workers: usize,
     /// Bytes of the visibility rows sampled (one bit per view and patch).
     pub row_bytes: u64,
+    /// Whether some pass runs the probe pass ([`PROBE_BYTES_PER_PIXEL`] more per worker).
+    pub probe: bool,
 }
 
 impl FixedNeeds {
@@ -94,12 +103,11 @@ impl FixedNeeds {
     pub fn sampling(&self) -> u64 {
         let batch = u64::from(self.triangles).min(SAMPLING_BATCH_TRIANGLES);
         let pixels = u64::from(self.resolution).pow(2);
+        let per_pixel =
+            SAMPLING_BYTES_PER_PIXEL + if self.probe { PROBE_BYTES_PER_PIXEL } else { 0 };
         SAMPLING_SLACK_BYTES
             .saturating_add(batch.saturating_mul(SAMPLING_BUILD_BYTES_PER_TRIANGLE))
-            .saturating_add(
-                (self.workers as u64)
-                    .saturating_mul(pixels.saturating_mul(SAMPLING_BYTES_PER_PIXEL)),
-            )
+            .saturating_add((self.workers as u64).saturating_mul(pixels.saturating_mul(per_pixel)))
             .saturating_add(self.row_bytes.saturating_mul(2))
     }
 }
@@ -239,6 +247,7 @@ mod tests {
             resolution: 128,
             workers: 2,
             row_bytes: 66 * 1000 / 8,
+            probe: false,
         };
         let m = MemoryBudget::minimum(&bunny);
         assert_eq!(m % (1 << 20), 0);
@@ -249,11 +258,24 @@ mod tests {
             ..bunny
         });
         assert!(finer > m + (20 << 20), "{finer}");
+        // The probe pass: 9 bytes a pixel on each of the 2 workers.
+        let probed = MemoryBudget::minimum(&FixedNeeds {
+            probe: true,
+            ..FixedNeeds {
+                resolution: 1024,
+                ..bunny
+            }
+        });
+        assert!(
+            probed >= finer + (18 << 20) - (1 << 20),
+            "{probed} against {finer}"
+        );
         let tiny = FixedNeeds {
             triangles: 1,
             resolution: 32,
             workers: 1,
             row_bytes: 1,
+            probe: false,
         };
         assert_eq!(MemoryBudget::minimum(&tiny), MIN_FIXED_BYTES);
         let huge = FixedNeeds {

@@ -305,6 +305,7 @@ impl Recipe {
             resolution: self.resolution(),
             workers: rayon::current_num_threads(),
             row_bytes: views * patches.div_ceil(64) * 8,
+            probe: self.probe.is_some() || self.shell_probe.is_some(),
         };
         let minimum = MemoryBudget::minimum(&needs);
         if self.memory().total() < minimum {

@@ -11,6 +11,10 @@
 //! "empty" in the reference) is dropped. The patch comes straight out of the key
 //! ([`patch_slot`]), with no per-triangle table to look up.
 //! Cost: 8 bytes per pixel, one load, `max` and store per fragment.
+//!
+//! The probe pass's shrunk occluders ([`DepthBuffer`], [`DepthBuffer::shrink_from`]) need
+//! depths alone: the same buffer with `u32` pixels, half the bytes to write and to read, and
+//! the same occlusion tests.
 
 use super::raster::{SUBPIXEL_BITS, ScreenVertex};
 
@@ -30,11 +34,33 @@ const DRAIN_RUN: usize = 8;
 /// Side of the square tiles of the occlusion map, in pixels.
 pub(crate) const TILE: usize = 8;
 
-/// Per-pixel packed keys of one view, plus the per-tile farthest depth built from them.
+/// What one pixel of a [`KeyBuffer`] holds: a packed key (`u64`, depth in the high half) or a
+/// depth alone (`u32`). Either way 0 is empty.
+pub(crate) trait Pixel: Copy + Default + Eq + std::fmt::Debug {
+    /// The pixel's depth bits (0: empty).
+    fn depth_bits(self) -> u32;
+}
+
+impl Pixel for u64 {
+    #[inline(always)]
+    fn depth_bits(self) -> u32 {
+        (self >> 32) as u32
+    }
+}
+
+impl Pixel for u32 {
+    #[inline(always)]
+    fn depth_bits(self) -> u32 {
+        self
+    }
+}
+
+/// Per-pixel packed keys of one view (or depths alone, [`DepthBuffer`]), plus the per-tile
+/// farthest depth built from them.
 #[derive(Debug)]
-pub(crate) struct KeyBuffer {
+pub(crate) struct KeyBuffer<P: Pixel = u64> {
     resolution: usize,
-    keys: Vec<u64>,
+    keys: Vec<P>,
     tiles_per_row: usize,
     /// Smallest depth bits (farthest) in each `TILE`² tile; 0 where a pixel is empty.
     tile_far: Vec<u32>,
@@ -42,20 +68,25 @@ pub(crate) struct KeyBuffer {
     column_far: Vec<i32>,
 }
 
-impl KeyBuffer {
+/// The depths of a view without their patches: the probe pass's shrunk occluders.
+pub(crate) type DepthBuffer = KeyBuffer<u32>;
+
+impl<P: Pixel> KeyBuffer<P> {
     /// A cleared buffer of `resolution`² pixels.
-    pub(crate) fn new(resolution: u32) -> KeyBuffer {
+    pub(crate) fn new(resolution: u32) -> KeyBuffer<P> {
         let resolution = resolution as usize;
         let tiles_per_row = resolution.div_ceil(TILE);
         KeyBuffer {
             resolution,
-            keys: vec![0; resolution * resolution],
+            keys: vec![P::default(); resolution * resolution],
             tiles_per_row,
             tile_far: vec![0; tiles_per_row * tiles_per_row],
             column_far: vec![0; resolution],
         }
     }
+}
 
+impl KeyBuffer {
     /// The packed keys, row by row from the top.
     #[cfg(test)]
     pub(crate) fn keys(&self) -> &[u64] {
@@ -89,59 +120,61 @@ impl KeyBuffer {
         let stored = &mut self.keys[index];
         *stored = (*stored).max(key);
     }
+}
 
+impl DepthBuffer {
     /// Makes this buffer the occluders of `source` shrunk by `radius` pixels: every pixel
     /// takes the farthest depth of `source` within the `(2 · radius + 1)`² square around it
     /// (an empty pixel there empties it), with its tiles. A fragment nearer than
     /// a pixel of the shrunk buffer may show from a camera that moves the occluders by up
     /// to `radius` pixels.
-    pub(crate) fn shrink_from(&mut self, source: &KeyBuffer, radius: usize, rows: &mut Vec<u32>) {
+    ///
+    /// Separable, in one pass over `source`: each source row's minimum over its window goes
+    /// to a ring of `2 · radius + 1` rows in `ring` (a few KiB, which stay in cache), and each
+    /// output row is the minimum of the ring rows of its window, written with the tiles'
+    /// column minima. Every loop runs over whole rows of contiguous slices, which the
+    /// compiler turns into SIMD.
+    pub(crate) fn shrink_from(&mut self, source: &KeyBuffer, radius: usize, ring: &mut Vec<u32>) {
         let n = self.resolution;
         debug_assert_eq!(n, source.resolution);
-        // Depths (0: empty), then the minimum over each row's window, then over each column's:
-        // whole-row loops over contiguous slices, which the compiler turns into SIMD.
-        rows.clear();
-        rows.extend(source.keys.iter().map(|&k| (k >> 32) as u32));
-        // One more row of scratch, after the image.
-        rows.resize(n * n + n, 0);
-        let (rows, scratch) = rows.split_at_mut(n * n);
         let radius = radius.min(n.saturating_sub(1));
-        for row in rows.chunks_exact_mut(n) {
-            // Widen by one pixel at a time: after d steps, each pixel holds its window of d.
-            for _ in 0..radius {
-                let mut left = row[0];
-                for x in 0..n - 1 {
-                    let (here, right) = (row[x], row[x + 1]);
-                    row[x] = here.min(left).min(right);
-                    left = here;
-                }
-                row[n - 1] = row[n - 1].min(left);
-            }
-        }
-        // The column minimum in 32-bit depths in the scratch row, then one pass writing the
-        // keys and the tiles' column minima (as `build_tiles` would find them in the keys).
-        let KeyBuffer {
-            keys,
+        let window = 2 * radius + 1;
+        // One more row of scratch for the row minima's steps past the first.
+        ring.resize((window + 1) * n, 0);
+        let (ring, step) = ring.split_at_mut(window * n);
+        let row_min = |yy: usize, out: &mut [u32], step: &mut [u32]| {
+            let keys = &source.keys[yy * n..(yy + 1) * n];
+            row_window_min(keys, radius, out, step);
+        };
+        let DepthBuffer {
+            keys: depths,
             tiles_per_row,
             tile_far,
             column_far,
             ..
         } = self;
         let columns = &mut column_far[..n];
-        for (y, out) in keys.chunks_exact_mut(n).enumerate() {
+        let mut ready = 0; // Source rows whose minima are in the ring.
+        for (y, out) in depths.chunks_exact_mut(n).enumerate() {
             let (a, b) = (y.saturating_sub(radius), (y + radius).min(n - 1));
-            scratch.copy_from_slice(&rows[a * n..(a + 1) * n]);
+            while ready <= b {
+                let slot = ready % window;
+                row_min(ready, &mut ring[slot * n..(slot + 1) * n], step);
+                ready += 1;
+            }
+            let slot = |yy: usize| &ring[yy % window * n..][..n];
+            out.copy_from_slice(slot(a));
             for yy in a + 1..=b {
-                for (c, &d) in scratch.iter_mut().zip(&rows[yy * n..(yy + 1) * n]) {
-                    *c = (*c).min(d);
+                for (o, &d) in out.iter_mut().zip(slot(yy)) {
+                    *o = (*o).min(d);
                 }
             }
             if y % TILE == 0 {
                 columns.fill(i32::MAX);
             }
-            for ((o, &c), far) in out.iter_mut().zip(&*scratch).zip(columns.iter_mut()) {
-                *o = if c == 0 { 0 } else { (u64::from(c) << 32) | 1 };
-                *far = (*far).min(c as i32);
+            // Depth bits are those of a positive `f32` or 0 (empty), so they order as `i32`.
+            for (far, &o) in columns.iter_mut().zip(&*out) {
+                *far = (*far).min(o as i32);
             }
             if y % TILE == TILE - 1 || y == n - 1 {
                 let tiles = &mut tile_far[y / TILE * *tiles_per_row..][..*tiles_per_row];
@@ -152,10 +185,52 @@ impl KeyBuffer {
         }
     }
 
+    /// Sets pixel `index` to depth `q` (tests of what reads the shrunk occluders).
+    #[cfg(test)]
+    pub(crate) fn set(&mut self, index: usize, q: f32) {
+        self.keys[index] = q.to_bits();
+    }
+}
+
+/// The depths of one row of keys, each the minimum over the `2 · radius + 1` pixels around it
+/// (clamped at the ends), into `out`; `step` is scratch of the row's length.
+fn row_window_min(keys: &[u64], radius: usize, out: &mut [u32], step: &mut [u32]) {
+    let n = keys.len();
+    let depth = |k: u64| (k >> 32) as u32;
+    if radius == 0 || n < 2 {
+        for (o, &k) in out.iter_mut().zip(keys) {
+            *o = depth(k);
+        }
+        return;
+    }
+    // The first step straight from the keys: each pixel and its two neighbours.
+    out[0] = depth(keys[0]).min(depth(keys[1]));
+    out[n - 1] = depth(keys[n - 2]).min(depth(keys[n - 1]));
+    for (o, ((&l, &c), &r)) in out[1..n - 1]
+        .iter_mut()
+        .zip(keys.iter().zip(&keys[1..]).zip(&keys[2..]))
+    {
+        *o = depth(l).min(depth(c)).min(depth(r));
+    }
+    // Each further step widens the window by one pixel on each side.
+    for _ in 1..radius {
+        step.copy_from_slice(out);
+        out[0] = step[0].min(step[1]);
+        out[n - 1] = step[n - 2].min(step[n - 1]);
+        for (o, ((&l, &c), &r)) in out[1..n - 1]
+            .iter_mut()
+            .zip(step.iter().zip(&step[1..]).zip(&step[2..]))
+        {
+            *o = l.min(c).min(r);
+        }
+    }
+}
+
+impl<P: Pixel> KeyBuffer<P> {
     /// The depth bits of pixel `index` (0: empty).
     #[inline(always)]
     pub(crate) fn depth_bits(&self, index: usize) -> u32 {
-        (self.keys[index] >> 32) as u32
+        self.keys[index].depth_bits()
     }
 
     /// Recomputes the farthest depth of every tile from the current keys: each band of
@@ -175,7 +250,7 @@ impl KeyBuffer {
             columns.fill(i32::MAX);
             for row in band.chunks_exact(n) {
                 for (c, &k) in columns.iter_mut().zip(row) {
-                    *c = (*c).min((k >> 32) as i32);
+                    *c = (*c).min(k.depth_bits() as i32);
                 }
             }
             for (t, c) in tiles.iter_mut().zip(columns.chunks(TILE)) {
@@ -293,7 +368,7 @@ impl KeyBuffer {
                 return false;
             };
             for &k in row {
-                nearer &= (k >> 32) as u32 > q_bits;
+                nearer &= k.depth_bits() > q_bits;
             }
         }
         nearer
@@ -308,7 +383,7 @@ impl KeyBuffer {
         let (py0, py1) = (y0.max(ty * TILE), y1.min(ty * TILE + TILE - 1));
         (py0..=py1).all(|y| {
             let keys = &self.keys[y * self.resolution..][px0..=px1];
-            keys.iter().all(|&k| (k >> 32) as u32 > q_bits)
+            keys.iter().all(|&k| k.depth_bits() > q_bits)
         })
     }
 }
@@ -344,10 +419,10 @@ mod tests {
                 source.plot(i, q, 1, true);
             }
         }
-        let mut shrunk = KeyBuffer::new(n as u32);
-        let mut rows = Vec::new();
-        for radius in [0, 1, 2, 5, 40] {
-            shrunk.shrink_from(&source, radius, &mut rows);
+        let mut shrunk = DepthBuffer::new(n as u32);
+        let mut ring = Vec::new();
+        for radius in [0, 1, 2, 3, 5, 22, 40] {
+            shrunk.shrink_from(&source, radius, &mut ring);
             for y in 0..n {
                 for x in 0..n {
                     let window = |c: usize| c.saturating_sub(radius)..=(c + radius).min(n - 1);
@@ -363,15 +438,21 @@ mod tests {
                     );
                 }
             }
-            // Keys of low half 1 (0 where empty), and the tiles `build_tiles` makes of them
-            // (23 pixels: the last band and column of tiles are partial).
-            for &k in &shrunk.keys {
-                assert_eq!(k as u32, u32::from(k != 0), "radius {radius}");
-            }
-            let mut rebuilt = KeyBuffer::new(n as u32);
+            // The tiles `build_tiles` makes of the shrunk depths (23 pixels: the last band
+            // and column of tiles are partial).
+            let mut rebuilt = DepthBuffer::new(n as u32);
             rebuilt.keys.copy_from_slice(&shrunk.keys);
             rebuilt.build_tiles();
             assert_eq!(rebuilt.tile_far, shrunk.tile_far, "radius {radius}");
+        }
+        // A buffer of one pixel, and of one row's width.
+        for n in [1u32, 2] {
+            let mut one = KeyBuffer::new(n);
+            one.plot(0, 0.5, 1, true);
+            let mut shrunk = DepthBuffer::new(n);
+            shrunk.shrink_from(&one, 1, &mut ring);
+            let expect = if n == 1 { 0.5f32.to_bits() } else { 0 };
+            assert_eq!(shrunk.depth_bits(0), expect, "{n} pixels");
         }
     }
 

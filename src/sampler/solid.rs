@@ -41,7 +41,7 @@
 use crate::ooc::Mesh;
 use crate::sampler::camera::Camera;
 use crate::sampler::conservative::scan_triangle_conservative;
-use crate::sampler::key_buffer::KeyBuffer;
+use crate::sampler::key_buffer::DepthBuffer;
 use crate::sampler::raster::{draw_triangle, project, view_planes};
 use rayon::prelude::*;
 
@@ -386,7 +386,7 @@ impl Solids {
         camera: &Camera,
         cell: &Cell,
         margin: usize,
-        guard: &KeyBuffer,
+        guard: &DepthBuffer,
         openings: &mut Openings,
     ) {
         let resolution = camera.resolution();
@@ -428,6 +428,11 @@ impl Solids {
                         camera,
                         &planes,
                         |st| {
+                            // Wholly behind the shrunk occluders (most caps of a hole
+                            // under the model): no pixel to scan for.
+                            if guard.triangle_hidden(st, true) {
+                                return;
+                            }
                             scan_triangle_conservative(st, resolution, |index, q, _| {
                                 if q.to_bits() > guard.depth_bits(index) {
                                     pixels.push(index as u32);
@@ -663,37 +668,51 @@ impl Parallax {
 
 /// Replaces each cell of the row-major grid `width` cells wide by its chessboard distance
 /// (in cells) to the nearest cell holding 0, at most [`FAR_TILES`]: the two raster passes
-/// over the eight neighbours, which give that distance exactly.
+/// over the eight neighbours, which give that distance exactly. Each pass takes a row's
+/// three neighbours in the row before it first, a loop over the whole row that the compiler
+/// turns into SIMD, and then its neighbour along the row, one cell after the other.
 fn chessboard_distances(grid: &mut [u8], width: usize) {
+    if width == 0 {
+        return;
+    }
     let height = grid.len() / width;
-    let at = |x: usize, y: usize| y * width + x;
     for y in 0..height {
-        for x in 0..width {
-            let mut d = grid[at(x, y)];
-            if x > 0 {
-                d = d.min(grid[at(x - 1, y)].saturating_add(1));
-            }
-            if y > 0 {
-                for xx in x.saturating_sub(1)..=(x + 1).min(width - 1) {
-                    d = d.min(grid[at(xx, y - 1)].saturating_add(1));
-                }
-            }
-            grid[at(x, y)] = d;
+        let (before, rest) = grid.split_at_mut(y * width);
+        let row = &mut rest[..width];
+        if y > 0 {
+            from_row(row, &before[(y - 1) * width..]);
+        }
+        for x in 1..width {
+            row[x] = row[x].min(row[x - 1].saturating_add(1));
         }
     }
     for y in (0..height).rev() {
-        for x in (0..width).rev() {
-            let mut d = grid[at(x, y)];
-            if x + 1 < width {
-                d = d.min(grid[at(x + 1, y)].saturating_add(1));
-            }
-            if y + 1 < height {
-                for xx in x.saturating_sub(1)..=(x + 1).min(width - 1) {
-                    d = d.min(grid[at(xx, y + 1)].saturating_add(1));
-                }
-            }
-            grid[at(x, y)] = d;
+        let (row, after) = grid[y * width..].split_at_mut(width);
+        if y + 1 < height {
+            from_row(row, &after[..width]);
         }
+        for x in (0..width - 1).rev() {
+            row[x] = row[x].min(row[x + 1].saturating_add(1));
+        }
+    }
+}
+
+/// Lowers each cell of `row` to one more than the least of its three neighbours in `other`,
+/// the grid row above or below it (as long).
+fn from_row(row: &mut [u8], other: &[u8]) {
+    let w = row.len();
+    let step = |r: &mut u8, d: u8| *r = (*r).min(d.saturating_add(1));
+    if w == 1 {
+        step(&mut row[0], other[0]);
+        return;
+    }
+    step(&mut row[0], other[0].min(other[1]));
+    step(&mut row[w - 1], other[w - 2].min(other[w - 1]));
+    for (r, ((&a, &b), &c)) in row[1..w - 1]
+        .iter_mut()
+        .zip(other.iter().zip(&other[1..]).zip(&other[2..]))
+    {
+        step(r, a.min(b).min(c));
     }
 }
 
@@ -982,11 +1001,16 @@ mod tests {
     /// Which triangles of `mesh` may show to `camera`'s eye (cell 0), each taken to cover the
     /// whole image.
     fn shown(solids: &Solids, mesh: &Mesh, camera: &Camera) -> Vec<bool> {
-        shown_behind(solids, mesh, camera, &KeyBuffer::new(camera.resolution()))
+        shown_behind(solids, mesh, camera, &DepthBuffer::new(camera.resolution()))
     }
 
     /// [`shown`] with the occluders `guard`.
-    fn shown_behind(solids: &Solids, mesh: &Mesh, camera: &Camera, guard: &KeyBuffer) -> Vec<bool> {
+    fn shown_behind(
+        solids: &Solids,
+        mesh: &Mesh,
+        camera: &Camera,
+        guard: &DepthBuffer,
+    ) -> Vec<bool> {
         let mut openings = Openings::default();
         let cell = Cell::ball(camera.eye(), 0.0);
         solids.openings(camera, &cell, 1, guard, &mut openings);
@@ -1076,7 +1100,7 @@ mod tests {
         let camera = Camera::look_at(eye.map(|x| x as f32), [1.75, 0.5, 0.5], 45.0, 64);
         let openings = {
             let mut o = Openings::default();
-            let nothing = KeyBuffer::new(camera.resolution());
+            let nothing = DepthBuffer::new(camera.resolution());
             let cell = Cell::ball(camera.eye(), 0.0);
             solids.openings(&camera, &cell, 1, &nothing, &mut o);
             o
@@ -1101,11 +1125,11 @@ mod tests {
         let m = mesh(&cube_faces()[..5], false);
         let solids = Solids::new(&m);
         let camera = camera([0.0, 0.0, 1.0]);
-        let mut guard = KeyBuffer::new(camera.resolution());
+        let mut guard = DepthBuffer::new(camera.resolution());
         let n = camera.resolution() as usize;
         let near = 1.0 / 5.0; // 1/w at 5 units from the eye, the box's top at 9.5
         for i in 0..n * n {
-            guard.plot(i, near, 0, true);
+            guard.set(i, near);
         }
         // Every side the eye faces is inward: all show through the open top, and none
         // behind the wall.
@@ -1126,7 +1150,7 @@ mod tests {
         let camera = camera([0.0, 0.0, 1.0]);
         let cell = Cell::ball(camera.eye(), 0.0);
         let mut openings = Openings::default();
-        let guard = KeyBuffer::new(camera.resolution());
+        let guard = DepthBuffer::new(camera.resolution());
         solids.openings(&camera, &cell, 1, &guard, &mut openings);
         let centre = camera.project([0.5, 0.5, 1.0]).unwrap().map(|x| x as usize);
         assert!(openings.covers(0, centre[0], centre[1]));

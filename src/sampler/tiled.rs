@@ -51,7 +51,7 @@
 use super::camera::{Camera, SphereBounds, normalize, widen};
 use super::checkpoint;
 use super::conservative::scan_triangle_conservative;
-use super::key_buffer::{KeyBuffer, low_half, patch_slot};
+use super::key_buffer::{KeyBuffer, Pixel, low_half, patch_slot};
 use super::marks::Marks;
 use super::near::{near_camera_count, near_cameras};
 use super::patch_box::{PatchBox, patch_boxes};
@@ -254,6 +254,7 @@ fn sample_rows(
         resolution: params.resolution,
         workers: rayon::current_num_threads(),
         row_bytes: (matrix.words().len() * 8) as u64,
+        probe: options.probe.is_some(),
     }
     .sampling();
     let storage = Storage::for_budget(
@@ -496,7 +497,7 @@ fn back_winding(mesh: &Mesh) -> i64 {
 }
 
 /// Whether contents within `bounds` provably change no pixel of `keys` (by its tiles).
-fn hidden(bounds: SphereBounds, keys: &KeyBuffer) -> bool {
+fn hidden<P: Pixel>(bounds: SphereBounds, keys: &KeyBuffer<P>) -> bool {
     match bounds {
         SphereBounds::Outside => true,
         SphereBounds::Unbounded => false,

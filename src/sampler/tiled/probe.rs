@@ -27,7 +27,7 @@ use crate::runtime::Patches;
 use crate::sampler::SamplingOptions;
 use crate::sampler::camera::{Camera, SphereBounds};
 use crate::sampler::conservative::scan_triangle_conservative;
-use crate::sampler::key_buffer::KeyBuffer;
+use crate::sampler::key_buffer::DepthBuffer;
 use crate::sampler::raster::{
     ScreenVertex, draw_triangle, project, sphere_needs_no_clip, view_planes,
 };
@@ -53,8 +53,8 @@ pub(super) struct Probe {
 
 /// One worker's probe buffers.
 pub(super) struct ProbeScratch {
-    guard: KeyBuffer,
-    rows: Vec<u32>,
+    guard: DepthBuffer,
+    ring: Vec<u32>,
     openings: Openings,
     /// The patches the view did not show, one bit each.
     unseen: Vec<u64>,
@@ -63,8 +63,8 @@ pub(super) struct ProbeScratch {
 impl ProbeScratch {
     pub(super) fn new(resolution: u32) -> ProbeScratch {
         ProbeScratch {
-            guard: KeyBuffer::new(resolution),
-            rows: Vec::new(),
+            guard: DepthBuffer::new(resolution),
+            ring: Vec::new(),
             openings: Default::default(),
             unseen: Vec::new(),
         }
@@ -139,7 +139,7 @@ impl ViewContext<'_> {
     pub(super) fn probe_prepare(&self, scratch: &mut WorkerScratch) {
         if let (Some(probe), Some(ps)) = (&self.probe, &mut scratch.probe) {
             ps.guard
-                .shrink_from(&scratch.view.keys, probe.radius, &mut ps.rows);
+                .shrink_from(&scratch.view.keys, probe.radius, &mut ps.ring);
         }
     }
 
