@@ -319,8 +319,9 @@ fn recipe_of(part: &Part) -> Result<Recipe, String> {
     .check()
     .map_err(|e| format!("its settings do not check: {e}; bake this shard again"))
     .map(|mut recipe| {
-        // The shells' probe and fold as the shards resolved them: the default's probe
-        // leaves the shells out, which no flag asks for alone (`Recipe::shell_probe`).
+        // The shells' probe and fold as the shards resolved them: parts written before the
+        // default probed its shells have none there, which no flag asks for alone
+        // (`Recipe::shell_probe`).
         recipe.shell_probe = s.shell_probe;
         recipe.shell_supersample.fold_corners = s.shell_fold_corners;
         recipe

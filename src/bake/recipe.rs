@@ -143,9 +143,9 @@ impl Recipe {
         self.probe
     }
 
-    /// The sampling shells' probe pass: the same as the sampling sphere's, but none for the
-    /// default's (their near views, a cube map each, would take 2.0–2.6× their plain time on
-    /// the bunny; BENCHMARKS.md, "The probe with the cover fold").
+    /// The sampling shells' probe pass: the same as the sampling sphere's. It is kept apart
+    /// because part files record it apart: parts written before the default probed the shells
+    /// have none there.
     pub fn shell_probe(&self) -> Option<u32> {
         self.shell_probe
     }
@@ -181,9 +181,11 @@ impl Recipe {
         };
         let mut recipe = self.clone();
         recipe.probe = None;
+        recipe.shell_probe = None;
         recipe.default_probe = false;
         if self.settings.fold_corners.is_none() {
             recipe.supersample.fold_corners = super::settings::DEFAULT_FOLD_CORNERS;
+            recipe.shell_supersample.fold_corners = super::settings::DEFAULT_FOLD_CORNERS;
         }
         Some((
             recipe,
@@ -851,7 +853,7 @@ mod tests {
             s.check().unwrap()
         };
         let default = recipe(|_| {});
-        assert_eq!(default.probe(), Some(1));
+        assert_eq!((default.probe(), default.shell_probe()), (Some(1), Some(1)));
         assert_eq!(default.supersample.fold_corners, FoldCorners::Cover);
         // Up to the bound on the CPU: as it is, on every machine (256 MiB is the smallest
         // default budget, and the bound's solids fit it).
@@ -866,7 +868,7 @@ mod tests {
         ] {
             let (off, message) = default.for_mesh(triangles, cpu).unwrap();
             assert!(message.contains(why), "{message}");
-            assert_eq!(off.probe(), None);
+            assert_eq!((off.probe(), off.shell_probe()), (None, None));
             assert_eq!(off.supersample.fold_corners, FoldCorners::All);
             assert_eq!(off.shell_supersample.fold_corners, FoldCorners::All);
             assert_eq!(off.checkpoints().count(), default.checkpoints().count());

@@ -45,9 +45,9 @@ pub const CONSERVATIVE_PROBE_PIXELS: u32 = 2;
 /// The default bake's probe pass shrinks occluders by this many pixels. With the cover fold,
 /// every zoo model misses at most 0.4 pixels a view on average at 1× and 2× the resolution
 /// (p99 ≤ 2), the bunny culls 44.4 % (45.4 % without the probe, 42.7 % with the split fold),
-/// and the bunny's bake takes 1.30× the thresholded bake's time with `--shells 0` (0.94× with
-/// its shells, which the default's probe leaves out); at 0 pixels the exposed
-/// engine misses 2.1 pixels a view at 2× (BENCHMARKS.md, "The probe with the cover fold").
+/// and the bunny's bake takes 1.23× the thresholded bake's time with `--shells 0` (1.35× with
+/// its two shells, which it probes too); at 0 pixels the exposed engine misses 2.1 pixels a
+/// view at 2× (BENCHMARKS.md, "The probe with the cover fold").
 pub const DEFAULT_PROBE_PIXELS: u32 = 1;
 
 /// Smallest `--resolution`: coarser ID buffers miss nearly every patch. Measured on the
@@ -65,8 +65,8 @@ pub const WARN_RESOLUTION: u32 = 32;
 /// pixels, and added where they may show to a camera near the view.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Probe {
-    /// [`DEFAULT_PROBE_PIXELS`] over the sampling sphere (not the shells), with the cover
-    /// fold, on the CPU backend for meshes of up to
+    /// [`DEFAULT_PROBE_PIXELS`] over every view, the sampling sphere's and the shells', each
+    /// view's cell at its own sphere's distance, with the cover fold, on the CPU backend for meshes of up to
     /// [`crate::memory::DEFAULT_PROBE_MAX_TRIANGLES`] triangles whose solids fit the budget,
     /// else off ([`Recipe::for_mesh`]); [`CONSERVATIVE_PROBE_PIXELS`] with `--conservative`.
     #[default]
@@ -371,13 +371,11 @@ impl BakeSettings {
         let default_probe = self.probe == Probe::Default
             && !self.conservative
             && fold_corners != FoldCorners::Split;
-        // The default's probe leaves the shells out: they fold as without it.
-        let shell_probe = if default_probe { None } else { probe };
+        // The shells probe and fold as the sampling sphere does (the default's cells at each
+        // pass's own distance: `Recipe::sampling_options`).
+        let shell_probe = probe;
         let shell_supersample = Supersample {
-            fold_corners: match self.fold_corners {
-                None if default_probe => DEFAULT_FOLD_CORNERS,
-                _ => fold_corners,
-            },
+            fold_corners,
             ..resolve(extra_levels.min(MAX_LEVEL - shell_level))
         };
         // Checkpoints are named after what was asked for: the default's probe, on or off
@@ -638,17 +636,12 @@ mod tests {
     #[test]
     fn every_shell_has_checkpoints_of_its_own_and_the_stored_levels_fold() {
         let c = check(|_| {}).unwrap();
-        // The default's probe leaves the shells out: no probe there, and the all-corner fold.
-        assert_eq!(
-            c.shell_supersample,
-            Supersample {
-                fold_corners: DEFAULT_FOLD_CORNERS,
-                ..c.supersample
-            }
-        );
+        // The default's probe and cover fold run on the shells too.
+        assert_eq!(c.shell_supersample, c.supersample);
+        assert_eq!(c.shell_supersample.fold_corners, PROBE_FOLD_CORNERS);
         assert_eq!(
             (c.probe(), c.shell_probe()),
-            (Some(DEFAULT_PROBE_PIXELS), None)
+            (Some(DEFAULT_PROBE_PIXELS), Some(DEFAULT_PROBE_PIXELS))
         );
         let asked = check(|s| s.probe = Probe::Pixels(1)).unwrap();
         assert_eq!(asked.shell_supersample, asked.supersample);
