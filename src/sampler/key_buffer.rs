@@ -135,6 +135,28 @@ impl DepthBuffer {
     /// column minima. Every loop runs over whole rows of contiguous slices, which the
     /// compiler turns into SIMD.
     pub(crate) fn shrink_from(&mut self, source: &KeyBuffer, radius: usize, ring: &mut Vec<u32>) {
+        #[cfg(target_arch = "x86_64")]
+        if super::raster::has_avx2() {
+            // SAFETY: the CPU has AVX2 (tested just above).
+            unsafe { self.shrink_from_avx2(source, radius, ring) };
+            return;
+        }
+        self.shrink(source, radius, ring);
+    }
+
+    /// [`Self::shrink_from`] compiled for AVX2 (found at run time: the build stays portable
+    /// x86-64). The same integer operations, so the same depths: only eight lanes to an
+    /// instruction, where baseline x86-64 (SSE2) has no 32-bit minimum and takes four
+    /// instructions for four lanes' (the shrink was 18 % of the bunny's default bake).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn shrink_from_avx2(&mut self, source: &KeyBuffer, radius: usize, ring: &mut Vec<u32>) {
+        self.shrink(source, radius, ring);
+    }
+
+    /// The body of [`Self::shrink_from`], inlined into each of its builds.
+    #[inline(always)]
+    fn shrink(&mut self, source: &KeyBuffer, radius: usize, ring: &mut Vec<u32>) {
         let n = self.resolution;
         debug_assert_eq!(n, source.resolution);
         let radius = radius.min(n.saturating_sub(1));
@@ -142,10 +164,6 @@ impl DepthBuffer {
         // One more row of scratch for the row minima's steps past the first.
         ring.resize((window + 1) * n, 0);
         let (ring, step) = ring.split_at_mut(window * n);
-        let row_min = |yy: usize, out: &mut [u32], step: &mut [u32]| {
-            let keys = &source.keys[yy * n..(yy + 1) * n];
-            row_window_min(keys, radius, out, step);
-        };
         let DepthBuffer {
             keys: depths,
             tiles_per_row,
@@ -159,7 +177,8 @@ impl DepthBuffer {
             let (a, b) = (y.saturating_sub(radius), (y + radius).min(n - 1));
             while ready <= b {
                 let slot = ready % window;
-                row_min(ready, &mut ring[slot * n..(slot + 1) * n], step);
+                let keys = &source.keys[ready * n..(ready + 1) * n];
+                row_window_min(keys, radius, &mut ring[slot * n..(slot + 1) * n], step);
                 ready += 1;
             }
             let slot = |yy: usize| &ring[yy % window * n..][..n];
@@ -194,6 +213,7 @@ impl DepthBuffer {
 
 /// The depths of one row of keys, each the minimum over the `2 · radius + 1` pixels around it
 /// (clamped at the ends), into `out`; `step` is scratch of the row's length.
+#[inline(always)]
 fn row_window_min(keys: &[u64], radius: usize, out: &mut [u32], step: &mut [u32]) {
     let n = keys.len();
     let depth = |k: u64| (k >> 32) as u32;
@@ -236,8 +256,28 @@ impl<P: Pixel> KeyBuffer<P> {
     /// Recomputes the farthest depth of every tile from the current keys: each band of
     /// [`TILE`] rows is folded into per-column minima first, a loop over whole rows that the
     /// compiler turns into SIMD (minima across eight keys of one tile took twelve instructions
-    /// per pixel), and then each tile takes the minimum of its columns.
+    /// per pixel), and then each tile takes the minimum of its columns. Built for AVX2 where
+    /// the CPU has it, as [`DepthBuffer::shrink_from`] is.
     pub(crate) fn build_tiles(&mut self) {
+        #[cfg(target_arch = "x86_64")]
+        if super::raster::has_avx2() {
+            // SAFETY: the CPU has AVX2 (tested just above).
+            unsafe { self.build_tiles_avx2() };
+            return;
+        }
+        self.build_tiles_body();
+    }
+
+    /// [`Self::build_tiles`] compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn build_tiles_avx2(&mut self) {
+        self.build_tiles_body();
+    }
+
+    /// The body of [`Self::build_tiles`], inlined into each of its builds.
+    #[inline(always)]
+    fn build_tiles_body(&mut self) {
         let n = self.resolution;
         let columns = &mut self.column_far[..n];
         for (band, tiles) in self
@@ -246,7 +286,7 @@ impl<P: Pixel> KeyBuffer<P> {
             .zip(self.tile_far.chunks_mut(self.tiles_per_row))
         {
             // Depth bits are those of a positive `f32` or 0 (empty), so they order as `i32`,
-            // whose minimum SSE2 has (it has no unsigned one).
+            // which compiles to fewer instructions than an unsigned minimum.
             columns.fill(i32::MAX);
             for row in band.chunks_exact(n) {
                 for (c, &k) in columns.iter_mut().zip(row) {
@@ -444,7 +484,22 @@ mod tests {
             rebuilt.keys.copy_from_slice(&shrunk.keys);
             rebuilt.build_tiles();
             assert_eq!(rebuilt.tile_far, shrunk.tile_far, "radius {radius}");
+            let mut body = DepthBuffer::new(n as u32);
+            body.keys.copy_from_slice(&shrunk.keys);
+            body.build_tiles_body();
+            assert_eq!(body.tile_far, shrunk.tile_far, "radius {radius}");
+            // The portable build of the shrink, where `shrink_from` took the AVX2 one.
+            let mut portable = DepthBuffer::new(n as u32);
+            portable.shrink(&source, radius, &mut ring);
+            assert_eq!(portable.keys, shrunk.keys, "radius {radius}");
+            assert_eq!(portable.tile_far, shrunk.tile_far, "radius {radius}");
         }
+        // The packed keys' tiles, both builds (AVX2 where the CPU has it, and portable).
+        let mut keys = KeyBuffer::new(n as u32);
+        keys.keys.copy_from_slice(&source.keys);
+        keys.build_tiles();
+        source.build_tiles_body();
+        assert_eq!(keys.tile_far, source.tile_far);
         // A buffer of one pixel, and of one row's width.
         for n in [1u32, 2] {
             let mut one = KeyBuffer::new(n);

@@ -30,7 +30,7 @@ use crate::tiling::PatchId;
 use wide::{CmpEq, CmpGt, CmpLt, f32x4, i32x4};
 
 mod batch;
-pub(crate) use batch::{ScreenBatch, prefetch};
+pub(crate) use batch::{ScreenBatch, has_avx2, prefetch};
 #[cfg(test)]
 pub(crate) use batch::{centre_code, codes_hold_no_centre, covers_no_centre};
 

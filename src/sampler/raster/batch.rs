@@ -81,7 +81,7 @@ pub(crate) fn prefetch<T>(items: &[T], at: usize) {
 }
 
 /// Whether this CPU has AVX2 (always false off x86-64).
-fn has_avx2() -> bool {
+pub(crate) fn has_avx2() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
         std::arch::is_x86_feature_detected!("avx2")
