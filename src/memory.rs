@@ -21,8 +21,9 @@
 //! | eval | whole | per-triangle maps bounded by a check, pixels per worker |
 //!
 //! **The minimum.** Some needs do not shrink with the budget: the sampler's per-worker ID
-//! buffers (and the probe pass's shrunk occluders beside them), the batch of the patch-ordered mesh it builds, the visibility rows, and the
-//! out-of-core tiling's merge buffers and small patch graph. [`MemoryBudget::minimum`] adds
+//! buffers (and the probe pass's shrunk occluders beside them), the batch of the
+//! patch-ordered mesh it builds, the visibility rows, and the out-of-core tiling's merge
+//! buffers and small patch graph. [`MemoryBudget::minimum`] adds
 //! them up for one bake (constants measured with `--stats` on the bunny and a 400K-triangle
 //! mesh, with margin), and the bake refuses a budget below it before any work, naming the
 //! minimum, so that every budget it accepts is honoured.
@@ -68,10 +69,11 @@ const SAMPLING_BATCH_TRIANGLES: u64 = 1 << 19;
 pub const SAMPLING_BYTES_PER_PIXEL: u64 = 12;
 
 /// Heap of each sampling worker per ID-buffer pixel for the probe pass (the default bake's
-/// and `--conservative`'s), at most: its shrunk occluders, a 4-byte depth
-/// (`sampler::key_buffer`'s `DepthBuffer`); the pixels where one boundary loop's cap lies in
-/// front of them, up to 4 bytes each when the cap fills the image; the openings' distance
-/// grids, a quarter of a byte; the tiles and a ring of a few rows.
+/// and `--conservative`'s), at most, counted from its buffers rather than measured: its
+/// shrunk occluders, a 4-byte depth (`sampler::key_buffer`'s `DepthBuffer`); the pixels where
+/// one boundary loop's cap lies in front of them, up to 4 bytes each when the cap fills the
+/// image; the openings' distance grids, a quarter of a byte; the tiles and a ring of a few
+/// rows.
 pub const PROBE_BYTES_PER_PIXEL: u64 = 9;
 
 /// Heap a bake takes whatever its budget: the out-of-core tiling's merge buffers and patch

@@ -66,9 +66,10 @@ pub const WARN_RESOLUTION: u32 = 32;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Probe {
     /// [`DEFAULT_PROBE_PIXELS`] over every view, the sampling sphere's and the shells', each
-    /// view's cell at its own sphere's distance, with the cover fold, on the CPU backend for meshes of up to
-    /// [`crate::memory::DEFAULT_PROBE_MAX_TRIANGLES`] triangles whose solids fit the budget,
-    /// else off ([`Recipe::for_mesh`]); [`CONSERVATIVE_PROBE_PIXELS`] with `--conservative`.
+    /// view's cell at its own sphere's distance, with the cover fold, on the CPU backend for
+    /// meshes of up to [`crate::memory::DEFAULT_PROBE_MAX_TRIANGLES`] triangles whose solids
+    /// fit the budget, else off ([`Recipe::for_mesh`]); [`CONSERVATIVE_PROBE_PIXELS`] with
+    /// `--conservative`.
     #[default]
     Default,
     /// No probe pass (`--probe off`): what each view shows, and nothing more.

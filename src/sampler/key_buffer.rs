@@ -197,9 +197,7 @@ impl DepthBuffer {
             }
             if y % TILE == TILE - 1 || y == n - 1 {
                 let tiles = &mut tile_far[y / TILE * *tiles_per_row..][..*tiles_per_row];
-                for (t, c) in tiles.iter_mut().zip(columns.chunks(TILE)) {
-                    *t = c.iter().copied().min().unwrap_or(0) as u32;
-                }
+                tiles_from_columns(tiles, columns);
             }
         }
     }
@@ -215,34 +213,44 @@ impl DepthBuffer {
 /// (clamped at the ends), into `out`; `step` is scratch of the row's length.
 #[inline(always)]
 fn row_window_min(keys: &[u64], radius: usize, out: &mut [u32], step: &mut [u32]) {
-    let n = keys.len();
-    let depth = |k: u64| (k >> 32) as u32;
-    if radius == 0 || n < 2 {
-        for (o, &k) in out.iter_mut().zip(keys) {
+    // The first step straight from the keys (a copy of their depths at radius 0), then each
+    // further step widens the window by one pixel on each side.
+    min_of_three(keys, out, radius > 0);
+    for _ in 1..radius {
+        step.copy_from_slice(out);
+        min_of_three(step, out, true);
+    }
+}
+
+/// Each `out[x]` = the least depth of `source[x − 1..=x + 1]` (clamped at the ends), or of
+/// `source[x]` alone without `widen`: one loop over the whole row, which the compiler turns
+/// into SIMD.
+#[inline(always)]
+fn min_of_three<P: Pixel>(source: &[P], out: &mut [u32], widen: bool) {
+    let n = source.len();
+    let depth = |p: P| p.depth_bits();
+    if !widen || n < 2 {
+        for (o, &k) in out.iter_mut().zip(source) {
             *o = depth(k);
         }
         return;
     }
-    // The first step straight from the keys: each pixel and its two neighbours.
-    out[0] = depth(keys[0]).min(depth(keys[1]));
-    out[n - 1] = depth(keys[n - 2]).min(depth(keys[n - 1]));
+    out[0] = depth(source[0]).min(depth(source[1]));
+    out[n - 1] = depth(source[n - 2]).min(depth(source[n - 1]));
     for (o, ((&l, &c), &r)) in out[1..n - 1]
         .iter_mut()
-        .zip(keys.iter().zip(&keys[1..]).zip(&keys[2..]))
+        .zip(source.iter().zip(&source[1..]).zip(&source[2..]))
     {
         *o = depth(l).min(depth(c)).min(depth(r));
     }
-    // Each further step widens the window by one pixel on each side.
-    for _ in 1..radius {
-        step.copy_from_slice(out);
-        out[0] = step[0].min(step[1]);
-        out[n - 1] = step[n - 2].min(step[n - 1]);
-        for (o, ((&l, &c), &r)) in out[1..n - 1]
-            .iter_mut()
-            .zip(step.iter().zip(&step[1..]).zip(&step[2..]))
-        {
-            *o = l.min(c).min(r);
-        }
+}
+
+/// Each tile of one band of [`TILE`] rows takes the least of its columns' minima (as `i32`:
+/// depth bits are those of a positive `f32` or 0, empty).
+#[inline(always)]
+fn tiles_from_columns(tiles: &mut [u32], columns: &[i32]) {
+    for (t, c) in tiles.iter_mut().zip(columns.chunks(TILE)) {
+        *t = c.iter().copied().min().unwrap_or(0) as u32;
     }
 }
 
@@ -293,9 +301,7 @@ impl<P: Pixel> KeyBuffer<P> {
                     *c = (*c).min(k.depth_bits() as i32);
                 }
             }
-            for (t, c) in tiles.iter_mut().zip(columns.chunks(TILE)) {
-                *t = c.iter().copied().min().unwrap_or(0) as u32;
-            }
+            tiles_from_columns(tiles, columns);
         }
     }
 
