@@ -584,6 +584,68 @@ mod tests {
     }
 
     #[test]
+    fn an_extent_hidden_hides_every_triangle_inside_it() {
+        // What lets a cluster of triangles be passed over by the extent of its vertices: a
+        // hidden extent hides every triangle whose corners lie in it, at no greater depth,
+        // in both rasterization modes (small rectangles by their pixels, large ones by the
+        // tiles), and a visible triangle's extent is never hidden.
+        let n = 40;
+        let mut rng = crate::test_kit::rng::Rng::new(11);
+        let mut below = |m: u64| (rng.next_u64() % m) as i64;
+        let mut b = KeyBuffer::new(n as u32);
+        for i in 0..n * n {
+            // Mostly near depths, a few far ones and empty pixels: holes to be seen through.
+            match below(40) {
+                0 => {}
+                1 | 2 => b.plot(i, 0.1, 1, true),
+                _ => b.plot(i, 0.6 + below(10) as f32 * 0.01, 1, true),
+            }
+        }
+        b.build_tiles();
+        let (mut hidden, mut shown) = (0, 0);
+        for _ in 0..4000 {
+            // A cluster of a few triangles within a box of up to 12 pixels, partly outside
+            // the image now and then.
+            let size = 64 + below(12 * 256);
+            let (x0, y0) = (
+                below(n as u64 * 256 + 512) - 256,
+                below(n as u64 * 256 + 512) - 256,
+            );
+            let count = 1 + below(6);
+            let mut corner = || ScreenVertex {
+                x: (x0 + below(size as u64)) as i32,
+                y: (y0 + below(size as u64)) as i32,
+                q: 0.2 + below(40) as f32 * 0.01,
+            };
+            let triangles: Vec<[ScreenVertex; 3]> =
+                (0..count).map(|_| [corner(), corner(), corner()]).collect();
+            let all = triangles.iter().flatten();
+            let extent = [
+                all.clone().map(|v| v.x).min().unwrap(),
+                all.clone().map(|v| v.x).max().unwrap(),
+                all.clone().map(|v| v.y).min().unwrap(),
+                all.clone().map(|v| v.y).max().unwrap(),
+            ];
+            let q_max = all.map(|v| v.q).fold(f32::NEG_INFINITY, f32::max);
+            for conservative in [false, true] {
+                let each = triangles
+                    .iter()
+                    .all(|&t| b.triangle_hidden(t, conservative));
+                if b.extent_hidden(extent, q_max, conservative) {
+                    assert!(each, "{extent:?} at {q_max}, conservative {conservative}");
+                    hidden += 1;
+                } else {
+                    shown += 1;
+                }
+            }
+        }
+        assert!(
+            hidden > 500 && shown > 500,
+            "{hidden} hidden, {shown} shown"
+        );
+    }
+
+    #[test]
     fn triangles_are_hidden_only_behind_full_tiles_of_nearer_depth() {
         let mut b = KeyBuffer::new(16);
         for y in 0..8 {

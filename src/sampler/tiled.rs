@@ -759,7 +759,9 @@ impl ViewContext<'_> {
                     // A tested section of one cluster (most patches of meshes not much finer
                     // than the image) is tested by the exact rectangle and largest depth of its
                     // projected vertices before its triangles one by one: its sphere's
-                    // rectangle passed, but it lies mostly just behind a silhouette.
+                    // rectangle passed, but it lies mostly just behind a silhouette. (Testing
+                    // each cluster of a larger section by its vertices' extent, as the probe
+                    // does, measured 1.03× on a 1M-triangle grid.)
                     if pass == Pass::Tested && section.clusters.len() == 1 {
                         let (extent, q_max) = screen.extent(0..vertex_end);
                         if keys.extent_hidden(extent, q_max, conservative) {

@@ -11,7 +11,8 @@
 //! of its component, where its cap lies in front of the shrunk occluders, within the parallax
 //! a camera of the cell may see between the cap and the component (`sampler/solid.rs`).
 //! Whole patches that face away from the cell and lie behind no opening are passed over by
-//! their normal cone.
+//! their normal cone; the triangles of a patch left are tested cluster by cluster, each
+//! cluster first as a whole by the screen extent of its vertices.
 //!
 //! The cell holds every camera whose query may use the view's row: the directions within
 //! [`CELL_PER_EDGE`] edges of the view's, at the pass's distance, or, with
@@ -221,16 +222,34 @@ impl ViewContext<'_> {
             let mut found = false;
             let mut k = patch.first as usize;
             if sphere_needs_no_clip(camera, patch.center, patch.radius) {
+                // Cluster by cluster, each first by the extent of the vertices holding its
+                // corners, projected only as far as the clusters tested so far use them (a
+                // hidden patch's clusters mostly lie wholly behind the shrunk occluders).
                 'sections: for section in self.mesh.sections(p) {
-                    let end = section.vertices.len();
-                    screen.project_from(camera, section.vertices.blocks(), 0, end);
-                    for &tri in section.triangles {
-                        let t = self.tiling.order[k];
-                        k += 1;
-                        let world = tri.map(|i| section.vertices.get(usize::from(i)));
-                        if in_front(t, world, screen.triangle(tri)) {
-                            found = true;
-                            break 'sections;
+                    let mut projected_to = 0;
+                    let mut start = 0;
+                    for cluster in section.clusters {
+                        let run = &section.triangles[start..cluster.triangle_end as usize];
+                        start = cluster.triangle_end as usize;
+                        let vertex_end = cluster.vertex_end as usize;
+                        if vertex_end > projected_to {
+                            let blocks = section.vertices.blocks();
+                            screen.project_from(camera, blocks, projected_to, vertex_end);
+                            projected_to = vertex_end;
+                        }
+                        let (extent, q_max) = screen.extent(cluster.vertices());
+                        if guard.extent_hidden(extent, q_max, true) {
+                            k += run.len();
+                            continue;
+                        }
+                        for &tri in run {
+                            let t = self.tiling.order[k];
+                            k += 1;
+                            let world = tri.map(|i| section.vertices.get(usize::from(i)));
+                            if in_front(t, world, screen.triangle(tri)) {
+                                found = true;
+                                break 'sections;
+                            }
                         }
                     }
                 }
