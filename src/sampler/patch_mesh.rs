@@ -243,6 +243,18 @@ pub(crate) struct Section<'a> {
     pub(crate) clusters: &'a [Cluster],
 }
 
+impl<'a> Section<'a> {
+    /// The triangles of cluster `c`.
+    #[inline(always)]
+    pub(crate) fn run(&self, c: usize) -> &'a [[u16; 3]] {
+        let start = match c {
+            0 => 0,
+            _ => self.clusters[c - 1].triangle_end as usize,
+        };
+        &self.triangles[start..self.clusters[c].triangle_end as usize]
+    }
+}
+
 /// Cuts the triangles `corners` (global vertex indices, in order) into runs of at most
 /// `max_vertices` distinct vertices each, and returns every run's vertices (global indices,
 /// in order of first use) and its corners as indices into them.

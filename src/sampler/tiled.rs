@@ -56,7 +56,7 @@ use super::marks::Marks;
 use super::near::{near_camera_count, near_cameras};
 use super::patch_box::{PatchBox, patch_boxes};
 use super::patch_graph::faces_away;
-use super::patch_mesh::{PatchMesh, Storage};
+use super::patch_mesh::{PatchMesh, Section, Storage};
 use super::raster::{
     DEFAULT_PATHS, ProjectedVertex, ScreenBatch, ScreenVertex, draw_triangle, prefetch, project,
     scan_triangle_with_area, signed_area, sphere_needs_no_clip, view_planes,
@@ -511,6 +511,23 @@ fn hidden<P: Pixel>(bounds: SphereBounds, keys: &KeyBuffer<P>) -> bool {
     }
 }
 
+/// Projects `section`'s vertices from `*projected_to` up to `end` into `screen` and moves
+/// `*projected_to` there: the vertices are numbered by first use, so a section's clusters,
+/// drawn in order, need them only that far.
+#[inline(always)]
+fn project_up_to(
+    screen: &mut ScreenBatch,
+    camera: &Camera,
+    section: &Section,
+    projected_to: &mut usize,
+    end: usize,
+) {
+    if end > *projected_to {
+        screen.project_from(camera, section.vertices.blocks(), *projected_to, end);
+        *projected_to = end;
+    }
+}
+
 /// Prefetches every cache line of `triangles` (see [`prefetch`]): a cluster's triangles
 /// while the one before it is drawn, since a view streams them from memory (6.4M −2 %).
 #[inline(always)]
@@ -735,14 +752,11 @@ impl ViewContext<'_> {
             let test = box_test(camera, patch);
             for section in self.mesh.sections(p) {
                 let mut projected_to = 0;
-                let mut start = 0;
-                prefetch_run(&section.triangles[..section.clusters[0].triangle_end as usize]);
+                prefetch_run(section.run(0));
                 for (c, cluster) in section.clusters.iter().enumerate() {
-                    let end = cluster.triangle_end as usize;
-                    let run = &section.triangles[start..end];
-                    start = end;
-                    if let Some(next) = section.clusters.get(c + 1) {
-                        prefetch_run(&section.triangles[end..next.triangle_end as usize]);
+                    let run = section.run(c);
+                    if c + 1 < section.clusters.len() {
+                        prefetch_run(section.run(c + 1));
                     }
                     if pass == Pass::Tested
                         && section.clusters.len() > 1
@@ -751,11 +765,7 @@ impl ViewContext<'_> {
                         continue;
                     }
                     let vertex_end = cluster.vertex_end as usize;
-                    if vertex_end > projected_to {
-                        let blocks = section.vertices.blocks();
-                        screen.project_from(camera, blocks, projected_to, vertex_end);
-                        projected_to = vertex_end;
-                    }
+                    project_up_to(screen, camera, &section, &mut projected_to, vertex_end);
                     // A tested section of one cluster (most patches of meshes not much finer
                     // than the image) is tested by the exact rectangle and largest depth of its
                     // projected vertices before its triangles one by one: its sphere's

@@ -23,7 +23,7 @@
 //! `CELL_PER_EDGE · edge · distance` around the eye. Every camera of a near view's cube map is
 //! probed, each against its own shrunk occluders.
 
-use super::{ViewContext, WorkerScratch, hidden, valid_bits};
+use super::{ViewContext, WorkerScratch, hidden, project_up_to, valid_bits};
 use crate::runtime::Patches;
 use crate::sampler::SamplingOptions;
 use crate::sampler::camera::{Camera, SphereBounds};
@@ -227,16 +227,10 @@ impl ViewContext<'_> {
                 // hidden patch's clusters mostly lie wholly behind the shrunk occluders).
                 'sections: for section in self.mesh.sections(p) {
                     let mut projected_to = 0;
-                    let mut start = 0;
-                    for cluster in section.clusters {
-                        let run = &section.triangles[start..cluster.triangle_end as usize];
-                        start = cluster.triangle_end as usize;
+                    for (c, cluster) in section.clusters.iter().enumerate() {
+                        let run = section.run(c);
                         let vertex_end = cluster.vertex_end as usize;
-                        if vertex_end > projected_to {
-                            let blocks = section.vertices.blocks();
-                            screen.project_from(camera, blocks, projected_to, vertex_end);
-                            projected_to = vertex_end;
-                        }
+                        project_up_to(screen, camera, &section, &mut projected_to, vertex_end);
                         let (extent, q_max) = screen.extent(cluster.vertices());
                         if guard.extent_hidden(extent, q_max, true) {
                             k += run.len();
