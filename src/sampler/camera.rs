@@ -177,12 +177,6 @@ impl Camera {
         self.scale / dot(sub(widen(p), self.eye), self.forward)
     }
 
-    /// The focal length in pixels: a point at view depth `z` and lateral offset `x` lies
-    /// `focal_pixels() · x / z` pixels from the image centre.
-    pub(crate) fn focal_pixels(&self) -> f64 {
-        self.scale
-    }
-
     /// Image width and height in pixels.
     pub fn resolution(&self) -> u32 {
         self.resolution

@@ -12,8 +12,7 @@
 //! - an open one shows them only to a camera that faces some triangle of its cap from the
 //!   front, and only behind a point of that cap that the camera sees. A view finds those
 //!   points for the cameras of its cell as the cap pixels in front of its shrunk depths,
-//!   widened by the parallax those cameras may see between the cap and the component
-//!   ([`Solids::openings`]).
+//!   widened by a margin of the shrink's pixels ([`Solids::openings`]).
 //!
 //! Any 2-chain with the loop as boundary is a valid cap; the tighter it hugs the opening, the
 //! fewer back faces lie behind it. A loop is capped by its least-area triangulation, which
@@ -60,9 +59,6 @@ pub(crate) struct Solids {
     /// Per open component: the first of its boundary loops in `loops` (one more entry at the
     /// end).
     loop_start: Vec<u32>,
-    /// Per open component: its bounding box `[min, max]`, everything that may show through
-    /// its openings.
-    bounds: Vec<[[f32; 3]; 2]>,
     /// Boundary loops and their caps.
     loops: Vec<Loop>,
     /// Cap triangles of every loop.
@@ -124,15 +120,6 @@ pub(crate) struct Cell {
 }
 
 impl Cell {
-    /// The farthest any camera of the cell lies from `eye`.
-    fn reach(&self, eye: [f64; 3]) -> f64 {
-        let from = |p: [f64; 3]| {
-            let d = sub(p, eye);
-            dot(d, d).sqrt()
-        };
-        from(self.ends[0]).max(from(self.ends[1])) + self.radius
-    }
-
     /// The ball of `radius` around `eye`.
     pub(crate) fn ball(eye: [f64; 3], radius: f64) -> Cell {
         Cell {
@@ -326,16 +313,6 @@ impl Solids {
             .collect();
         open_start.push(loops.len() as u32);
         drop(loop_start);
-        let mut bounds = vec![[[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]]; open_count];
-        for t in 0..n as u32 {
-            if let Some([lo, hi]) = bounds.get_mut(component[t as usize] as usize) {
-                for v in mesh.triangle(t) {
-                    let p = mesh.position(v);
-                    *lo = std::array::from_fn(|k| lo[k].min(p[k]));
-                    *hi = std::array::from_fn(|k| hi[k].max(p[k]));
-                }
-            }
-        }
         let orientation = component
             .iter()
             .map(|&c| component_sign[c as usize])
@@ -345,7 +322,6 @@ impl Solids {
             component,
             component_sign,
             loop_start: open_start,
-            bounds,
             loops,
             caps,
         }
@@ -360,27 +336,27 @@ impl Solids {
     /// Number of closed components (no boundary loop).
     #[cfg(test)]
     pub(crate) fn closed_count(&self) -> usize {
-        self.component_sign.len() - self.bounds.len()
+        self.component_sign.len() + 1 - self.loop_start.len()
     }
 
     /// Where each component may be looked into from a camera of `cell`: the pixels of
     /// `camera`'s image where a cap triangle that some such camera sees from the front, drawn
     /// conservatively, lies in front of `guard` (the view's shrunk occluders), kept per loop as
-    /// the distance of each [`OPENING_TILE`]² tile from them over a rectangle. A back face is
-    /// in the opening where that distance is within `margin` plus the parallax between the
-    /// nearest cap triangle that showed and the farthest point of the component
-    /// ([`Parallax::tiles`], [`Openings::covers`]).
+    /// each pixel's distance from them over a rectangle. A back face is in the opening within
+    /// `margin` pixels of them ([`Openings::covers`]).
     ///
     /// A ray that shows a back face entered the capped solid through a cap point between the
     /// eye and that face, and nothing occludes that point either. So the cap point shows to
     /// the camera, and whatever shows to a camera of the cell is in front of `guard`: the
     /// assumption the whole probe rests on. A cap hidden behind the model (an open end pushed
     /// into another part, the inside of a wing open along its trailing edge) opens nothing.
-    /// From this view's eye the cap point and the back face behind it lie apart by up to the
-    /// parallax, which the widening covers. The farthest point of the component rather than
-    /// of each back face: the widening also reaches cap points that this view's eye sees
-    /// hidden by more than the shrink, through a gap (the airplane's wing root, 5 units from
-    /// the fuselage: with each face's own depth, 1 % of its views miss up to 15 pixels).
+    /// From this view's eye the cap point and the back face behind it lie apart by the
+    /// parallax between them; as for every occluder's edge in the probe, the margin covers
+    /// what comes out by up to the shrink (the probe passes its radius plus one pixel), and
+    /// the finer views around the view find what comes out by more. Widening each opening by
+    /// the whole parallax the cell allows culled 0.6–2.3 points less on the bunny and the
+    /// airplane, for one view of 300 more identical in some of their bakes (a 1-pixel miss;
+    /// docs/benchmarks/quality-zoo.md, "Openings as tight as the shrink").
     pub(crate) fn openings(
         &self,
         camera: &Camera,
@@ -391,36 +367,27 @@ impl Solids {
     ) {
         let resolution = camera.resolution();
         let n = resolution as usize;
-        let tiles = n.div_ceil(OPENING_TILE);
         let planes = view_planes(camera);
-        let (eye, forward) = (camera.eye(), camera.forward());
-        let depth = |p: [f64; 3]| dot(sub(p, eye), forward);
-        let tile_of = |i: u32| (i as usize % n / OPENING_TILE, i as usize / n / OPENING_TILE);
+        let pixel_of = |i: u32| (i as usize % n, i as usize / n);
         openings.clear();
-        let view = Parallax {
-            focal: camera.focal_pixels(),
-            reach: cell.reach(eye),
-            resolution: n,
-            margin,
-        };
+        openings.margin = margin;
         let Openings {
             start,
             loops,
             distance,
             pixels,
+            ..
         } = openings;
         for (c, w) in self.loop_start.windows(2).enumerate() {
-            let (sign, bounds) = (self.component_sign[c], self.bounds[c]);
+            let sign = self.component_sign[c];
             start.push(loops.len() as u32);
             for l in &self.loops[w[0] as usize..w[1] as usize] {
                 pixels.clear();
-                let mut near = f64::INFINITY;
                 for cap in &self.caps[l.caps.clone()] {
                     let outward = cap.normal().map(|x| x * f64::from(sign));
                     if !may_face(widen(cap.corners[0]), outward, cell) {
                         continue;
                     }
-                    let before = pixels.len();
                     let projected = cap.corners.map(|p| project(camera, &planes, p));
                     draw_triangle(
                         projected,
@@ -440,62 +407,41 @@ impl Solids {
                             });
                         },
                     );
-                    if pixels.len() > before {
-                        for p in cap.corners {
-                            near = near.min(depth(widen(p)));
-                        }
-                    }
                 }
                 if pixels.is_empty() {
                     continue;
                 }
-                let far = box_corners(bounds)
-                    .map(|p| depth(widen(p)))
-                    .into_iter()
-                    .fold(f64::NEG_INFINITY, f64::max);
-                let grow = view.tiles(near, far);
-                // The loop's tiles, widened by `grow` tiles each way: its rectangle.
-                let (mut x0, mut y0, mut x1, mut y1) = (tiles, tiles, 0, 0);
+                // The loop's pixels, widened by `margin` each way: its rectangle.
+                let (mut x0, mut y0, mut x1, mut y1) = (n, n, 0, 0);
                 for &i in pixels.iter() {
-                    let (x, y) = tile_of(i);
+                    let (x, y) = pixel_of(i);
                     (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x), y1.max(y));
                 }
-                let widen_tiles = |lo: usize, hi: usize| {
-                    (
-                        lo.saturating_sub(grow),
-                        hi.saturating_add(grow).min(tiles - 1),
-                    )
-                };
-                let ((x0, x1), (y0, y1)) = (widen_tiles(x0, x1), widen_tiles(y0, y1));
+                let widen_by_margin =
+                    |lo: usize, hi: usize| (lo.saturating_sub(margin), (hi + margin).min(n - 1));
+                let ((x0, x1), (y0, y1)) = (widen_by_margin(x0, x1), widen_by_margin(y0, y1));
                 let (width, height) = (x1 + 1 - x0, y1 + 1 - y0);
-                // Every tile of the rectangle lies within `grow` of the loop's, or the view's
-                // grids would pass their bound: the whole rectangle (a superset).
-                let first = if grow >= width.max(height)
-                    || distance.len() + width * height > GRID_TILES_PER_VIEW_TILE * tiles * tiles
+                // Every pixel of the rectangle lies within `margin` of the loop's, or the
+                // view's grids would pass their bound: the whole rectangle (a superset).
+                let first = if margin >= width.max(height)
+                    || distance.len() + width * height > n * n / GRID_PIXELS_PER_CELL
                 {
                     WHOLE_RECT
                 } else {
                     let first = distance.len();
-                    distance.resize(first + width * height, FAR_TILES);
+                    distance.resize(first + width * height, FAR_PIXELS);
                     let grid = &mut distance[first..];
                     for &i in pixels.iter() {
-                        let (x, y) = tile_of(i);
+                        let (x, y) = pixel_of(i);
                         grid[(y - y0) * width + (x - x0)] = 0;
                     }
                     chessboard_distances(grid, width);
                     first
                 };
                 loops.push(LoopOpening {
-                    rect: [
-                        x0 * OPENING_TILE,
-                        y0 * OPENING_TILE,
-                        ((x1 + 1) * OPENING_TILE).min(n) - 1,
-                        ((y1 + 1) * OPENING_TILE).min(n) - 1,
-                    ],
-                    tile: [x0, y0],
+                    rect: [x0, y0, x1, y1],
                     width,
                     first,
-                    grow,
                 });
             }
         }
@@ -600,74 +546,20 @@ impl Solids {
     }
 }
 
-/// Side of the square tiles of the openings' masks, in pixels.
-pub(crate) const OPENING_TILE: usize = 4;
+/// Distances at or past this many pixels are stored as this.
+const FAR_PIXELS: u8 = u8::MAX;
 
-/// The eight corners of the box `[min, max]`.
-fn box_corners([lo, hi]: [[f32; 3]; 2]) -> [[f32; 3]; 8] {
-    std::array::from_fn(|i| {
-        [
-            if i & 1 == 0 { lo[0] } else { hi[0] },
-            if i & 2 == 0 { lo[1] } else { hi[1] },
-            if i & 4 == 0 { lo[2] } else { hi[2] },
-        ]
-    })
-}
-
-/// Distances at or past this many tiles are stored as this.
-const FAR_TILES: u8 = u8::MAX;
-
-/// A view's loops keep distance grids of at most this many tiles per tile of the image (4 for
-/// 512², 64 KiB); past it, and where a loop's widening spans its whole rectangle, a loop's
-/// opening is its rectangle ([`WHOLE_RECT`]). Many open parts seen at once (a near view of a
-/// model of open shells) so cost bounded memory.
-const GRID_TILES_PER_VIEW_TILE: usize = 4;
+/// A view's loops keep distance grids of at most one cell (a byte) per this many pixels of
+/// the image (64 KiB at 512²); past it, and where a loop's margin spans its whole rectangle,
+/// a loop's opening is its rectangle ([`WHOLE_RECT`]). Many open parts seen at once (a near
+/// view of a model of open shells) so cost bounded memory.
+const GRID_PIXELS_PER_CELL: usize = 4;
 
 /// `LoopOpening::first` of an opening that is its whole rectangle.
 const WHOLE_RECT: usize = usize::MAX;
 
-/// What a view's openings need to bound parallax ([`Parallax::tiles`]).
-#[derive(Clone, Copy, Debug)]
-struct Parallax {
-    /// The camera's focal length in pixels.
-    focal: f64,
-    /// The farthest a camera of the cell lies from the view's eye.
-    reach: f64,
-    /// The image side in pixels.
-    resolution: usize,
-    /// Pixels every opening is widened by besides the parallax.
-    margin: usize,
-}
-
-impl Parallax {
-    /// How many tiles from a cap point at view depth `near` or more a face at depth `far` or
-    /// less may lie in the image and still be seen through that point by a camera of the
-    /// cell, `margin` included. From a camera moved by `t`, a point at depth `z` and image
-    /// offset `u` (in focal lengths) moves by `(u·t_z − t_xy) / (z − t_z)`; two points in
-    /// line from there lie apart by at most `√(1 + |u|²) · |t| · (1 / (near − |t|) − 1 / (far
-    /// − |t|))`, and `|u|` is largest at the image's corners. A camera that may reach the
-    /// cap's depth could line anything up: every tile.
-    fn tiles(&self, near: f64, far: f64) -> usize {
-        let all = self.resolution.div_ceil(OPENING_TILE);
-        let reach = self.reach;
-        if near - reach <= 0.0 || near.is_nan() || far.is_nan() {
-            return all;
-        }
-        let corner = std::f64::consts::SQRT_2 * self.resolution as f64 / (2.0 * self.focal);
-        let spread = (1.0 + corner * corner).sqrt()
-            * reach
-            * (1.0 / (near - reach) - 1.0 / (far.max(near) - reach));
-        let pixels = self.focal * spread + self.margin as f64;
-        if pixels < (all * OPENING_TILE) as f64 {
-            (pixels.ceil() as usize).div_ceil(OPENING_TILE)
-        } else {
-            all
-        }
-    }
-}
-
 /// Replaces each cell of the row-major grid `width` cells wide by its chessboard distance
-/// (in cells) to the nearest cell holding 0, at most [`FAR_TILES`]: the two raster passes
+/// (in cells) to the nearest cell holding 0, at most [`FAR_PIXELS`]: the two raster passes
 /// over the eight neighbours, which give that distance exactly. Each pass takes a row's
 /// three neighbours in the row before it first, a loop over the whole row that the compiler
 /// turns into SIMD, and then its neighbour along the row, one cell after the other.
@@ -717,31 +609,28 @@ fn from_row(row: &mut [u8], other: &[u8]) {
 }
 
 /// A view's openings ([`Solids::openings`]): per component, the pixels of its loops' caps
-/// that may show, as tile masks.
+/// that may show, as distance grids.
 #[derive(Default)]
 pub(crate) struct Openings {
     /// Per open component `c`: its loops are `loops[start[c]..start[c + 1]]`.
     start: Vec<u32>,
     loops: Vec<LoopOpening>,
-    /// Every loop's tile distances.
+    /// Every loop's pixel distances.
     distance: Vec<u8>,
     /// The cap pixels of the loop being built.
     pixels: Vec<u32>,
+    /// How many pixels from a cap pixel that shows a back face may show.
+    margin: usize,
 }
 
-/// One loop's opening in a view: a rectangle of pixels and its tiles' distances from the
-/// cap's.
+/// One loop's opening in a view: a rectangle of pixels and their distances from the cap's.
 struct LoopOpening {
-    /// `[x0, y0, x1, y1]`, inclusive: every pixel the mask may hold.
+    /// `[x0, y0, x1, y1]`, inclusive: every pixel the opening may hold.
     rect: [usize; 4],
-    /// The tile of the mask's first bit, `[x, y]`.
-    tile: [usize; 2],
-    /// Tiles per row.
+    /// Pixels per row of the rectangle.
     width: usize,
-    /// The first tile's distance in `Openings::distance`, or [`WHOLE_RECT`].
+    /// The rectangle's first pixel's distance in `Openings::distance`, or [`WHOLE_RECT`].
     first: usize,
-    /// How many tiles from the cap's pixels a back face may show ([`Parallax::tiles`]).
-    grow: usize,
 }
 
 impl Openings {
@@ -762,16 +651,17 @@ impl Openings {
     }
 
     /// Whether a back face of `component` at pixel `(x, y)` may show through an opening:
-    /// whether it lies within the parallax of a cap pixel that shows ([`Solids::openings`]).
+    /// whether it lies within the margin of a cap pixel that shows ([`Solids::openings`]).
     pub(crate) fn covers(&self, component: u32, x: usize, y: usize) -> bool {
         self.of(component).iter().any(|l| {
             let [x0, y0, x1, y1] = l.rect;
             if x < x0 || x > x1 || y < y0 || y > y1 {
                 return false;
             }
-            let tile = (y / OPENING_TILE - l.tile[1]) * l.width + (x / OPENING_TILE - l.tile[0]);
-            // Exact below FAR_TILES; at it, `grow` is as large or the rectangle held it.
-            l.first == WHOLE_RECT || usize::from(self.distance[l.first + tile]) <= l.grow
+            // Exact below FAR_PIXELS; at it, the margin is as large or the rectangle held it.
+            l.first == WHOLE_RECT
+                || usize::from(self.distance[l.first + (y - y0) * l.width + (x - x0)])
+                    <= self.margin
         })
     }
 
@@ -1144,7 +1034,7 @@ mod tests {
     #[test]
     fn openings_cover_only_where_the_cap_shows() {
         // The box open at the top, from above: its inside shows through the top's pixels
-        // (widened by the margin, in tiles), not elsewhere in the image.
+        // (widened by the margin), not elsewhere in the image.
         let m = mesh(&cube_faces()[..5], false);
         let solids = Solids::new(&m);
         let camera = camera([0.0, 0.0, 1.0]);
@@ -1220,45 +1110,6 @@ mod tests {
     }
 
     proptest::proptest! {
-        /// A cap point and a back face that a camera within `reach` of the eye sees in line
-        /// lie within [`Parallax::tiles`] of each other in the view's image.
-        #[test]
-        fn parallax_bounds_what_a_moved_camera_lines_up(
-            t in proptest::array::uniform3(-1.0f64..1.0),
-            pixel in proptest::array::uniform2(0.0f64..1.0),
-            behind in 0.0f64..1.0,
-            along in 0.0f64..1.0,
-        ) {
-            let camera = Camera::look_at([2.0, -3.0, 10.0], [0.0; 3], 45.0, 512);
-            let (eye, forward, right, up) =
-                (camera.eye(), camera.forward(), camera.right(), camera.up());
-            let reach = 0.8;
-            let (near, far) = (7.0, 13.0);
-            let length = dot(t, t).sqrt().max(1.0);
-            let t = t.map(|x| x / length * reach);
-            // The back face: pixel `pixel` of the view, at a depth from `near` to `far`.
-            let focal = camera.focal_pixels();
-            let half = 256.0;
-            let z = near + behind * (far - near);
-            let (x, y) = ((pixel[0] * 512.0 - half) / focal, (half - pixel[1] * 512.0) / focal);
-            let b: [f64; 3] = std::array::from_fn(|k| {
-                eye[k] + z * (forward[k] + x * right[k] + y * up[k])
-            });
-            // The cap point: on the segment from the moved camera to `b`, at depth ≥ `near`.
-            let c: [f64; 3] = std::array::from_fn(|k| eye[k] + t[k]);
-            let depth = |p: [f64; 3]| dot(sub(p, eye), forward);
-            let lo = (near - depth(c)) / (z - depth(c));
-            let s = lo + along * (1.0 - lo);
-            let a: [f64; 3] = std::array::from_fn(|k| c[k] + s * (b[k] - c[k]));
-            proptest::prop_assume!(depth(a) >= near);
-            let project = |p: [f64; 3]| camera.project(p.map(|x| x as f32)).unwrap();
-            let (pa, pb) = (project(a), project(b));
-            let apart = (pa[0] - pb[0]).abs().max((pa[1] - pb[1]).abs());
-            let view = Parallax { focal, reach, resolution: 512, margin: 0 };
-            let bound = (view.tiles(near, far) * OPENING_TILE) as f64;
-            proptest::prop_assert!(apart <= bound + 1e-3, "{apart} px apart, bound {bound}");
-        }
-
         /// The chessboard distances are the brute-force ones.
         #[test]
         fn chessboard_distances_are_exact(
@@ -1269,7 +1120,7 @@ mod tests {
             proptest::prop_assume!(height > 0);
             let cells = &cells[..width * height];
             let mut grid: Vec<u8> =
-                cells.iter().map(|&zero| if zero { 0 } else { FAR_TILES }).collect();
+                cells.iter().map(|&zero| if zero { 0 } else { FAR_PIXELS }).collect();
             chessboard_distances(&mut grid, width);
             for (i, &d) in grid.iter().enumerate() {
                 let (x, y) = (i % width, i / width);
@@ -1277,7 +1128,7 @@ mod tests {
                     .filter(|&j| cells[j])
                     .map(|j| x.abs_diff(j % width).max(y.abs_diff(j / width)))
                     .min()
-                    .map_or(FAR_TILES, |d| d.min(usize::from(FAR_TILES)) as u8);
+                    .map_or(FAR_PIXELS, |d| d.min(usize::from(FAR_PIXELS)) as u8);
                 proptest::prop_assert_eq!(d, brute, "cell ({}, {})", x, y);
             }
         }

@@ -8,8 +8,8 @@
 //! Shrinking occluders also uncovers the back faces behind every silhouette, which would cost
 //! most of the culling; so a triangle is drawn only if some camera of the view's cell may see
 //! its visible side: its outward side anywhere, its back only near the pixels of an opening
-//! of its component, where its cap lies in front of the shrunk occluders, within the parallax
-//! a camera of the cell may see between the cap and the component (`sampler/solid.rs`).
+//! of its component, within `radius + 1` pixels of where its cap lies in front of the shrunk
+//! occluders (`sampler/solid.rs`).
 //! Whole patches that face away from the cell and lie behind no opening are passed over by
 //! their normal cone; the triangles of a patch left are tested cluster by cluster, each
 //! cluster first as a whole by the screen extent of its vertices.
