@@ -1048,6 +1048,36 @@ mod tests {
     }
 
     #[test]
+    fn openings_reach_exactly_the_margin_past_the_cap() {
+        // Along the row through the open top's centre, the covered pixels run `margin`
+        // further each way than the cap's own (margin 0), and no further.
+        let m = mesh(&cube_faces()[..5], false);
+        let solids = Solids::new(&m);
+        let camera = camera([0.0, 0.0, 1.0]);
+        let cell = Cell::ball(camera.eye(), 0.0);
+        let guard = DepthBuffer::new(camera.resolution());
+        let n = camera.resolution() as usize;
+        let y = camera.project([0.5, 0.5, 1.0]).unwrap()[1] as usize;
+        let covered_span = |margin: usize| {
+            let mut openings = Openings::default();
+            solids.openings(&camera, &cell, margin, &guard, &mut openings);
+            let covered: Vec<usize> = (0..n).filter(|&x| openings.covers(0, x, y)).collect();
+            // One run of pixels.
+            assert_eq!(covered.len(), covered[covered.len() - 1] - covered[0] + 1);
+            (covered[0], covered[covered.len() - 1])
+        };
+        let (lo, hi) = covered_span(0);
+        assert!(lo >= 3 && hi + 3 < n, "the cap lies inside the image");
+        for margin in [1, 3] {
+            assert_eq!(
+                covered_span(margin),
+                (lo - margin, hi + margin),
+                "margin {margin}"
+            );
+        }
+    }
+
+    #[test]
     fn least_area_caps_span_their_loops() {
         // A planar convex hexagon: n − 2 triangles, its area exactly, every side used once.
         let hexagon: Vec<[f64; 3]> = (0..6)
