@@ -77,7 +77,7 @@ enum Mode {
     Conservative,
     /// `--conservative --fold-corners all`: `--conservative` before the split fold.
     ConservativeAll,
-    /// `--fold-min-pixels 4 --fold-corners one`.
+    /// `--fold-min-pixels 4 --fold-corners one --probe off`.
     Thresholded,
     /// `--probe off`: the default before the probe pass was.
     Plain,
