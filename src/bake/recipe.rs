@@ -16,6 +16,7 @@ use crate::ooc::{Mesh, MeshError, MeshErrorKind, OpenOptions, default_cache_dir}
 use crate::output::{AtomicFile, NamedPath};
 use crate::progress::Progress;
 use crate::runtime::Pvis;
+use crate::sampler::FoldCorners;
 use crate::sampler::SamplingOptions;
 use crate::tiling::{self, Patch, PatchId, Tiling, TilingOptions};
 use crate::visibility::{SamplingParams, VisibilityMatrix};
@@ -390,6 +391,7 @@ impl Recipe {
                 sphere.band
             },
             far_view: s.far_views && sphere.shell.is_none(),
+            folds_into: None,
         }
     }
 
@@ -491,12 +493,22 @@ impl Recipe {
             let rows = backend.sample(mesh, tiling, &fine, &fine_options, progress)?;
             (plain, Some(rows))
         } else {
-            let options = self.sampling_options(
+            let mut options = self.sampling_options(
                 min_pixels,
                 checkpoints.fine.clone(),
                 views(fine.level),
                 sphere,
             );
+            // These folds drop what a finer view's fold targets (its parents) hold, so its
+            // probe need not look for it.
+            if fine.level == params.level + 1
+                && matches!(
+                    supersample.fold_corners,
+                    FoldCorners::Split | FoldCorners::Cover
+                )
+            {
+                options.folds_into = Some(params.level);
+            }
             if supersample.splits(params.level) {
                 let (rows, seen) = backend.sample_split(mesh, tiling, &fine, &options, progress)?;
                 (rows, Some(seen))
@@ -843,7 +855,6 @@ mod tests {
     #[test]
     fn the_default_probe_turns_itself_off_where_it_cannot_run() {
         use crate::memory::DEFAULT_PROBE_MAX_TRIANGLES;
-        use crate::sampler::FoldCorners;
         let recipe = |f: fn(&mut BakeSettings)| {
             let mut s = BakeSettings {
                 memory: MemoryBudget::new(256 << 20),

@@ -122,6 +122,13 @@ pub struct SamplingOptions {
     /// probes the far camera too, in a cell of the same angular size. Not for near passes
     /// ([`SamplingOptions::shell`]), which ignore it.
     pub far_view: bool,
+    /// The stored level this pass's rows are folded into, when the fold keeps from a finer
+    /// view only the patches its fold targets do not hold yet ([`super::FoldCorners::Split`]
+    /// and [`super::FoldCorners::Cover`], one level finer). The probe of each view one level
+    /// finer than it then leaves out the patches its two parents' rows hold: its parents are
+    /// its fold targets, so the fold would drop them, and the folded rows are the same bit
+    /// for bit. `None`: the probe tests every patch a view did not show.
+    pub folds_into: Option<u32>,
 }
 
 /// How far out [`SamplingOptions::far_view`] renders, in sampling distances: far enough that
@@ -598,14 +605,20 @@ impl ViewContext<'_> {
         let (row, seen) = row.split_at_mut(scratch.camera_row.len());
         seen.fill(0);
         let d = normalize(widen(crate::sphere::direction(index)));
+        // What the probe may leave out (`SamplingOptions::folds_into`): the views of the level
+        // just finer than the stored one have their fold targets as parents.
+        let known = match self.options.folds_into {
+            Some(stored) if self.params.level == stored + 1 && index >= view_count(stored) => hint,
+            _ => None,
+        };
         let Some(distance) = self.options.shell else {
             let camera = Camera::sampling_view(self.params, index);
             let cell = self.probe.as_ref().map(|p| p.cell(d, camera.eye()));
-            self.render_camera(&camera, cell.as_ref(), hint, scratch, row, seen);
+            self.render_camera(&camera, cell.as_ref(), hint, known, scratch, row, seen);
             if self.options.far_view {
                 let (far, cell) = self.far_camera(d);
                 let mut part = std::mem::take(&mut scratch.camera_row);
-                self.render_camera(&far, cell.as_ref(), hint, scratch, &mut part, seen);
+                self.render_camera(&far, cell.as_ref(), hint, known, scratch, &mut part, seen);
                 for (r, p) in row.iter_mut().zip(&part) {
                     *r |= p;
                 }
@@ -618,7 +631,7 @@ impl ViewContext<'_> {
         let mut part = std::mem::take(&mut scratch.camera_row);
         row.fill(0);
         for camera in cameras.iter() {
-            self.render_camera(camera, cell.as_ref(), hint, scratch, &mut part, seen);
+            self.render_camera(camera, cell.as_ref(), hint, known, scratch, &mut part, seen);
             for (r, p) in row.iter_mut().zip(&part) {
                 *r |= p;
             }
@@ -638,18 +651,20 @@ impl ViewContext<'_> {
     }
 
     /// Renders `camera`'s image into `row` (and the probe pass for the cameras of `cell`, when
-    /// there is one), and ORs what the image showed, before the probe, into `seen` (empty when
-    /// not wanted). The patches its hints show (every patch in the first level) are drawn
+    /// there is one, leaving out the patches `known` holds), and ORs what the image showed,
+    /// before the probe, into `seen` (empty when not wanted). The patches its hints show (every patch in the first level) are drawn
     /// first, except their triangles that face away from the eye, which are put off; then the
     /// occlusion tiles are built, and the put-off triangles and the other patches are drawn
     /// unless the tiles prove them hidden (patches by their bounding sphere and box, then each
     /// cluster by its sphere, then each triangle by its bounding box). The keys do not depend
     /// on drawing order, so the row equals a brute-force render's.
+    #[allow(clippy::too_many_arguments)]
     fn render_camera(
         &self,
         camera: &Camera,
         cell: Option<&Cell>,
         hint: Option<[&[u64]; 2]>,
+        known: Option<[&[u64]; 2]>,
         scratch: &mut WorkerScratch,
         row: &mut [u64],
         seen: &mut [u64],
@@ -713,7 +728,7 @@ impl ViewContext<'_> {
             *s |= r;
         }
         if let Some(cell) = cell {
-            self.probe_row(camera, cell, scratch, row);
+            self.probe_row(camera, cell, known, scratch, row);
         }
     }
 

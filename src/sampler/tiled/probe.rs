@@ -12,7 +12,10 @@
 //! occluders (`sampler/solid.rs`).
 //! Whole patches that face away from the cell and lie behind no opening are passed over by
 //! their normal cone; the triangles of a patch left are tested cluster by cluster, each
-//! cluster first as a whole by the screen extent of its vertices.
+//! cluster first as a whole by the screen extent of its vertices. Where the pass's fold keeps
+//! from a finer view only what its fold targets lack (`SamplingOptions::folds_into`), a view
+//! one level finer than the stored one does not test the patches its parents, which are
+//! those targets, already hold.
 //!
 //! The cell holds every camera whose query may use the view's row: the directions within
 //! [`CELL_PER_EDGE`] edges of the view's, at the pass's distance, or, with
@@ -144,11 +147,13 @@ impl ViewContext<'_> {
         }
     }
 
-    /// Adds to `row` the patches the probe finds from `camera`, for the cameras of `cell`.
+    /// Adds to `row` the patches the probe finds from `camera`, for the cameras of `cell`,
+    /// among those neither `row` nor `known` (two rows the fold holds already) holds.
     pub(super) fn probe_row(
         &self,
         camera: &Camera,
         cell: &Cell,
+        known: Option<[&[u64]; 2]>,
         scratch: &mut WorkerScratch,
         row: &mut [u64],
     ) {
@@ -197,6 +202,11 @@ impl ViewContext<'_> {
                 .enumerate()
                 .map(|(w, r)| !r & valid_bits(w, patch_count)),
         );
+        if let Some([a, b]) = known {
+            for (u, (a, b)) in ps.unseen.iter_mut().zip(a.iter().zip(b)) {
+                *u &= !(a | b);
+            }
+        }
         for p in Patches::of_bits(&ps.unseen) {
             let p = p as usize;
             let patch = &self.tiling.patches[p];

@@ -784,6 +784,64 @@ fn split_sampling_returns_the_probed_rows_and_the_rows_before_the_probe() {
 }
 
 #[test]
+fn a_probe_leaving_out_what_the_parents_hold_folds_to_the_same_rows() {
+    // `folds_into`: the views one level finer than the stored level do not probe the patches
+    // their parents hold. The split and cover folds drop those anyway, so their stored rows
+    // stay the same bit for bit, on the sampling sphere and on a near pass.
+    let mesh = bunny();
+    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
+    let p = params_for(&mesh, 2, 64);
+    let probe = SamplingOptions {
+        probe: Some(1),
+        ..SamplingOptions::default()
+    };
+    for (i, options) in [probe.clone(), near(&p, 1.2, probe)]
+        .into_iter()
+        .enumerate()
+    {
+        let split = |options: &SamplingOptions| {
+            sample_tiled_split(&mesh, &tiling, &p, options, &NoProgress).unwrap()
+        };
+        let (rows, seen) = split(&options);
+        let leaving_out = SamplingOptions {
+            folds_into: Some(1),
+            ..options.clone()
+        };
+        let (lean, lean_seen) = split(&leaving_out);
+        assert_same(&lean_seen, &seen);
+        let stored = view_count(1);
+        for v in 0..rows.views() {
+            let (a, b) = (rows.row(v), lean.row(v));
+            if v < stored {
+                assert_eq!(a, b, "{i}: stored view {v}");
+            }
+            for (&a, &b) in a.iter().zip(b) {
+                assert_eq!(a & b, b, "{i}: view {v} gained a patch");
+            }
+        }
+        assert!(
+            lean.count_ones() < rows.count_ones(),
+            "{i}: nothing was left out"
+        );
+        let coarse = |m: &VisibilityMatrix| m.prefix(stored);
+        assert_same(
+            &split_fold(coarse(&lean), &lean, &seen, 2, 1),
+            &split_fold(coarse(&rows), &rows, &seen, 2, 1),
+        );
+        assert_same(
+            &cover_fold(coarse(&lean), &lean, 2, 1),
+            &cover_fold(coarse(&rows), &rows, 2, 1),
+        );
+        // Only the level just finer than the stored one leaves anything out.
+        let coarser = SamplingOptions {
+            folds_into: Some(0),
+            ..options
+        };
+        assert_same(&split(&coarser).0, &rows);
+    }
+}
+
+#[test]
 fn far_views_add_the_rim_a_far_camera_sees_and_leave_near_passes_alone() {
     let mesh = bunny();
     let tiling = crate::tiling::tile(&mesh, 200).unwrap();
