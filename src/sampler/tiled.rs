@@ -37,8 +37,10 @@
 //! Options: `min_pixels` (a patch counts only if it covers that many pixels), `dilate` (also
 //! mark edge neighbours of visible patches that may face the eye), `always_visible` (patches
 //! set in every row), `conservative` (conservative rasterization, `conservative.rs`), a
-//! checkpoint written after each level (`checkpoint.rs`), and `views` (render only some views
-//! and the ancestors that seed them: a shard of a sharded bake, `bake::Shard`).
+//! checkpoint written after each level (`checkpoint.rs`), `views` (render only some views
+//! and the ancestors that seed them: a shard of a sharded bake, `bake::Shard`), and
+//! `folds_into` (the probe of a finer view leaves out what its parents hold where the fold
+//! would drop it, `tiled/probe.rs`).
 //! Cost per view: a sphere test per patch, the triangles of the drawn patches (a tile test
 //! for those drawn after the tiles), one pass over the pixels. Memory: one
 //! `resolution² × 8`-byte buffer per thread, the result (one bit per view and patch), and
@@ -652,12 +654,13 @@ impl ViewContext<'_> {
 
     /// Renders `camera`'s image into `row` (and the probe pass for the cameras of `cell`, when
     /// there is one, leaving out the patches `known` holds), and ORs what the image showed,
-    /// before the probe, into `seen` (empty when not wanted). The patches its hints show (every patch in the first level) are drawn
-    /// first, except their triangles that face away from the eye, which are put off; then the
-    /// occlusion tiles are built, and the put-off triangles and the other patches are drawn
-    /// unless the tiles prove them hidden (patches by their bounding sphere and box, then each
-    /// cluster by its sphere, then each triangle by its bounding box). The keys do not depend
-    /// on drawing order, so the row equals a brute-force render's.
+    /// before the probe, into `seen` (empty when not wanted). The patches its hints show
+    /// (every patch in the first level) are drawn first, except their triangles that face
+    /// away from the eye, which are put off; then the occlusion tiles are built, and the
+    /// put-off triangles and the other patches are drawn unless the tiles prove them hidden
+    /// (patches by their bounding sphere and box, then each cluster by its sphere, then each
+    /// triangle by its bounding box). The keys do not depend on drawing order, so the row
+    /// equals a brute-force render's.
     #[allow(clippy::too_many_arguments)]
     fn render_camera(
         &self,
