@@ -104,6 +104,16 @@ fn tiled(
     sample_tiled(mesh, tiling, p, o, &NoProgress).unwrap()
 }
 
+/// [`sample_tiled_split`]'s rows with the probe and before it.
+fn tiled_split(
+    mesh: &Mesh,
+    tiling: &Tiling,
+    p: &SamplingParams,
+    o: &SamplingOptions,
+) -> (VisibilityMatrix, VisibilityMatrix) {
+    sample_tiled_split(mesh, tiling, p, o, &NoProgress).unwrap()
+}
+
 fn assert_same(a: &VisibilityMatrix, b: &VisibilityMatrix) {
     assert_eq!((a.views(), a.patches()), (b.views(), b.patches()));
     for v in 0..a.views() {
@@ -759,9 +769,7 @@ fn split_sampling_returns_the_probed_rows_and_the_rows_before_the_probe() {
             probe: None,
             ..options.clone()
         };
-        let split = |options: &SamplingOptions| {
-            sample_tiled_split(&mesh, &tiling, &p, options, &NoProgress).unwrap()
-        };
+        let split = |options: &SamplingOptions| tiled_split(&mesh, &tiling, &p, options);
         let (rows, seen) = split(&options);
         assert_same(&rows, &tiled(&mesh, &tiling, &p, &options));
         assert_same(&seen, &tiled(&mesh, &tiling, &p, &plain));
@@ -799,9 +807,7 @@ fn a_probe_leaving_out_what_the_parents_hold_folds_to_the_same_rows() {
         .into_iter()
         .enumerate()
     {
-        let split = |options: &SamplingOptions| {
-            sample_tiled_split(&mesh, &tiling, &p, options, &NoProgress).unwrap()
-        };
+        let split = |options: &SamplingOptions| tiled_split(&mesh, &tiling, &p, options);
         let (rows, seen) = split(&options);
         let leaving_out = SamplingOptions {
             folds_into: Some(1),
