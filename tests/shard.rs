@@ -204,6 +204,42 @@ fn conservative_split_passes_merge_into_the_single_bake() {
     assert!(std::fs::read(&out).unwrap() == single(dir.path(), &flags, "2"));
 }
 
+/// `--finer-views centroids`: the sampling sphere's finer pass renders the stored faces'
+/// centroids (its shell the finer vertices); three shards, each rendering its centroids and
+/// the corners seeding them, merge into the single bake.
+#[test]
+fn centroid_finer_views_merge_into_the_single_bake() {
+    let dir = TempDir::new().unwrap();
+    let flags = [
+        "--patches",
+        "120",
+        "--level",
+        "2",
+        "--resolution",
+        "64",
+        "--conservative",
+        "--finer-views",
+        "centroids",
+        "--shells",
+        "1",
+    ];
+    let parts = shards(dir.path(), BUNNY, &flags, 3, |i| 1 + i % 2);
+    let out = dir.path().join("merged.pvis");
+    let given: Vec<&Path> = parts.iter().map(|p| p.as_path()).collect();
+    ok(merge(&given, &out));
+    let centroids = single(dir.path(), &flags, "2");
+    assert!(std::fs::read(&out).unwrap() == centroids);
+    let midpoints: Vec<&str> = flags
+        .iter()
+        .copied()
+        .filter(|&f| f != "--finer-views" && f != "centroids")
+        .collect();
+    assert!(
+        single(dir.path(), &midpoints, "2") != centroids,
+        "the flag changed nothing"
+    );
+}
+
 /// Every refusal is one line with exit code 1 (2 for a usage error), naming the file at fault.
 #[test]
 fn merge_refuses_missing_repeated_foreign_and_damaged_parts() {
@@ -276,7 +312,7 @@ fn merge_refuses_missing_repeated_foreign_and_damaged_parts() {
         1,
         &[
             s(&old_part),
-            "part file version 2, expected 6",
+            "part file version 2, expected 7",
             "bake this shard again",
         ],
     );

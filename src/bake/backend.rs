@@ -41,6 +41,8 @@ pub(crate) fn cpu_only_option(settings: &BakeSettings) -> Option<&'static str> {
         Some("--conservative-raster")
     } else if settings.resume {
         Some("--resume")
+    } else if settings.finer_views == crate::sampler::FinerViews::Centroids {
+        Some("--finer-views centroids")
     } else {
         None
     }

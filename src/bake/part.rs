@@ -37,7 +37,7 @@ use super::shells::MAX_SHELLS;
 use super::wire::{Fields, PATCH_BYTES, Put};
 use crate::format::VisibilityEncoding;
 use crate::runtime::crc32c::crc32c;
-use crate::sampler::FoldCorners;
+use crate::sampler::{FinerViews, FoldCorners};
 use crate::sphere::{MAX_LEVEL, view_count};
 use crate::tiling::Patch;
 use crate::visibility::SamplingParams;
@@ -49,7 +49,7 @@ const MAGIC: &[u8; 8] = b"PVISPART";
 /// record `--far-views` (and a conservative part carries its split fold's second passes), 5
 /// since they record the shells' probe and fold apart from the sampling sphere's, 6 since they
 /// record `--sampled-rows`.
-const VERSION: u32 = 6;
+const VERSION: u32 = 7;
 
 /// A fold's code in the settings block.
 fn fold_code(corners: FoldCorners) -> u8 {
@@ -122,6 +122,8 @@ pub struct PartSettings {
     pub shell_fold_corners: FoldCorners,
     /// `--sampled-rows`: the merged file keeps the rows as sampled, unsaturated.
     pub sampled_rows: bool,
+    /// Where the sampling sphere's finer views lie (`--finer-views`).
+    pub finer_views: FinerViews,
 }
 
 impl PartSettings {
@@ -164,6 +166,10 @@ impl PartSettings {
         b.put_u32(self.shell_probe.map_or(0, |r| r + 1));
         b.put_u8(fold_code(self.shell_fold_corners));
         b.put_u8(u8::from(self.sampled_rows));
+        b.put_u8(match self.finer_views {
+            FinerViews::Midpoints => 0,
+            FinerViews::Centroids => 1,
+        });
         b
     }
 
@@ -209,6 +215,11 @@ impl PartSettings {
             shell_probe: f.u32()?.checked_sub(1),
             shell_fold_corners: fold_of(f.u8()?)?,
             sampled_rows: flag(f.u8()?)?,
+            finer_views: match f.u8()? {
+                0 => FinerViews::Midpoints,
+                1 => FinerViews::Centroids,
+                _ => return None,
+            },
         };
         let in_range = settings.level <= MAX_LEVEL
             && settings.extra_levels <= MAX_LEVEL
@@ -230,6 +241,24 @@ impl PartSettings {
         levels
     }
 
+    /// The layout of each pass's views, in [`PartSettings::pass_levels`]' order: the sampling
+    /// sphere's finer pass has `--finer-views`' (`sampler::FineViews::pass`), every other pass
+    /// the sphere's vertices.
+    pub fn pass_finer_views(&self) -> Vec<FinerViews> {
+        let (main, _) = self.sphere_pass_levels();
+        self.pass_levels()
+            .iter()
+            .enumerate()
+            .map(|(i, &level)| {
+                if i < main.len() && level > self.level {
+                    self.finer_views
+                } else {
+                    FinerViews::Midpoints
+                }
+            })
+            .collect()
+    }
+
     /// The pass levels of the sampling sphere, and of one shell.
     pub(crate) fn sphere_pass_levels(&self) -> (Vec<u32>, Vec<u32>) {
         let passes = |extra_levels, fold_min_pixels, fold_corners, level| {
@@ -237,6 +266,8 @@ impl PartSettings {
                 extra_levels,
                 fold_min_pixels,
                 fold_corners,
+                // The layout of the finer views changes no pass level.
+                finer: FinerViews::Midpoints,
             }
             .pass_levels(level)
         };
@@ -496,6 +527,7 @@ pub(crate) mod tests {
             far_views: false,
             shell_fold_corners: FoldCorners::All,
             sampled_rows: false,
+            finer_views: FinerViews::Centroids,
         };
         let shard = Shard { index: 1, count: 3 };
         let patches = (0..70)

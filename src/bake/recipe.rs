@@ -16,8 +16,8 @@ use crate::ooc::{Mesh, MeshError, MeshErrorKind, OpenOptions, default_cache_dir}
 use crate::output::{AtomicFile, NamedPath};
 use crate::progress::Progress;
 use crate::runtime::Pvis;
-use crate::sampler::FoldCorners;
 use crate::sampler::SamplingOptions;
+use crate::sampler::{FinerViews, FoldCorners};
 use crate::tiling::{self, Patch, PatchId, Tiling, TilingOptions};
 use crate::visibility::{SamplingParams, VisibilityMatrix};
 use std::io::{BufWriter, Write};
@@ -392,6 +392,7 @@ impl Recipe {
             },
             far_view: s.far_views && sphere.shell.is_none(),
             folds_into: None,
+            finer: FinerViews::Midpoints,
         }
     }
 
@@ -476,6 +477,15 @@ impl Recipe {
             ..params
         };
         let min_pixels = self.settings.min_pixels;
+        // Where the finer pass's views lie: the sphere's vertices unless it is one level finer
+        // (at the finest level the pass may be the stored level itself).
+        let finer = |level: u32| {
+            if level > params.level {
+                supersample.finer
+            } else {
+                FinerViews::Midpoints
+            }
+        };
         let (plain, fine) = if supersample.fold_min_pixels > 0 {
             let coarse_options = self.sampling_options(
                 min_pixels,
@@ -484,21 +494,27 @@ impl Recipe {
                 sphere,
             );
             let plain = backend.sample(mesh, tiling, &params, &coarse_options, progress)?;
-            let fine_options = self.sampling_options(
-                supersample.fold_min_pixels,
-                checkpoints.fine.clone(),
-                views(fine.level),
-                sphere,
-            );
+            let fine_options = SamplingOptions {
+                finer: finer(fine.level),
+                ..self.sampling_options(
+                    supersample.fold_min_pixels,
+                    checkpoints.fine.clone(),
+                    views(fine.level),
+                    sphere,
+                )
+            };
             let rows = backend.sample(mesh, tiling, &fine, &fine_options, progress)?;
             (plain, Some(rows))
         } else {
-            let mut options = self.sampling_options(
-                min_pixels,
-                checkpoints.fine.clone(),
-                views(fine.level),
-                sphere,
-            );
+            let mut options = SamplingOptions {
+                finer: finer(fine.level),
+                ..self.sampling_options(
+                    min_pixels,
+                    checkpoints.fine.clone(),
+                    views(fine.level),
+                    sphere,
+                )
+            };
             // These folds drop what a finer view's fold targets (its parents) hold, so its
             // probe need not look for it.
             if fine.level == params.level + 1

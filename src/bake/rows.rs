@@ -14,7 +14,7 @@
 //! query's answer depends on is set), unless the bake keeps the rows as sampled.
 
 use super::Supersample;
-use crate::sampler::{fold_into_with, saturate, split_fold};
+use crate::sampler::{FineViews, FinerViews, fold_views, saturate, split_fold_views};
 use crate::sphere::{MAX_LEVEL, view_count};
 use crate::visibility::{SamplingParams, VisibilityMatrix};
 
@@ -61,11 +61,34 @@ pub(crate) struct SphereRows {
 impl SphereRows {
     /// Views rendered to get these rows.
     pub(crate) fn sampled_views(&self) -> u32 {
+        let fine = self.fine_views(self.params.level);
+        // A pass at the finer level renders the views of its layout, one at the stored level
+        // every view.
+        let rendered = |m: &VisibilityMatrix| {
+            if m.views() == fine.slots() {
+                fine.end()
+            } else {
+                m.views()
+            }
+        };
         if self.supersample.splits(self.params.level) {
             // The seen rows come from the same renders.
-            return self.plain.views();
+            return rendered(&self.plain);
         }
-        self.plain.views() + self.fine.as_ref().map_or(0, VisibilityMatrix::views)
+        rendered(&self.plain) + self.fine.as_ref().map_or(0, rendered)
+    }
+
+    /// The views of the pass folded into stored level `level`: the sampled level's finer
+    /// views are laid out as the bake asked, those of a coarser level cut from the same rows
+    /// (`eval --sweep`) are sphere vertices of the sampled level.
+    fn fine_views(&self, level: u32) -> FineViews {
+        let fine_level = (level + self.supersample.extra_levels).min(MAX_LEVEL);
+        let finer = if level == self.params.level && fine_level > level {
+            self.supersample.finer
+        } else {
+            FinerViews::Midpoints
+        };
+        FineViews::new(level, fine_level, finer)
     }
 
     /// The matrices of the passes, in sampling order: the plain pass, then the thresholded
@@ -92,18 +115,18 @@ impl SphereRows {
             self.params.level
         );
         let coarse = self.plain.prefix(view_count(level));
-        let fine_level = (level + self.supersample.extra_levels).min(MAX_LEVEL);
+        let views = self.fine_views(level);
+        let fine_level = views.fine_level();
         if fine_level == level {
             return coarse;
         }
         if self.supersample.splits(level) {
             let seen = self.fine.as_ref().expect("a split pass has its seen rows");
-            return split_fold(
+            return split_fold_views(
                 coarse,
                 &self.plain.prefix(view_count(fine_level)),
                 &seen.prefix(view_count(fine_level)),
-                fine_level,
-                level,
+                &views,
             );
         }
         let fine = self
@@ -111,13 +134,7 @@ impl SphereRows {
             .as_ref()
             .unwrap_or(&self.plain)
             .prefix(view_count(fine_level));
-        fold_into_with(
-            coarse,
-            &fine,
-            fine_level,
-            level,
-            self.supersample.fold_corners,
-        )
+        fold_views(coarse, &fine, &views, self.supersample.fold_corners)
     }
 }
 

@@ -7,7 +7,7 @@
 //! shells' level and supersampling, and the checkpoint files of each sampling pass.
 
 use crate::format::VisibilityEncoding;
-use crate::sampler::{FoldCorners, MAX_RESOLUTION, MAX_VIEW_SUPERSAMPLE};
+use crate::sampler::{FinerViews, FoldCorners, MAX_RESOLUTION, MAX_VIEW_SUPERSAMPLE};
 use crate::sphere::{MAX_LEVEL, view_count};
 use crate::tiling::{PatchId, TilingMode};
 use std::path::PathBuf;
@@ -124,6 +124,10 @@ pub struct BakeSettings {
     /// Which stored views receive a finer view's patches (`--fold-corners`); `None`:
     /// [`DEFAULT_FOLD_CORNERS`].
     pub fold_corners: Option<FoldCorners>,
+    /// Where the sampling sphere's finer views lie (`--finer-views`): the finer level's
+    /// vertices, or, with one finer level, the centroids of the stored faces
+    /// (`sampler::FinerViews`). The shells' finer views are always the vertices.
+    pub finer_views: FinerViews,
     /// Patch numbering (`--patch-order`).
     pub patch_order: PatchOrder,
     /// VISB encoding (`--encoding`).
@@ -170,6 +174,7 @@ impl Default for BakeSettings {
             view_supersample: None,
             fold_min_pixels: None,
             fold_corners: None,
+            finer_views: FinerViews::Midpoints,
             patch_order: PatchOrder::default(),
             encoding: VisibilityEncoding::Tree,
             tiling: TilingMode::Auto,
@@ -217,6 +222,8 @@ pub struct Supersample {
     pub fold_min_pixels: u32,
     /// Which stored views receive a finer view's patches.
     pub fold_corners: FoldCorners,
+    /// Where the finer views lie.
+    pub finer: FinerViews,
 }
 
 impl Supersample {
@@ -342,9 +349,19 @@ impl BakeSettings {
                 extra_levels,
                 fold_min_pixels: if thresholded { fold_min_pixels } else { 0 },
                 fold_corners,
+                finer: FinerViews::Midpoints,
             }
         };
-        let supersample = resolve(extra_levels);
+        if self.finer_views == FinerViews::Centroids && extra_levels != 1 {
+            return fail(format!(
+                "--finer-views centroids with --view-supersample {extra_levels}: expected one \
+                 finer level (the centroids of the stored faces)"
+            ));
+        }
+        let supersample = Supersample {
+            finer: self.finer_views,
+            ..resolve(extra_levels)
+        };
         if self.shells > MAX_SHELLS {
             return fail(format!(
                 "--shells {}: expected 0 (no near views) to {MAX_SHELLS}",
@@ -428,6 +445,9 @@ impl BakeSettings {
         let mut suffix = plain.clone();
         if supersample.extra_levels > 0 {
             suffix.push_str(&format!(".vs{}", supersample.extra_levels));
+            if supersample.finer == FinerViews::Centroids {
+                suffix.push_str(".centroids");
+            }
             if supersample.fold_corners == FoldCorners::Split {
                 // The pass holds its seen rows too.
                 suffix.push_str(".split");
@@ -468,7 +488,8 @@ mod tests {
                 Supersample {
                     extra_levels: DEFAULT_VIEW_SUPERSAMPLE,
                     fold_min_pixels: 0,
-                    fold_corners: FoldCorners::Cover
+                    fold_corners: FoldCorners::Cover,
+                    finer: FinerViews::Midpoints,
                 },
                 512
             )
@@ -632,6 +653,43 @@ mod tests {
             let err = check(|s| f(s)).unwrap_err();
             assert!(err.0.starts_with(flag), "{flag}: {}", err.0);
         }
+    }
+
+    #[test]
+    fn centroid_finer_views_need_one_finer_level_and_leave_the_shells_alone() {
+        let c = check(|s| {
+            s.finer_views = FinerViews::Centroids;
+            s.shells = 1
+        })
+        .unwrap();
+        assert_eq!(c.supersample.finer, FinerViews::Centroids);
+        assert_eq!(c.shell_supersample.finer, FinerViews::Midpoints);
+        assert_eq!(
+            c.fine_checkpoint,
+            Some("out.pvis.vs1.centroids.ckpt".into())
+        );
+        for k in [0, 2] {
+            let err = check(|s| {
+                s.finer_views = FinerViews::Centroids;
+                s.view_supersample = Some(k)
+            })
+            .unwrap_err();
+            assert!(
+                err.0.contains(&format!(
+                    "--finer-views centroids with --view-supersample {k}"
+                )),
+                "{}",
+                err.0
+            );
+        }
+        // At the finest level there is no finer one.
+        assert!(
+            check(|s| {
+                s.finer_views = FinerViews::Centroids;
+                s.level = MAX_LEVEL
+            })
+            .is_err()
+        );
     }
 
     #[test]

@@ -17,6 +17,7 @@ use super::tiling_file::TilingFile;
 use super::{Backend, BakeError, Part, Recipe, Shard, Stages};
 use crate::ooc::Mesh;
 use crate::progress::Progress;
+use crate::sampler::FineViews;
 use crate::tiling::Tiling;
 use crate::visibility::VisibilityMatrix;
 use std::path::Path;
@@ -60,6 +61,7 @@ impl Recipe {
             shell_fold_min_pixels: self.shell_supersample.fold_min_pixels,
             far_views: s.far_views,
             shell_fold_corners: self.shell_supersample.fold_corners,
+            finer_views: self.supersample.finer,
             sampled_rows: s.sampled_rows,
         }
     }
@@ -125,11 +127,14 @@ impl Recipe {
         let passes: Vec<PassRows> = settings
             .pass_levels()
             .into_iter()
+            .zip(settings.pass_finer_views())
             .zip(rows.passes())
-            .map(|(level, matrix)| {
+            .map(|((level, finer), matrix)| {
                 let views = shard.views(level);
                 owned_views += views.len() as u32;
-                rendered_views += crate::sampler::rendered_view_count(matrix.views(), &views);
+                let pass = FineViews::pass(level, finer);
+                debug_assert_eq!(pass.slots(), matrix.views());
+                rendered_views += crate::sampler::rendered_view_count(&pass, &views);
                 PassRows {
                     level,
                     words: owned_rows(matrix, &views),

@@ -160,6 +160,14 @@ pub struct BakeArgs {
     /// (cover). [default: all; split with --conservative; cover with --probe]
     #[arg(long, value_enum, value_name = "WHICH")]
     pub fold_corners: Option<FoldCornersArg>,
+    /// With one level of view supersampling: where the finer views lie. midpoints: the finer
+    /// sphere level's vertices, the midpoints of the stored edges (12·4^L views at --level
+    /// L). centroids: the centroids of the stored faces (8·4^L views, two thirds as many),
+    /// each folded into its face's three corners; every point of a face then lies within a
+    /// third of an edge of a view, and the probe's cells grow to match. The sampling sphere
+    /// only (shells sample their vertices); the CPU sampler only.
+    #[arg(long, value_enum, value_name = "WHERE", default_value = "midpoints")]
+    pub finer_views: FinerViewsArg,
     /// Sampling shells for near cameras: N nested spheres of near views between the sampling
     /// sphere (distance D = R / sin(fov/2), R the bounding radius) and F·R (--shell-min), at
     /// D·(F·R/D)^(s/N) for s = 1..N. Each near view records every patch visible from its eye
@@ -255,6 +263,15 @@ pub enum FoldCornersArg {
     /// One stored view per face holding the finer view, chosen for the whole sphere so that
     /// the fewest other faces answer the patch.
     Cover,
+}
+
+/// `--finer-views`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum FinerViewsArg {
+    /// The finer sphere level's vertices.
+    Midpoints,
+    /// The centroids of the stored level's faces.
+    Centroids,
 }
 
 /// `--tiling`.

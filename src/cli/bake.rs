@@ -4,7 +4,7 @@
 
 use super::UsageError;
 use super::args::{
-    BackendArg, BakeArgs, EncodingArg, FoldCornersArg, PatchOrderArg, memory_budget,
+    BackendArg, BakeArgs, EncodingArg, FinerViewsArg, FoldCornersArg, PatchOrderArg, memory_budget,
 };
 use super::out::{StdoutError, outln};
 use super::progress::Bars;
@@ -15,7 +15,7 @@ use patchvis::bake::{
 use patchvis::format::VisibilityEncoding;
 use patchvis::ooc::Mesh;
 use patchvis::output::{NamedPath, check_outputs};
-use patchvis::sampler::FoldCorners;
+use patchvis::sampler::{FinerViews, FoldCorners};
 use patchvis::sphere::view_count;
 use patchvis::tiling::PatchId;
 use serde_json::json;
@@ -46,6 +46,10 @@ pub(super) fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
             FoldCornersArg::Split => FoldCorners::Split,
             FoldCornersArg::Cover => FoldCorners::Cover,
         }),
+        finer_views: match args.finer_views {
+            FinerViewsArg::Midpoints => FinerViews::Midpoints,
+            FinerViewsArg::Centroids => FinerViews::Centroids,
+        },
         patch_order: match args.patch_order {
             PatchOrderArg::Covisibility => PatchOrder::Covisibility,
             PatchOrderArg::Spatial => PatchOrder::Spatial,
@@ -200,6 +204,7 @@ impl Summary<'_> {
             "fold_min_pixels": r.supersample.fold_min_pixels,
             "backend": self.backend.describe(),
             "fold_corners": format!("{:?}", b.fold_corners).to_lowercase(),
+            "finer_views": r.supersample.finer.name(),
             "patch_order": if b.renumbered { "covisibility" } else { "spatial" },
             "encoding": format!("{:?}", self.args.encoding).to_lowercase(),
             "sampled_views": b.sampled_views,

@@ -28,8 +28,9 @@ const MAGIC: &[u8; 8] = b"PVISCKPT";
 /// CRC-32C, 5 since it hashes the probe pass, 6 since it hashes a near pass's shell and the
 /// band its probe spans, 7 since a pass may hold its seen rows too (`sample_tiled_split`)
 /// and render far views (`SamplingOptions::far_view`), 8 since a finer view's probe may leave
-/// out what its parents hold (`SamplingOptions::folds_into`).
-const VERSION: u32 = 8;
+/// out what its parents hold (`SamplingOptions::folds_into`), 9 since a pass's finer views
+/// may be face centroids (`SamplingOptions::finer`).
+const VERSION: u32 = 9;
 const HEADER_BYTES: usize = 8 + 4 + 4 + 8 + 4 + 4;
 const CRC_BYTES: usize = 4;
 /// What a refused checkpoint's message tells the user to do.
@@ -82,6 +83,10 @@ pub(crate) fn input_hash(
     h.word(u64::from(options.band.is_some()));
     h.word(u64::from(options.far_view));
     h.word(options.folds_into.map_or(0, |l| u64::from(l) + 1));
+    h.word(match options.finer {
+        crate::sampler::FinerViews::Midpoints => 0,
+        crate::sampler::FinerViews::Centroids => 1,
+    });
     if let Some(views) = &options.views {
         h.word(views.len() as u64 | 1 << 63);
         for &v in views {

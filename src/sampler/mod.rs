@@ -18,6 +18,7 @@ mod camera;
 mod checkpoint;
 mod clip;
 mod conservative;
+mod finer;
 #[cfg(feature = "gpu")]
 pub mod gpu;
 mod id_buffer;
@@ -39,13 +40,14 @@ pub use camera::{Camera, MAX_RESOLUTION, NEAR_FRACTION};
 /// The checkpoint file's bytes without a mesh, for the `checkpoint` fuzz target.
 #[doc(hidden)]
 pub use checkpoint::{decode as decode_checkpoint, encode as encode_checkpoint};
+pub use finer::{FineViews, FinerViews, Seeds, centroid};
 pub use id_buffer::{IdBuffer, NO_PATCH};
 pub use near::{MAX_NEAR_CAMERAS, NearCameras, near_camera_count, near_cameras};
 pub use raster::{Rasterizer, SUBPIXEL_BITS, render_ids, render_ids_filtered};
 pub use saturate::saturate;
 pub use supersample::{
     FoldCorners, FoldTargets, MAX_VIEW_SUPERSAMPLE, cover_fold, fold_into, fold_into_with,
-    fold_targets, split_fold, supersample_rows,
+    fold_targets, fold_views, split_fold, split_fold_views, supersample_rows,
 };
 pub use tiled::{
     FAR_VIEW_FACTOR, SamplingError, SamplingOptions, rendered_view_count, sample_tiled,

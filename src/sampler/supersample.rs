@@ -17,6 +17,11 @@
 //! - otherwise `u` lies strictly inside a level-`L` face: that face's **three corners**
 //!   (`sphere::locate(direction(u), L)`).
 //!
+//! With centroid finer views (`bake --finer-views centroids`, `finer.rs`), each finer view
+//! lies strictly inside one level-`L` face and goes to its three corners: the coverage below
+//! holds as for a face-interior vertex. The `*_views` folds take the pass's layout
+//! ([`FineViews`]); the others fold sphere vertices.
+//!
 //! Both are decided on the integer lattice of `sphere::numbering` (a level-`L + K` point lies
 //! on a level-`L` edge exactly when one of its coordinates is a multiple of `2^K`), not with
 //! floating point.
@@ -53,6 +58,7 @@
 //! point location for face-interior views) and 2 or 3 row ORs per fine view.
 
 use super::VisibilityMatrix;
+use super::finer::{FineViews, FinerViews};
 use crate::sphere::{
     LatticePoint, ViewIndex, direction, lattice_point, leaf_faces, locate, view_count, view_index,
 };
@@ -185,33 +191,33 @@ pub fn fold_into(
 ///
 /// Panics under the same caller contracts as [`fold_into`].
 pub fn fold_into_with(
-    mut coarse: VisibilityMatrix,
+    coarse: VisibilityMatrix,
     fine: &VisibilityMatrix,
     fine_level: u32,
     level: u32,
     corners: FoldCorners,
 ) -> VisibilityMatrix {
-    assert!(
-        fine_level >= level,
-        "fine level {fine_level} is coarser than the stored level {level}"
-    );
-    assert_eq!(
-        fine.views(),
-        view_count(fine_level),
-        "the fine matrix must have one row per view of level {fine_level}"
-    );
-    assert_eq!(
-        coarse.views(),
-        view_count(level),
-        "the coarse matrix must have one row per view of level {level}"
-    );
-    assert_eq!(coarse.patches(), fine.patches(), "patch counts differ");
+    let views = FineViews::new(level, fine_level, FinerViews::Midpoints);
+    fold_views(coarse, fine, &views, corners)
+}
+
+/// [`fold_into_with`] of a pass whose finer views are `views` (`fine` has one row per slot of
+/// the pass, `coarse` one per view of the stored level).
+///
+/// Panics under the same caller contracts as [`fold_into`].
+pub fn fold_views(
+    mut coarse: VisibilityMatrix,
+    fine: &VisibilityMatrix,
+    views: &FineViews,
+    corners: FoldCorners,
+) -> VisibilityMatrix {
+    check_shapes(&coarse, fine, views);
     if corners == FoldCorners::Cover {
-        return cover_fold(coarse, fine, fine_level, level);
+        return cover_fold_views(coarse, fine, views);
     }
-    for u in view_count(level)..fine.views() {
+    for u in views.finer_range() {
         let row = fine.row(u);
-        let targets = fold_targets(u, level);
+        let targets = views.targets(u);
         let chosen = match corners {
             FoldCorners::All | FoldCorners::Split => targets.views(),
             FoldCorners::One => &targets.views()[..1],
@@ -224,6 +230,24 @@ pub fn fold_into_with(
         }
     }
     coarse
+}
+
+/// Checks the fold's caller contracts: one row of `fine` per slot of `views`, one row of
+/// `coarse` per stored view, the same patches.
+fn check_shapes(coarse: &VisibilityMatrix, fine: &VisibilityMatrix, views: &FineViews) {
+    assert_eq!(
+        fine.views(),
+        views.slots(),
+        "the fine matrix must have one row per view of level {}",
+        views.fine_level()
+    );
+    assert_eq!(
+        coarse.views(),
+        view_count(views.level()),
+        "the coarse matrix must have one row per view of level {}",
+        views.level()
+    );
+    assert_eq!(coarse.patches(), fine.patches(), "patch counts differ");
 }
 
 /// The split fold ([`FoldCorners::Split`]) of the rows of a pass with the probe: `coarse` the
@@ -251,16 +275,29 @@ pub fn split_fold(
     fine_level: u32,
     level: u32,
 ) -> VisibilityMatrix {
+    let views = FineViews::new(level, fine_level, FinerViews::Midpoints);
+    split_fold_views(coarse, full, seen, &views)
+}
+
+/// [`split_fold`] of a pass whose finer views are `views`.
+///
+/// Panics under [`split_fold`]'s caller contracts.
+pub fn split_fold_views(
+    coarse: VisibilityMatrix,
+    full: &VisibilityMatrix,
+    seen: &VisibilityMatrix,
+    views: &FineViews,
+) -> VisibilityMatrix {
     assert_eq!(
         (full.views(), full.patches()),
         (seen.views(), seen.patches()),
         "the full and the seen rows differ in shape"
     );
-    let mut coarse = fold_into_with(coarse, seen, fine_level, level, FoldCorners::All);
+    let mut coarse = fold_views(coarse, seen, views, FoldCorners::All);
     // The closed faces around every stored view.
-    let (faces, around) = faces_around(level);
-    for u in view_count(level)..full.views() {
-        let targets = fold_targets(u, level);
+    let (faces, around) = faces_around(views.level());
+    for u in views.finer_range() {
+        let targets = views.targets(u);
         let targets = targets.views();
         for (w, &word) in full.row(u).iter().enumerate() {
             let mut missing = word;
@@ -320,17 +357,28 @@ pub(super) fn faces_around(level: u32) -> (Vec<[ViewIndex; 3]>, Vec<Vec<u32>>) {
 /// row per leaf face while folding (about twice the stored rows). Panics under
 /// [`fold_into`]'s caller contracts.
 pub fn cover_fold(
-    mut coarse: VisibilityMatrix,
+    coarse: VisibilityMatrix,
     fine: &VisibilityMatrix,
     fine_level: u32,
     level: u32,
 ) -> VisibilityMatrix {
-    let (faces, around) = faces_around(level);
+    let views = FineViews::new(level, fine_level, FinerViews::Midpoints);
+    check_shapes(&coarse, fine, &views);
+    cover_fold_views(coarse, fine, &views)
+}
+
+/// [`cover_fold`] of a pass whose finer views are `views`.
+fn cover_fold_views(
+    mut coarse: VisibilityMatrix,
+    fine: &VisibilityMatrix,
+    views: &FineViews,
+) -> VisibilityMatrix {
+    let (faces, around) = faces_around(views.level());
     let words = coarse.words_per_row();
     // What each face needs: the OR of its finer views' rows.
     let mut need = vec![0u64; faces.len() * words];
-    for u in view_count(level)..view_count(fine_level) {
-        let targets = fold_targets(u, level);
+    for u in views.finer_range() {
+        let targets = views.targets(u);
         let targets = targets.views();
         let row = fine.row(u);
         for &f in &around[targets[0] as usize] {

@@ -53,6 +53,7 @@
 use super::camera::{Camera, SphereBounds, normalize, widen};
 use super::checkpoint;
 use super::conservative::scan_triangle_conservative;
+use super::finer::{FineViews, FinerViews};
 use super::key_buffer::{KeyBuffer, Pixel, low_half, patch_slot};
 use super::marks::Marks;
 use super::near::{near_camera_count, near_cameras};
@@ -68,7 +69,7 @@ use super::{SamplingParams, VisibilityMatrix};
 use crate::ooc::Mesh;
 use crate::progress::Progress;
 use crate::runtime::Patches;
-use crate::sphere::{parents, view_count};
+use crate::sphere::view_count;
 use crate::tiling::{PatchId, Tiling};
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -131,6 +132,11 @@ pub struct SamplingOptions {
     /// its fold targets, so the fold would drop them, and the folded rows are the same bit
     /// for bit. `None`: the probe tests every patch a view did not show.
     pub folds_into: Option<u32>,
+    /// Where the views of the pass's finest level lie ([`FinerViews`]): with
+    /// [`FinerViews::Centroids`], the views of `params.level` beyond level `params.level − 1`'s
+    /// are the centroids of that level's leaf faces, each seeded by its face's corners
+    /// (`finer.rs`). Not for near passes ([`SamplingOptions::shell`]): caller contract.
+    pub finer: FinerViews,
 }
 
 /// How far out [`SamplingOptions::far_view`] renders, in sampling distances: far enough that
@@ -229,7 +235,12 @@ fn sample_rows(
         // Checks the shell's distance (caller contract).
         near_camera_count(params, distance);
     }
+    assert!(
+        options.shell.is_none() || options.finer == FinerViews::Midpoints,
+        "a near pass renders sphere vertices only"
+    );
     let views = view_count(params.level);
+    let pass = FineViews::pass(params.level, options.finer);
     // Words of one row of the patches: the rows' prefix of the matrix's rows.
     let words = (patch_count as usize).div_ceil(64);
     let mut matrix = if split {
@@ -237,9 +248,10 @@ fn sample_rows(
     } else {
         VisibilityMatrix::new(views, patch_count)
     };
-    let rendered = rendered_views(views, options.views.as_deref());
+    let rendered = rendered_views(&pass, options.views.as_deref());
+    // Views rendered below index `view`: those that exist, or those a share wants.
     let rendered_below = |view: u32| {
-        rendered.as_ref().map_or(view, |r| {
+        rendered.as_ref().map_or(view.min(pass.end()), |r| {
             r[..view as usize].iter().filter(|&&b| b).count() as u32
         })
     };
@@ -282,7 +294,7 @@ fn sample_rows(
         back_winding: back_winding(mesh),
         probe: options
             .probe
-            .map(|radius| probe::Probe::new(radius, params, options, mesh, tiling)),
+            .map(|radius| probe::Probe::new(radius, params, &pass, options, mesh, tiling)),
     };
     let words_per_row = matrix.words_per_row();
     for level in first_level..=params.level {
@@ -299,12 +311,16 @@ fn sample_rows(
                 || WorkerScratch::new(params.resolution, patch_count, options.probe.is_some()),
                 |scratch, (i, row)| {
                     let view = first_view + i as u32;
-                    if rendered.as_ref().is_some_and(|r| !r[view as usize]) {
+                    if !pass.exists(view) || rendered.as_ref().is_some_and(|r| !r[view as usize]) {
                         return;
                     }
-                    let hint = parents(view)
-                        .map(|pair| pair.map(|p| &done[p as usize * words_per_row..][..words]));
-                    context.render_view(view, hint, scratch, row);
+                    let seeds = pass.seeds(view);
+                    let mut rows: [&[u64]; 3] = [&[]; 3];
+                    for (r, &s) in rows.iter_mut().zip(seeds.views()) {
+                        *r = &done[s as usize * words_per_row..][..words];
+                    }
+                    let hint = (!seeds.views().is_empty()).then(|| &rows[..seeds.views().len()]);
+                    context.render_view(view, pass.direction(view), hint, scratch, row);
                     progress.inc(1);
                 },
             );
@@ -328,32 +344,32 @@ fn sample_rows(
     Ok((rows, Some(seen)))
 }
 
-/// How many of the `views` views of a pass a run with [`SamplingOptions::views`] `wanted`
-/// renders: those and their ancestors.
-pub fn rendered_view_count(views: u32, wanted: &[u32]) -> u32 {
-    rendered_views(views, Some(wanted)).map_or(views, |r| r.iter().filter(|&&b| b).count() as u32)
+/// How many views of the pass `pass` a run with [`SamplingOptions::views`] `wanted`
+/// renders: those that exist, and their ancestors.
+pub fn rendered_view_count(pass: &FineViews, wanted: &[u32]) -> u32 {
+    rendered_views(pass, Some(wanted))
+        .map_or(pass.end(), |r| r.iter().filter(|&&b| b).count() as u32)
 }
 
-/// Which of the `views` views a run renders when it wants `wanted` (ascending ids below
-/// `views`): those and every ancestor that seeds them; `None` when it wants every view.
-fn rendered_views(views: u32, wanted: Option<&[u32]>) -> Option<Vec<bool>> {
+/// Which views of `pass` a run renders when it wants `wanted` (ascending ids below its slot
+/// count): those that exist and every ancestor that seeds them; `None` when it wants every
+/// view.
+fn rendered_views(pass: &FineViews, wanted: Option<&[u32]>) -> Option<Vec<bool>> {
     let wanted = wanted?;
+    let views = pass.slots();
     let mut rendered = vec![false; views as usize];
     for &v in wanted {
         assert!(
             v < views,
             "view {v} is not one of the {views} views sampled"
         );
-        rendered[v as usize] = true;
+        rendered[v as usize] = pass.exists(v);
     }
-    // Parents are coarser, so they have smaller ids: one pass from the finest view down
-    // closes the set.
+    // Seeds have smaller ids: one pass from the last view down closes the set.
     for v in (0..views).rev() {
-        if rendered[v as usize]
-            && let Some(pair) = parents(v)
-        {
-            for p in pair {
-                rendered[p as usize] = true;
+        if rendered[v as usize] {
+            for &s in pass.seeds(v).views() {
+                rendered[s as usize] = true;
             }
         }
     }
@@ -593,28 +609,29 @@ impl Placer<'_, '_> {
 }
 
 impl ViewContext<'_> {
-    /// Renders view `index` into `row`, `hint` giving its parents' rows (`None` in the first
-    /// level): the sampling view's camera, or each camera of a near view (`near.rs`), whose
-    /// rows are ORed. A `row` of twice the words of the patches gets the seen rows of
-    /// [`sample_tiled_split`] in its second half.
+    /// Renders view `index` (unit direction `direction`) into `row`, `hint` giving its seeds'
+    /// rows (`None` in the first level): the sampling view's camera, or each camera of a near
+    /// view (`near.rs`), whose rows are ORed. A `row` of twice the words of the patches gets
+    /// the seen rows of [`sample_tiled_split`] in its second half.
     fn render_view(
         &self,
         index: u32,
-        hint: Option<[&[u64]; 2]>,
+        direction: [f32; 3],
+        hint: Option<&[&[u64]]>,
         scratch: &mut WorkerScratch,
         row: &mut [u64],
     ) {
         let (row, seen) = row.split_at_mut(scratch.camera_row.len());
         seen.fill(0);
-        let d = normalize(widen(crate::sphere::direction(index)));
+        let d = normalize(widen(direction));
         // What the probe may leave out (`SamplingOptions::folds_into`): the views of the level
-        // just finer than the stored one have their fold targets as parents.
+        // just finer than the stored one have their fold targets as seeds.
         let known = match self.options.folds_into {
             Some(stored) if self.params.level == stored + 1 && index >= view_count(stored) => hint,
             _ => None,
         };
         let Some(distance) = self.options.shell else {
-            let camera = Camera::sampling_view(self.params, index);
+            let camera = Camera::sampling(self.params, direction);
             let cell = self.probe.as_ref().map(|p| p.cell(d, camera.eye()));
             self.render_camera(&camera, cell.as_ref(), hint, known, scratch, row, seen);
             if self.options.far_view {
@@ -666,8 +683,8 @@ impl ViewContext<'_> {
         &self,
         camera: &Camera,
         cell: Option<&Cell>,
-        hint: Option<[&[u64]; 2]>,
-        known: Option<[&[u64]; 2]>,
+        hint: Option<&[&[u64]]>,
+        known: Option<&[&[u64]]>,
         scratch: &mut WorkerScratch,
         row: &mut [u64],
         seen: &mut [u64],
@@ -681,7 +698,8 @@ impl ViewContext<'_> {
         // is left to the tested pass. Always-visible patches are always drawn first.
         let eye = camera.eye();
         for (w, d) in view.drawn.iter_mut().enumerate() {
-            let hinted = hint.map_or(u64::MAX, |[a, b]| a[w] | b[w]) & valid(w);
+            let hinted =
+                hint.map_or(u64::MAX, |rows| rows.iter().fold(0, |a, r| a | r[w])) & valid(w);
             let mut away = 0u64;
             for k in Patches::of_bits(&[hinted]) {
                 let k = k as usize;

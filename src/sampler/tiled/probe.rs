@@ -18,7 +18,9 @@
 //! those targets, already hold.
 //!
 //! The cell holds every camera whose query may use the view's row: the directions within
-//! [`CELL_PER_EDGE`] edges of the view's, at the pass's distance, or, with
+//! [`CELL_PER_EDGE`] `· edge` of the view's, `edge` the largest angle between a view of the
+//! pass and a view seeding it (an edge of the sampled level; with centroid finer views, a
+//! corner's distance from its face's centroid, `finer.rs`), at the pass's distance, or, with
 //! `SamplingOptions::band = [near, far]`, at any distance from `near` to `far`. It is taken as
 //! the points within `CELL_PER_EDGE · edge · far` of the segment from `center + d · near` to
 //! `center + d · far` along the view's direction `d` (a point at angle `φ` and distance `t` lies
@@ -31,12 +33,12 @@ use crate::runtime::Patches;
 use crate::sampler::SamplingOptions;
 use crate::sampler::camera::{Camera, SphereBounds};
 use crate::sampler::conservative::scan_triangle_conservative;
+use crate::sampler::finer::FineViews;
 use crate::sampler::key_buffer::DepthBuffer;
 use crate::sampler::raster::{
     ScreenVertex, draw_triangle, project, sphere_needs_no_clip, view_planes,
 };
 use crate::sampler::solid::{Cell, Openings, Side, Solids};
-use crate::sphere::{direction, parents, view_count};
 use crate::visibility::SamplingParams;
 
 /// How the probe pass runs.
@@ -75,34 +77,19 @@ impl ProbeScratch {
     }
 }
 
-/// The cell's radius in edges of the sampled level. A query from a sphere face joins the
-/// rows of its corners, and every point of a face lies within its circumradius, `1/√3 ≈
-/// 0.577` of an edge, of some corner; 0.6 leaves a margin.
+/// The cell's radius in `edge`s (see the module documentation). A query from a sphere face
+/// joins the rows of its corners, which hold its finer views' rows, and every point of a face
+/// lies within `1/√3 ≈ 0.577 · edge` of one of them (`FineViews::max_seed_angle`); 0.6
+/// leaves a margin.
 const CELL_PER_EDGE: f64 = 0.6;
 
-/// Largest angle between a view of `level` and a parent of it (half an edge of `level − 1`).
-fn max_parent_angle(level: u32) -> f64 {
-    if level == 0 {
-        return std::f64::consts::FRAC_PI_2;
-    }
-    let mut max = 0f64;
-    for v in view_count(level - 1)..view_count(level) {
-        let d = direction(v).map(f64::from);
-        for p in parents(v).into_iter().flatten() {
-            let e = direction(p).map(f64::from);
-            let dot = (d[0] * e[0] + d[1] * e[1] + d[2] * e[2]).clamp(-1.0, 1.0);
-            max = max.max(dot.acos());
-        }
-    }
-    max
-}
-
 impl Probe {
-    /// The probe of a pass sampling `params` with `options` (its shell and band), occluders
-    /// shrunk by `radius` pixels.
+    /// The probe of a pass sampling `params` (its views laid out as `pass`) with `options` (its
+    /// shell and band), occluders shrunk by `radius` pixels.
     pub(super) fn new(
         radius: u32,
         params: &SamplingParams,
+        pass: &FineViews,
         options: &SamplingOptions,
         mesh: &crate::ooc::Mesh,
         tiling: &crate::tiling::Tiling,
@@ -113,7 +100,7 @@ impl Probe {
         let far = options.band.map_or(distance, |[_, far]| far.max(distance));
         Probe {
             radius: radius as usize,
-            cell: CELL_PER_EDGE * f64::from(far) * max_parent_angle(params.level),
+            cell: CELL_PER_EDGE * f64::from(far) * pass.max_seed_angle(),
             band: options.band.map(|b| b.map(f64::from)),
             center: params.center.map(f64::from),
             solids,
@@ -148,12 +135,12 @@ impl ViewContext<'_> {
     }
 
     /// Adds to `row` the patches the probe finds from `camera`, for the cameras of `cell`,
-    /// among those neither `row` nor `known` (two rows the fold holds already) holds.
+    /// among those neither `row` nor `known` (rows the fold holds already) holds.
     pub(super) fn probe_row(
         &self,
         camera: &Camera,
         cell: &Cell,
-        known: Option<[&[u64]; 2]>,
+        known: Option<&[&[u64]]>,
         scratch: &mut WorkerScratch,
         row: &mut [u64],
     ) {
@@ -202,9 +189,11 @@ impl ViewContext<'_> {
                 .enumerate()
                 .map(|(w, r)| !r & valid_bits(w, patch_count)),
         );
-        if let Some([a, b]) = known {
-            for (u, (a, b)) in ps.unseen.iter_mut().zip(a.iter().zip(b)) {
-                *u &= !(a | b);
+        for rows in known.into_iter() {
+            for r in rows {
+                for (u, &k) in ps.unseen.iter_mut().zip(r.iter()) {
+                    *u &= !k;
+                }
             }
         }
         for p in Patches::of_bits(&ps.unseen) {

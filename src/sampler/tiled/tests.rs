@@ -900,3 +900,110 @@ fn far_views_add_the_rim_a_far_camera_sees_and_leave_near_passes_alone() {
         ),
     );
 }
+
+#[test]
+fn centroid_views_render_each_face_centre_exactly_whatever_the_threads_or_shards() {
+    // `finer: Centroids`: level 2's slots beyond level 1's are level 1's face centroids.
+    // Each renders what a brute-force render from its direction shows, the stored prefix is
+    // the level-1 views', the slots after the last face stay empty, and threads and shards
+    // change no row.
+    let mesh = bunny();
+    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
+    let p = params_for(&mesh, 2, 64);
+    let centroids = SamplingOptions {
+        finer: FinerViews::Centroids,
+        ..SamplingOptions::default()
+    };
+    let run = |threads, options: &SamplingOptions| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| tiled(&mesh, &tiling, &p, options))
+    };
+    let rows = run(1, &centroids);
+    assert_eq!(rows.views(), view_count(2));
+    let plain = tiled(&mesh, &tiling, &p, &SamplingOptions::default());
+    assert_same(&rows.prefix(view_count(1)), &plain.prefix(view_count(1)));
+    let pass = FineViews::pass(2, FinerViews::Centroids);
+    let patches = tiling.patches.len() as u32;
+    for u in pass.finer_range() {
+        let camera = Camera::sampling(&p, pass.direction(u));
+        let expected = reference_row(&mesh, &tiling.patch_of, &camera, false, 0, patches);
+        let got: Vec<bool> = (0..patches).map(|q| rows.get(u, q)).collect();
+        assert_eq!(got, expected, "centroid view {u}");
+    }
+    for u in pass.end()..rows.views() {
+        assert!(rows.row(u).iter().all(|&w| w == 0), "slot {u} is no view");
+    }
+    let probed = SamplingOptions {
+        probe: Some(1),
+        folds_into: Some(1),
+        ..centroids.clone()
+    };
+    for options in [centroids, probed] {
+        let full = run(1, &options);
+        assert_same(&run(2, &options), &full);
+        // A shard wanting a centroid, a stored view and a slot that names no view.
+        let wanted = vec![7, view_count(1) + 5, pass.end() + 1];
+        let shard = run(
+            2,
+            &SamplingOptions {
+                views: Some(wanted.clone()),
+                ..options.clone()
+            },
+        );
+        for v in wanted {
+            assert_eq!(shard.row(v), full.row(v), "view {v} {options:?}");
+        }
+        // A centroid, its face's three corners and their ancestors.
+        let u = view_count(1) + 5;
+        let mut needed = std::collections::BTreeSet::from([u]);
+        let mut todo: Vec<u32> = pass.seeds(u).views().to_vec();
+        while let Some(v) = todo.pop() {
+            if needed.insert(v) {
+                todo.extend(crate::sphere::parents(v).into_iter().flatten());
+            }
+        }
+        assert_eq!(rendered_view_count(&pass, &[u]), needed.len() as u32);
+    }
+}
+
+#[test]
+fn a_centroid_probe_leaving_out_what_the_corners_hold_folds_to_the_same_rows() {
+    // A centroid's seeds are its face's corners, which are its fold targets: its probe may
+    // leave out what they hold and the split and cover folds stay the same bit for bit.
+    let mesh = bunny();
+    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
+    let p = params_for(&mesh, 2, 64);
+    let options = SamplingOptions {
+        probe: Some(1),
+        finer: FinerViews::Centroids,
+        ..SamplingOptions::default()
+    };
+    let (rows, seen) = tiled_split(&mesh, &tiling, &p, &options);
+    let (lean, lean_seen) = tiled_split(
+        &mesh,
+        &tiling,
+        &p,
+        &SamplingOptions {
+            folds_into: Some(1),
+            ..options
+        },
+    );
+    assert_same(&lean_seen, &seen);
+    assert!(
+        lean.count_ones() < rows.count_ones(),
+        "nothing was left out"
+    );
+    let pass = FineViews::new(1, 2, FinerViews::Centroids);
+    let coarse = |m: &VisibilityMatrix| m.prefix(view_count(1));
+    assert_same(
+        &split_fold_views(coarse(&lean), &lean, &seen, &pass),
+        &split_fold_views(coarse(&rows), &rows, &seen, &pass),
+    );
+    assert_same(
+        &fold_views(coarse(&lean), &lean, &pass, FoldCorners::Cover),
+        &fold_views(coarse(&rows), &rows, &pass, FoldCorners::Cover),
+    );
+}
