@@ -97,7 +97,7 @@ pub struct SamplingOptions {
     /// `None`: on the heap. Never changes the result.
     pub memory_budget: Option<u64>,
     /// Render only these views (ascending ids) and the coarser views that seed them (their
-    /// ancestors through [`parents`]), so that each is rendered exactly as in a full run;
+    /// ancestors through their seeds, `sphere::parents` or a face's corners), so that each is rendered exactly as in a full run;
     /// the other rows stay empty. `None`: every view. A sharded bake (`bake::Shard`) renders
     /// its share this way.
     pub views: Option<Vec<u32>>,
