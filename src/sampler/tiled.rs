@@ -97,9 +97,9 @@ pub struct SamplingOptions {
     /// `None`: on the heap. Never changes the result.
     pub memory_budget: Option<u64>,
     /// Render only these views (ascending ids) and the coarser views that seed them (their
-    /// ancestors through their seeds, `sphere::parents` or a face's corners), so that each is rendered exactly as in a full run;
-    /// the other rows stay empty. `None`: every view. A sharded bake (`bake::Shard`) renders
-    /// its share this way.
+    /// ancestors through `sphere::parents` or a face's corners), so that each is rendered
+    /// exactly as in a full run; the other rows stay empty. `None`: every view. A sharded
+    /// bake (`bake::Shard`) renders its share this way.
     pub views: Option<Vec<u32>>,
     /// The probe pass (`tiled/probe.rs`): after each view, every patch it did not show is
     /// drawn again with conservative rasterization against the view's occluders shrunk by
