@@ -5,7 +5,8 @@
 //! [--models LIST] [--triangles T] [--shells N] [--json OUT.json] [--keep DIR]`
 //!
 //! Modes: `default`, `conservative`, `level5` (`--level 5 --probe 1 --fold-corners split`, the
-//! tightest setting measured that keeps ≥ 99 % of the views identical), and baselines measured
+//! tightest setting measured that keeps ≥ 99 % of the views identical), `centroids` (the same
+//! with `--finer-views centroids`, two thirds of its finer views), and baselines measured
 //! in the same run: `thresholded` (the default before issue 20), `plain` (`--probe off`) and
 //! `conservative-all` (`--conservative` with the all-corner fold it had before the split fold).
 //!
@@ -24,9 +25,10 @@
 //! generated meshes and the `.pvis` files go to a temporary directory, or to `--keep DIR`.
 //!
 //! Cost: per model and mode one bake (level 4 supersampled from level 5: 5,124 ID buffers at
-//! 512², and with `--conservative` the probe pass over each; `level5` renders 16,386) and
-//! 2 × 2 × N renders (full and culled, at 1× and 2×). On 2 cores the full default run takes about 5 minutes, two thirds
-//! of it baking; `--views 30 --models bunny,ant` takes about 2.
+//! 512², and with `--conservative` the probe pass over each; `level5` renders 16,386,
+//! `centroids` 12,290) and 2 × 2 × N renders (full and culled, at 1× and 2×). On 2 cores the
+//! full default run takes about 5 minutes, two thirds of it baking; `--views 30 --models
+//! bunny,ant` takes about 2.
 
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{Parser, ValueEnum};
@@ -38,7 +40,7 @@ use patchvis::generate::truss::Truss;
 use patchvis::generate::{Model, write_ply};
 use patchvis::progress::NoProgress;
 use patchvis::runtime::Pvis;
-use patchvis::sampler::{Camera, FoldCorners};
+use patchvis::sampler::{Camera, FinerViews, FoldCorners};
 use patchvis::tiling::TilingMode;
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -85,6 +87,9 @@ enum Mode {
     /// `--level 5 --probe 1 --fold-corners split`: a stored level finer, the probe at one
     /// pixel, the split fold.
     Level5,
+    /// `level5` with `--finer-views centroids`: the finer views at the level-5 faces'
+    /// centroids instead of level 6's vertices.
+    Centroids,
 }
 
 impl Mode {
@@ -96,6 +101,7 @@ impl Mode {
             Mode::Thresholded => "thresholded",
             Mode::Plain => "plain",
             Mode::Level5 => "level5",
+            Mode::Centroids => "centroids",
         }
     }
 }
@@ -271,19 +277,24 @@ fn bake_and_eval(
         probe: match mode {
             Mode::Thresholded | Mode::Plain => Probe::Off,
             Mode::Default | Mode::Conservative | Mode::ConservativeAll => Probe::Default,
-            Mode::Level5 => Probe::Pixels(1),
+            Mode::Level5 | Mode::Centroids => Probe::Pixels(1),
         },
         fold_min_pixels: (mode == Mode::Thresholded).then_some(4),
         fold_corners: match mode {
             Mode::Thresholded => Some(FoldCorners::One),
             Mode::ConservativeAll => Some(FoldCorners::All),
-            Mode::Level5 => Some(FoldCorners::Split),
+            Mode::Level5 | Mode::Centroids => Some(FoldCorners::Split),
             Mode::Default | Mode::Conservative | Mode::Plain => None,
         },
-        level: if mode == Mode::Level5 {
+        level: if matches!(mode, Mode::Level5 | Mode::Centroids) {
             5
         } else {
             BakeSettings::default().level
+        },
+        finer_views: if mode == Mode::Centroids {
+            FinerViews::Centroids
+        } else {
+            FinerViews::Midpoints
         },
         shells,
         memory,
