@@ -107,6 +107,53 @@ fn supersampled_rows_contain_the_plain_rows_and_fold_the_finer_bake() {
     assert!(!ss.file("bunny.pvis.vs1.ckpt").exists());
 }
 
+/// `--finer-views centroids`: the finer views are level 1's 32 face centroids, each folded
+/// into its face's corners; the rows hold the plain level-1 rows, differ from the midpoints'
+/// fold, and the stats say how many views were sampled.
+#[test]
+fn centroid_finer_views_fold_the_face_centres_into_the_plain_rows() {
+    let mut flags = folded_level_1("0", "all").to_vec();
+    flags.extend_from_slice(&["--finer-views", "centroids"]);
+    let centroids = bake_with(&flags).stats().run();
+    let midpoints = bake(&folded_level_1("0", "all"));
+    let plain = bake(&["--level", "1", "--view-supersample", "0"]);
+    let (level, rows_c) = rows(&centroids);
+    let (_, rows_m) = rows(&midpoints);
+    let (_, rows_p) = rows(&plain);
+    assert_eq!((level, rows_c.views()), (1, view_count(1)));
+    for v in 0..view_count(1) {
+        let (c, p) = (rows_c.row(v), rows_p.row(v));
+        assert!(
+            c.iter().zip(p).all(|(&c, &p)| p & !c == 0),
+            "view {v}: the row lacks patches of the plain row"
+        );
+    }
+    assert!(rows_c != rows_p, "the centroids added nothing at level 1");
+    assert!(rows_c != rows_m, "the centroids folded as the midpoints");
+    let report = centroids.stats();
+    assert_eq!(report["finer_views"], "centroids");
+    assert_eq!(report["sampled_views"], view_count(1) + 8 * 4);
+    assert!(!centroids.file("bunny.pvis.vs1.centroids.ckpt").exists());
+    // Centroids lie one level finer only.
+    for k in ["0", "2"] {
+        let baked =
+            Bake::new(&["--view-supersample", k, "--finer-views", "centroids", "-q"]).attempt();
+        assert_eq!(
+            baked.output.status.code(),
+            Some(2),
+            "--view-supersample {k}"
+        );
+        let err = stderr(&baked.output);
+        assert!(
+            err.contains(&format!(
+                "--finer-views centroids with --view-supersample {k}"
+            )),
+            "{err}"
+        );
+        assert!(!baked.pvis.exists());
+    }
+}
+
 /// Without `--sampled-rows` a bake stores its rows saturated: each view's row is its row as
 /// sampled plus every patch all the sphere faces around the view already answer, so every
 /// query answers the same, and the file is smaller.

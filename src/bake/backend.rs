@@ -152,3 +152,30 @@ impl Backend {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampler::FinerViews;
+
+    #[test]
+    fn the_gpu_refuses_what_only_the_cpu_sampler_does() {
+        let with = |f: fn(&mut BakeSettings)| {
+            let mut s = BakeSettings::default();
+            f(&mut s);
+            cpu_only_option(&s)
+        };
+        assert_eq!(with(|_| {}), None);
+        assert_eq!(with(|s| s.conservative = true), Some("--conservative"));
+        assert_eq!(
+            with(|s| s.finer_views = FinerViews::Centroids),
+            Some("--finer-views centroids")
+        );
+        let centroids = BakeSettings {
+            finer_views: FinerViews::Centroids,
+            ..BakeSettings::default()
+        };
+        let err = Backend::open(BackendChoice::Gpu, &centroids).unwrap_err();
+        assert!(err.to_string().contains("--finer-views centroids"), "{err}");
+    }
+}
