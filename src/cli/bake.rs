@@ -293,7 +293,14 @@ impl Summary<'_> {
             outln!("          sampled on the {}", self.backend.describe())?;
         }
         let k = r.supersample.extra_levels;
-        if k > 0 {
+        if k > 0 && r.supersample.finer == FinerViews::Centroids {
+            outln!(
+                "          view supersampling: sampled {} views (level {} and its faces' centroids), folded into level {}",
+                view_count(s.level) + 8 * 4u32.pow(s.level),
+                s.level,
+                s.level
+            )?;
+        } else if k > 0 {
             outln!(
                 "          view supersampling: sampled {} views (level {}), folded into level {}",
                 view_count(s.level + k),
