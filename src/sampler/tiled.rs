@@ -40,7 +40,8 @@
 //! checkpoint written after each level (`checkpoint.rs`), `views` (render only some views
 //! and the ancestors that seed them: a shard of a sharded bake, `bake::Shard`), and
 //! `folds_into` (the probe of a finer view leaves out what its parents hold where the fold
-//! would drop it, `tiled/probe.rs`).
+//! would drop it, `tiled/probe.rs`), and `finer` (the finest level's views at the centroids
+//! of the faces of the level below, each seeded by the face's three corners, `finer.rs`).
 //! Cost per view: a sphere test per patch, the triangles of the drawn patches (a tile test
 //! for those drawn after the tiles), one pass over the pixels. Memory: one
 //! `resolution² × 8`-byte buffer per thread, the result (one bit per view and patch), and
