@@ -15,7 +15,7 @@
 use libfuzzer_sys::fuzz_target;
 use patchvis::bake::{Part, PartSettings, PassRows, PatchOrder, Shard};
 use patchvis::format::VisibilityEncoding;
-use patchvis::sampler::{FoldCorners, SamplingParams};
+use patchvis::sampler::{FinerViews, FoldCorners, SamplingParams};
 use patchvis::tiling::Patch;
 
 /// Levels beyond 3 only make inputs larger; the layout does not change with the level.
@@ -70,6 +70,11 @@ fuzz_target!(|data: &[u8]| {
         shell_probe: (threshold >> 7 & 1 == 1).then_some(1),
         shell_fold_corners: FoldCorners::All,
         sampled_rows: index >> 7 & 1 == 1,
+        finer_views: if index >> 6 & 1 == 1 {
+            FinerViews::Centroids
+        } else {
+            FinerViews::Midpoints
+        },
     };
     let words_per_row = (patches as usize).div_ceil(64);
     let mut next_bit = bits.iter().cycle();
