@@ -180,62 +180,51 @@ fn two_passes_and_scheduler_shards_merge_into_the_single_bake() {
     assert!(std::fs::read(&out).unwrap() == single(dir.path(), &flags, "1"));
 }
 
+/// Three shards of a bake of the bunny with `flags`, on one and two threads, merge into the
+/// single bake; returns its bytes.
+fn three_shards_merge_into_the_single_bake(dir: &Path, flags: &[&str]) -> Vec<u8> {
+    let parts = shards(dir, BUNNY, flags, 3, |i| 1 + i % 2);
+    let out = dir.join("merged.pvis");
+    let given: Vec<&Path> = parts.iter().map(|p| p.as_path()).collect();
+    ok(merge(&given, &out));
+    let single = single(dir, flags, "2");
+    assert!(std::fs::read(&out).unwrap() == single);
+    single
+}
+
+/// `--conservative` at a small level and resolution, with one shell.
+const CONSERVATIVE: [&str; 9] = [
+    "--patches",
+    "120",
+    "--level",
+    "2",
+    "--resolution",
+    "64",
+    "--conservative",
+    "--shells",
+    "1",
+];
+
 /// `--conservative`'s split fold: each pass's rows before the probe travel as a second pass,
 /// for the sampling sphere and a shell; three shards on one and two threads merge into the
 /// single bake.
 #[test]
 fn conservative_split_passes_merge_into_the_single_bake() {
     let dir = TempDir::new().unwrap();
-    let flags = [
-        "--patches",
-        "120",
-        "--level",
-        "2",
-        "--resolution",
-        "64",
-        "--conservative",
-        "--shells",
-        "1",
-    ];
-    let parts = shards(dir.path(), BUNNY, &flags, 3, |i| 1 + i % 2);
-    let out = dir.path().join("merged.pvis");
-    let given: Vec<&Path> = parts.iter().map(|p| p.as_path()).collect();
-    ok(merge(&given, &out));
-    assert!(std::fs::read(&out).unwrap() == single(dir.path(), &flags, "2"));
+    three_shards_merge_into_the_single_bake(dir.path(), &CONSERVATIVE);
 }
 
 /// `--finer-views centroids`: the sampling sphere's finer pass renders the stored faces'
 /// centroids (its shell the finer vertices); three shards, each rendering its centroids and
-/// the corners seeding them, merge into the single bake.
+/// the corners seeding them, merge into the single bake, which is not the midpoints'.
 #[test]
 fn centroid_finer_views_merge_into_the_single_bake() {
     let dir = TempDir::new().unwrap();
-    let flags = [
-        "--patches",
-        "120",
-        "--level",
-        "2",
-        "--resolution",
-        "64",
-        "--conservative",
-        "--finer-views",
-        "centroids",
-        "--shells",
-        "1",
-    ];
-    let parts = shards(dir.path(), BUNNY, &flags, 3, |i| 1 + i % 2);
-    let out = dir.path().join("merged.pvis");
-    let given: Vec<&Path> = parts.iter().map(|p| p.as_path()).collect();
-    ok(merge(&given, &out));
-    let centroids = single(dir.path(), &flags, "2");
-    assert!(std::fs::read(&out).unwrap() == centroids);
-    let midpoints: Vec<&str> = flags
-        .iter()
-        .copied()
-        .filter(|&f| f != "--finer-views" && f != "centroids")
-        .collect();
+    let mut flags = CONSERVATIVE.to_vec();
+    flags.extend_from_slice(&["--finer-views", "centroids"]);
+    let centroids = three_shards_merge_into_the_single_bake(dir.path(), &flags);
     assert!(
-        single(dir.path(), &midpoints, "2") != centroids,
+        single(dir.path(), &CONSERVATIVE, "2") != centroids,
         "the flag changed nothing"
     );
 }

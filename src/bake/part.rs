@@ -246,12 +246,18 @@ impl PartSettings {
     /// the sphere's vertices.
     pub fn pass_finer_views(&self) -> Vec<FinerViews> {
         let (main, _) = self.sphere_pass_levels();
+        let supersample = Supersample {
+            extra_levels: self.extra_levels,
+            fold_min_pixels: self.fold_min_pixels,
+            fold_corners: self.fold_corners,
+            finer: self.finer_views,
+        };
         self.pass_levels()
             .iter()
             .enumerate()
             .map(|(i, &level)| {
-                if i < main.len() && level > self.level {
-                    self.finer_views
+                if i < main.len() {
+                    supersample.finer_views(self.level, level)
                 } else {
                     FinerViews::Midpoints
                 }

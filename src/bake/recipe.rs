@@ -477,15 +477,8 @@ impl Recipe {
             ..params
         };
         let min_pixels = self.settings.min_pixels;
-        // Where the finer pass's views lie: the sphere's vertices unless it is one level finer
-        // (at the finest level the pass may be the stored level itself).
-        let finer = |level: u32| {
-            if level > params.level {
-                supersample.finer
-            } else {
-                FinerViews::Midpoints
-            }
-        };
+        // Where the finer pass's views lie (at the finest level it is the stored level).
+        let finer = supersample.finer_views(params.level, fine.level);
         let (plain, fine) = if supersample.fold_min_pixels > 0 {
             let coarse_options = self.sampling_options(
                 min_pixels,
@@ -495,7 +488,7 @@ impl Recipe {
             );
             let plain = backend.sample(mesh, tiling, &params, &coarse_options, progress)?;
             let fine_options = SamplingOptions {
-                finer: finer(fine.level),
+                finer,
                 ..self.sampling_options(
                     supersample.fold_min_pixels,
                     checkpoints.fine.clone(),
@@ -507,7 +500,7 @@ impl Recipe {
             (plain, Some(rows))
         } else {
             let mut options = SamplingOptions {
-                finer: finer(fine.level),
+                finer,
                 ..self.sampling_options(
                     min_pixels,
                     checkpoints.fine.clone(),

@@ -14,7 +14,7 @@
 //! query's answer depends on is set), unless the bake keeps the rows as sampled.
 
 use super::Supersample;
-use crate::sampler::{FineViews, FinerViews, fold_views, saturate, split_fold_views};
+use crate::sampler::{FineViews, fold_views, saturate, split_fold_views};
 use crate::sphere::{MAX_LEVEL, view_count};
 use crate::visibility::{SamplingParams, VisibilityMatrix};
 
@@ -83,11 +83,7 @@ impl SphereRows {
     /// (`eval --sweep`) are sphere vertices of the sampled level.
     fn fine_views(&self, level: u32) -> FineViews {
         let fine_level = (level + self.supersample.extra_levels).min(MAX_LEVEL);
-        let finer = if level == self.params.level && fine_level > level {
-            self.supersample.finer
-        } else {
-            FinerViews::Midpoints
-        };
+        let finer = self.supersample.finer_views(self.params.level, fine_level);
         FineViews::new(level, fine_level, finer)
     }
 

@@ -243,6 +243,18 @@ impl Supersample {
         }
     }
 
+    /// The layout of the views of a sampling pass at `pass_level` of a sphere whose stored level
+    /// is `stored`: `--finer-views`' for the finer pass, the sphere's vertices for a pass at
+    /// the stored level (or a coarser one cut from the same rows, `eval --sweep`), whose
+    /// views are all vertices.
+    pub fn finer_views(&self, stored: u32, pass_level: u32) -> FinerViews {
+        if pass_level > stored {
+            self.finer
+        } else {
+            FinerViews::Midpoints
+        }
+    }
+
     /// Whether the passes at stored level `level` fold with [`FoldCorners::Split`]: there is
     /// a finer level to fold from, so the finer pass keeps its seen rows too
     /// (`sampler::sample_tiled_split`).

@@ -15,7 +15,7 @@ use patchvis::bake::{
 use patchvis::format::VisibilityEncoding;
 use patchvis::ooc::Mesh;
 use patchvis::output::{NamedPath, check_outputs};
-use patchvis::sampler::{FinerViews, FoldCorners};
+use patchvis::sampler::{FineViews, FinerViews, FoldCorners};
 use patchvis::sphere::view_count;
 use patchvis::tiling::PatchId;
 use serde_json::json;
@@ -293,18 +293,15 @@ impl Summary<'_> {
             outln!("          sampled on the {}", self.backend.describe())?;
         }
         let k = r.supersample.extra_levels;
-        if k > 0 && r.supersample.finer == FinerViews::Centroids {
+        if k > 0 {
+            let views = FineViews::new(s.level, s.level + k, r.supersample.finer);
+            let which = match r.supersample.finer {
+                FinerViews::Midpoints => format!("level {}", s.level + k),
+                FinerViews::Centroids => format!("level {} and its faces' centroids", s.level),
+            };
             outln!(
-                "          view supersampling: sampled {} views (level {} and its faces' centroids), folded into level {}",
-                view_count(s.level) + 8 * 4u32.pow(s.level),
-                s.level,
-                s.level
-            )?;
-        } else if k > 0 {
-            outln!(
-                "          view supersampling: sampled {} views (level {}), folded into level {}",
-                view_count(s.level + k),
-                s.level + k,
+                "          view supersampling: sampled {} views ({which}), folded into level {}",
+                views.end(),
                 s.level
             )?;
             if r.supersample.fold_min_pixels > 0 {

@@ -133,14 +133,6 @@ impl FineViews {
         self.fine_level
     }
 
-    /// The layout.
-    pub fn finer(&self) -> FinerViews {
-        match self.faces {
-            None => FinerViews::Midpoints,
-            Some(_) => FinerViews::Centroids,
-        }
-    }
-
     /// Slots of the pass's matrix: one per view of `fine_level`.
     pub fn slots(&self) -> u32 {
         view_count(self.fine_level)
@@ -233,7 +225,7 @@ impl FineViews {
 
 /// The direction of `face`'s centroid view: its corners' sum, normalized (see the module
 /// documentation).
-pub fn centroid(face: &Face) -> [f32; 3] {
+fn centroid(face: &Face) -> [f32; 3] {
     let d = face.directions;
     let sum: [f64; 3] =
         core::array::from_fn(|k| f64::from(d[0][k]) + f64::from(d[1][k]) + f64::from(d[2][k]));

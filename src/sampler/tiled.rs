@@ -320,7 +320,8 @@ fn sample_rows(
                     for (r, &s) in rows.iter_mut().zip(seeds.views()) {
                         *r = &done[s as usize * words_per_row..][..words];
                     }
-                    let hint = (!seeds.views().is_empty()).then(|| &rows[..seeds.views().len()]);
+                    let n = seeds.views().len();
+                    let hint = (n > 0).then(|| &rows[..n]);
                     context.render_view(view, pass.direction(view), hint, scratch, row);
                     progress.inc(1);
                 },

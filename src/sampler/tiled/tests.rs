@@ -114,6 +114,23 @@ fn tiled_split(
     sample_tiled_split(mesh, tiling, p, o, &NoProgress).unwrap()
 }
 
+/// The bunny in 200 patches, sampled at `level` at 64 px: the small setup of most tests.
+fn small_bunny(level: u32) -> (Mesh, Tiling, SamplingParams) {
+    let mesh = bunny();
+    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
+    let p = params_for(&mesh, level, 64);
+    (mesh, tiling, p)
+}
+
+/// `f`, run on a pool of `threads` threads.
+fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
 fn assert_same(a: &VisibilityMatrix, b: &VisibilityMatrix) {
     assert_eq!((a.views(), a.patches()), (b.views(), b.patches()));
     for v in 0..a.views() {
@@ -169,9 +186,7 @@ fn tiled_equals_brute_force_on_the_bunny_in_small_patches() {
 #[test]
 fn a_tiny_memory_budget_maps_the_mesh_and_changes_nothing() {
     // A 1-byte budget puts the regrouped mesh and the key table in mapped files.
-    let mesh = bunny();
-    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
-    let p = params_for(&mesh, 2, 64);
+    let (mesh, tiling, p) = small_bunny(2);
     let mapped = SamplingOptions {
         memory_budget: Some(1),
         ..SamplingOptions::default()
@@ -368,13 +383,7 @@ fn tiled_output_is_identical_for_one_and_two_threads() {
             ..SamplingOptions::default()
         },
     ] {
-        let run = |threads| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| tiled(&mesh, &tiling, &p, &options))
-        };
+        let run = |threads| on_threads(threads, || tiled(&mesh, &tiling, &p, &options));
         assert_same(&run(1), &run(2));
     }
 }
@@ -382,9 +391,7 @@ fn tiled_output_is_identical_for_one_and_two_threads() {
 #[test]
 fn the_probe_pass_keeps_every_row_and_finds_more() {
     // The bunny at 64 px: thin ears, and surfaces turning away at the silhouettes.
-    let mesh = bunny();
-    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
-    let p = params_for(&mesh, 2, 64);
+    let (mesh, tiling, p) = small_bunny(2);
     let plain = tiled(&mesh, &tiling, &p, &SamplingOptions::default());
     for radius in [0, 1] {
         let probed = tiled(
@@ -508,9 +515,7 @@ fn near_equals_brute_force(mesh: &Mesh, tiling: &Tiling, p: &SamplingParams, fac
 
 #[test]
 fn near_views_equal_brute_force_on_the_bunny() {
-    let mesh = bunny();
-    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
-    let p = params_for(&mesh, 1, 64);
+    let (mesh, tiling, p) = small_bunny(1);
     // The bounding sphere itself, a cube map (1.1), the last cube map and the first single
     // camera (1.4, 1.5), one camera (2).
     for factor in [1.0, 1.1, 1.4, 1.5, 2.0] {
@@ -608,11 +613,7 @@ fn near_passes_are_independent_of_threads_shards_and_resuming() {
         near(&p, 2.0, SamplingOptions::default()),
     ] {
         let run = |threads, options: &SamplingOptions| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| tiled(&mesh, &tiling, &p, options))
+            on_threads(threads, || tiled(&mesh, &tiling, &p, options))
         };
         let full = run(1, &options);
         assert_same(&run(2, &options), &full);
@@ -677,9 +678,7 @@ fn a_near_checkpoint_resumes_and_refuses_another_shell() {
 
 #[test]
 fn the_probe_keeps_near_rows_and_a_band_widens_its_cell() {
-    let mesh = bunny();
-    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
-    let p = params_for(&mesh, 1, 64);
+    let (mesh, tiling, p) = small_bunny(1);
     for factor in [1.1, 2.0] {
         let plain = tiled(
             &mesh,
@@ -754,9 +753,7 @@ fn a_band_on_the_main_pass_keeps_every_row() {
 #[test]
 fn split_sampling_returns_the_probed_rows_and_the_rows_before_the_probe() {
     let dir = tempfile::tempdir().unwrap();
-    let mesh = bunny();
-    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
-    let p = params_for(&mesh, 1, 64);
+    let (mesh, tiling, p) = small_bunny(1);
     let probe = SamplingOptions {
         probe: Some(2),
         ..SamplingOptions::default()
@@ -796,9 +793,7 @@ fn a_probe_leaving_out_what_the_parents_hold_folds_to_the_same_rows() {
     // `folds_into`: the views one level finer than the stored level do not probe the patches
     // their parents hold. The split and cover folds drop those anyway, so their stored rows
     // stay the same bit for bit, on the sampling sphere and on a near pass.
-    let mesh = bunny();
-    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
-    let p = params_for(&mesh, 2, 64);
+    let (mesh, tiling, p) = small_bunny(2);
     let probe = SamplingOptions {
         probe: Some(1),
         ..SamplingOptions::default()
@@ -849,9 +844,7 @@ fn a_probe_leaving_out_what_the_parents_hold_folds_to_the_same_rows() {
 
 #[test]
 fn far_views_add_the_rim_a_far_camera_sees_and_leave_near_passes_alone() {
-    let mesh = bunny();
-    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
-    let p = params_for(&mesh, 1, 64);
+    let (mesh, tiling, p) = small_bunny(1);
     let far = SamplingOptions {
         far_view: true,
         ..SamplingOptions::default()
@@ -907,19 +900,13 @@ fn centroid_views_render_each_face_centre_exactly_whatever_the_threads_or_shards
     // Each renders what a brute-force render from its direction shows, the stored prefix is
     // the level-1 views', the slots after the last face stay empty, and threads and shards
     // change no row.
-    let mesh = bunny();
-    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
-    let p = params_for(&mesh, 2, 64);
+    let (mesh, tiling, p) = small_bunny(2);
     let centroids = SamplingOptions {
         finer: FinerViews::Centroids,
         ..SamplingOptions::default()
     };
     let run = |threads, options: &SamplingOptions| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| tiled(&mesh, &tiling, &p, options))
+        on_threads(threads, || tiled(&mesh, &tiling, &p, options))
     };
     let rows = run(1, &centroids);
     assert_eq!(rows.views(), view_count(2));
@@ -973,9 +960,7 @@ fn centroid_views_render_each_face_centre_exactly_whatever_the_threads_or_shards
 fn a_centroid_probe_leaving_out_what_the_corners_hold_folds_to_the_same_rows() {
     // A centroid's seeds are its face's corners, which are its fold targets: its probe may
     // leave out what they hold and the split and cover folds stay the same bit for bit.
-    let mesh = bunny();
-    let tiling = crate::tiling::tile(&mesh, 200).unwrap();
-    let p = params_for(&mesh, 2, 64);
+    let (mesh, tiling, p) = small_bunny(2);
     let options = SamplingOptions {
         probe: Some(1),
         finer: FinerViews::Centroids,
