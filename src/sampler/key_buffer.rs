@@ -15,8 +15,15 @@
 //! The probe pass's shrunk occluders ([`DepthBuffer`], [`DepthBuffer::shrink_from`]) need
 //! depths alone: the same buffer with `u32` pixels, half the bytes to write and to read, and
 //! the same occlusion tests.
+//!
+//! A model at the sampling distance covers a fraction of its image: on average 12 % of the
+//! pixels on the airplane, 30 % on the bunny. So each band of [`TILE`] rows keeps the span of
+//! columns its triangles may have written ([`Span`]; every pixel outside it is empty), and
+//! the passes over whole images (draining, the tiles, the shrink) visit the spans alone.
 
-use super::raster::{SUBPIXEL_BITS, ScreenVertex};
+use super::conservative::scan_triangle_conservative;
+use super::raster::{DEFAULT_PATHS, SUBPIXEL_BITS, ScreenVertex, scan_triangle_with_area};
+use std::ops::Range;
 
 /// Relative widening of a triangle's largest corner depth in [`KeyBuffer::triangle_hidden`]:
 /// interpolated `f32` depths exceed it by a few ulps at most (~1e-7 relative), and
@@ -25,7 +32,7 @@ const TRIANGLE_DEPTH_SLACK: f32 = 1e-4;
 
 /// Triangles whose pixel rectangle is narrower and lower than this many pixels are tested
 /// against their pixels directly (a tile lookup costs more than a few pixels' depths).
-const SMALL_RECT: i64 = 4;
+const SMALL_RECT: usize = 4;
 
 /// Pixels [`KeyBuffer::drain`] tests for emptiness at once: eight keys, four SSE2 registers
 /// or-ed together.
@@ -55,6 +62,85 @@ impl Pixel for u32 {
     }
 }
 
+/// The columns `[start, end)` of one band of [`TILE`] rows where a pixel may be written:
+/// every pixel of the band outside them is empty. `start >= end`: the whole band is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Span {
+    start: u32,
+    end: u32,
+}
+
+impl Span {
+    /// No column.
+    const EMPTY: Span = Span {
+        start: u32::MAX,
+        end: 0,
+    };
+
+    fn is_empty(self) -> bool {
+        self.start >= self.end
+    }
+
+    /// The columns, as a range to slice a row with (`0..0` when empty).
+    fn range(self) -> Range<usize> {
+        if self.is_empty() {
+            0..0
+        } else {
+            self.start as usize..self.end as usize
+        }
+    }
+
+    /// The smallest span holding both.
+    fn union(self, other: Span) -> Span {
+        Span {
+            start: self.start.min(other.start),
+            end: self.end.max(other.end),
+        }
+    }
+
+    /// The columns of both.
+    fn intersect(self, other: Span) -> Span {
+        Span {
+            start: self.start.max(other.start),
+            end: self.end.min(other.end),
+        }
+    }
+
+    /// The columns of `self` outside `other`: up to two ranges, either possibly empty.
+    fn minus(self, other: Span) -> [Range<usize>; 2] {
+        if self.is_empty() {
+            return [0..0, 0..0];
+        }
+        if other.is_empty() {
+            return [self.range(), 0..0];
+        }
+        let (s, e) = (self.start as usize, self.end as usize);
+        let (os, oe) = (other.start as usize, other.end as usize);
+        [s..os.clamp(s, e), oe.clamp(s, e)..e]
+    }
+
+    /// The tiles of a band wholly inside the span, of `tiles_per_row` tiles over `n` columns
+    /// (the last one partial when `n` is not a multiple of [`TILE`]): every other tile of the
+    /// band holds an empty pixel.
+    fn whole_tiles(self, n: usize, tiles_per_row: usize) -> Range<usize> {
+        if self.is_empty() {
+            return 0..0;
+        }
+        let first = (self.start as usize).div_ceil(TILE);
+        let end = if self.end as usize >= n {
+            tiles_per_row
+        } else {
+            self.end as usize / TILE
+        };
+        if first < end { first..end } else { 0..0 }
+    }
+}
+
+/// The rows of band `band` of a `n`-row image.
+fn band_rows(band: usize, n: usize) -> Range<usize> {
+    band * TILE..((band + 1) * TILE).min(n)
+}
+
 /// Per-pixel packed keys of one view (or depths alone, [`DepthBuffer`]), plus the per-tile
 /// farthest depth built from them.
 #[derive(Debug)]
@@ -66,6 +152,8 @@ pub(crate) struct KeyBuffer<P: Pixel = u64> {
     tile_far: Vec<u32>,
     /// [`Self::build_tiles`]' per-column minima of one band of tiles.
     column_far: Vec<i32>,
+    /// Per band of [`TILE`] rows, the columns that may hold a fragment (or a depth).
+    spans: Vec<Span>,
 }
 
 /// The depths of a view without their patches: the probe pass's shrunk occluders.
@@ -82,7 +170,29 @@ impl<P: Pixel> KeyBuffer<P> {
             tiles_per_row,
             tile_far: vec![0; tiles_per_row * tiles_per_row],
             column_far: vec![0; resolution],
+            spans: vec![Span::EMPTY; tiles_per_row],
         }
+    }
+
+    /// Widens the spans to the inclusive pixel rectangle `[x0, y0, x1, y1]` (inside the image).
+    #[inline(always)]
+    fn mark(&mut self, rect: [usize; 4]) {
+        let [x0, y0, x1, y1] = rect;
+        let span = Span {
+            start: x0 as u32,
+            end: x1 as u32 + 1,
+        };
+        for band in &mut self.spans[y0 / TILE..=y1 / TILE] {
+            *band = band.union(span);
+        }
+    }
+
+    /// Whether pixel `index` lies in its band's span: where [`KeyBuffer::drain`] and the
+    /// tiles look for it.
+    #[cfg(debug_assertions)]
+    fn in_span(&self, index: usize) -> bool {
+        let (x, y) = (index % self.resolution, index / self.resolution);
+        self.spans[y / TILE].range().contains(&x)
     }
 }
 
@@ -96,29 +206,70 @@ impl KeyBuffer {
     /// Calls `f` with the key of every pixel that may hold a fragment, row by row from the
     /// top (the others are empty: key 0), and empties every pixel: the buffer is then as
     /// [`Self::new`] made it, ready for the next view without a clearing pass of its own.
-    /// Runs of [`DRAIN_RUN`] empty pixels (most of an image) are skipped after one test, and
-    /// only the others are written.
+    /// Only the bands' spans are visited; in them, runs of [`DRAIN_RUN`] empty pixels are
+    /// skipped after one test, and only the others are written.
     #[inline(always)]
     pub(crate) fn drain(&mut self, mut f: impl FnMut(u64)) {
-        for run in self.keys.chunks_mut(DRAIN_RUN) {
-            if run.iter().fold(0, |any, &k| any | k) == 0 {
-                continue;
+        let n = self.resolution;
+        for (band, span) in self.spans.iter_mut().enumerate() {
+            for y in band_rows(band, n) {
+                for run in self.keys[y * n..][span.range()].chunks_mut(DRAIN_RUN) {
+                    if run.iter().fold(0, |any, &k| any | k) == 0 {
+                        continue;
+                    }
+                    for k in run {
+                        f(*k);
+                        *k = 0;
+                    }
+                }
             }
-            for k in run {
-                f(*k);
-                *k = 0;
-            }
+            *span = Span::EMPTY;
+        }
+    }
+
+    /// Rasterizes screen triangle `tri` (signed area `area`) with key low half `low`
+    /// ([`low_half`]): every pixel whose centre it covers, or with `conservative` every pixel
+    /// square it touches ([`scan_triangle_conservative`]). The bands' spans are widened to
+    /// the pixels it may touch first.
+    #[inline(always)]
+    pub(crate) fn draw(&mut self, tri: [ScreenVertex; 3], area: i64, low: u32, conservative: bool) {
+        // A superset of the pixels either rasterization writes; none when it is empty.
+        let Some(rect) = self.pixel_rect(extent_of(tri), true) else {
+            return;
+        };
+        self.mark(rect);
+        let resolution = self.resolution as u32;
+        let plot = |index, q, covered| self.plot(index, q, low, covered);
+        if conservative {
+            scan_triangle_conservative(tri, resolution, plot);
+        } else {
+            scan_triangle_with_area(tri, area, resolution, DEFAULT_PATHS, plot);
         }
     }
 
     /// Depth test and write of a fragment with low half `low` ([`low_half`]) at depth `q`;
-    /// branch-free like [`super::IdBuffer`]'s `plot`.
+    /// branch-free like [`super::IdBuffer`]'s `plot`. The pixel lies in its band's span
+    /// ([`Self::draw`] marked it).
     #[inline(always)]
-    pub(crate) fn plot(&mut self, index: usize, q: f32, low: u32, covered: bool) {
+    fn plot(&mut self, index: usize, q: f32, low: u32, covered: bool) {
         let key = (u64::from(q.to_bits()) << 32) | u64::from(low);
         let key = if covered & (q > 0.0) { key } else { 0 };
+        #[cfg(debug_assertions)]
+        debug_assert!(
+            key == 0 || self.in_span(index),
+            "pixel {index} outside its span"
+        );
         let stored = &mut self.keys[index];
         *stored = (*stored).max(key);
+    }
+
+    /// [`Self::plot`] with pixel `index` added to its band's span (tests write pixels one
+    /// by one).
+    #[cfg(test)]
+    pub(crate) fn plot_marked(&mut self, index: usize, q: f32, low: u32, covered: bool) {
+        let (x, y) = (index % self.resolution, index / self.resolution);
+        self.mark([x, y, x, y]);
+        self.plot(index, q, low, covered);
     }
 }
 
@@ -154,7 +305,10 @@ impl DepthBuffer {
         self.shrink(source, radius, ring);
     }
 
-    /// The body of [`Self::shrink_from`], inlined into each of its builds.
+    /// The body of [`Self::shrink_from`], inlined into each of its builds. Only the source's
+    /// spans are visited: a pixel outside them is empty, so is its shrunk depth, and the
+    /// buffer takes the source's spans (emptying first what the last shrink wrote outside
+    /// them).
     #[inline(always)]
     fn shrink(&mut self, source: &KeyBuffer, radius: usize, ring: &mut Vec<u32>) {
         let n = self.resolution;
@@ -169,35 +323,72 @@ impl DepthBuffer {
             tiles_per_row,
             tile_far,
             column_far,
+            spans,
             ..
         } = self;
-        let columns = &mut column_far[..n];
-        let mut ready = 0; // Source rows whose minima are in the ring.
-        for (y, out) in depths.chunks_exact_mut(n).enumerate() {
-            let (a, b) = (y.saturating_sub(radius), (y + radius).min(n - 1));
-            while ready <= b {
-                let slot = ready % window;
-                let keys = &source.keys[ready * n..(ready + 1) * n];
-                row_window_min(keys, radius, &mut ring[slot * n..(slot + 1) * n], step);
-                ready += 1;
-            }
-            let slot = |yy: usize| &ring[yy % window * n..][..n];
-            out.copy_from_slice(slot(a));
-            for yy in a + 1..=b {
-                for (o, &d) in out.iter_mut().zip(slot(yy)) {
-                    *o = (*o).min(d);
+        for (band, (old, &new)) in spans.iter_mut().zip(&source.spans).enumerate() {
+            for y in band_rows(band, n) {
+                for columns in old.minus(new) {
+                    depths[y * n..][columns].fill(0);
                 }
             }
+            *old = new;
+        }
+        let span_of = |y: usize| source.spans[y / TILE];
+        let columns = &mut column_far[..n];
+        let mut ready = 0; // Source rows before it have their minima in the ring (if wanted).
+        for (y, out) in depths.chunks_exact_mut(n).enumerate() {
+            let own = span_of(y);
+            let whole = own.whole_tiles(n, *tiles_per_row);
+            let tiled = whole.start * TILE..(whole.end * TILE).min(n);
             if y % TILE == 0 {
-                columns.fill(i32::MAX);
+                columns[tiled.clone()].fill(i32::MAX);
+            }
+            if !own.is_empty() {
+                let (a, b) = (y.saturating_sub(radius), (y + radius).min(n - 1));
+                ready = ready.max(a);
+                while ready <= b {
+                    let span = span_of(ready);
+                    if !span.is_empty() {
+                        // Widened by the radius, so that the minima over the span itself
+                        // are clamped only at the image's edges.
+                        let (s, e) = (span.start as usize, span.end as usize);
+                        let wide = s.saturating_sub(radius)..(e + radius).min(n);
+                        let slot = &mut ring[ready % window * n..][..n];
+                        row_window_min(
+                            &source.keys[ready * n..][wide.clone()],
+                            radius,
+                            &mut slot[wide.clone()],
+                            &mut step[wide],
+                        );
+                    }
+                    ready += 1;
+                }
+                // The columns every row of the window may hold: the others are empty.
+                let live = (a..=b).fold(own, |live, yy| live.intersect(span_of(yy)));
+                for empty in own.minus(live) {
+                    out[empty].fill(0);
+                }
+                let live = live.range();
+                if !live.is_empty() {
+                    let slot = |yy: usize| &ring[yy % window * n..][live.clone()];
+                    let out = &mut out[live.clone()];
+                    out.copy_from_slice(slot(a));
+                    for yy in a + 1..=b {
+                        for (o, &d) in out.iter_mut().zip(slot(yy)) {
+                            *o = (*o).min(d);
+                        }
+                    }
+                }
             }
             // Depth bits are those of a positive `f32` or 0 (empty), so they order as `i32`.
-            for (far, &o) in columns.iter_mut().zip(&*out) {
+            for (far, &o) in columns[tiled.clone()].iter_mut().zip(&out[tiled.clone()]) {
                 *far = (*far).min(o as i32);
             }
             if y % TILE == TILE - 1 || y == n - 1 {
                 let tiles = &mut tile_far[y / TILE * *tiles_per_row..][..*tiles_per_row];
-                tiles_from_columns(tiles, columns);
+                tiles.fill(0);
+                tiles_from_columns(&mut tiles[whole], &columns[tiled]);
             }
         }
     }
@@ -205,6 +396,8 @@ impl DepthBuffer {
     /// Sets pixel `index` to depth `q` (tests of what reads the shrunk occluders).
     #[cfg(test)]
     pub(crate) fn set(&mut self, index: usize, q: f32) {
+        let (x, y) = (index % self.resolution, index / self.resolution);
+        self.mark([x, y, x, y]);
         self.keys[index] = q.to_bits();
     }
 }
@@ -283,25 +476,31 @@ impl<P: Pixel> KeyBuffer<P> {
         self.build_tiles_body();
     }
 
-    /// The body of [`Self::build_tiles`], inlined into each of its builds.
+    /// The body of [`Self::build_tiles`], inlined into each of its builds. A tile not wholly
+    /// inside its band's span holds an empty pixel: only the others are computed.
     #[inline(always)]
     fn build_tiles_body(&mut self) {
         let n = self.resolution;
         let columns = &mut self.column_far[..n];
-        for (band, tiles) in self
+        for ((band, tiles), span) in self
             .keys
             .chunks(n * TILE)
             .zip(self.tile_far.chunks_mut(self.tiles_per_row))
+            .zip(&self.spans)
         {
+            tiles.fill(0);
+            let whole = span.whole_tiles(n, self.tiles_per_row);
+            let tiled = whole.start * TILE..(whole.end * TILE).min(n);
+            let columns = &mut columns[tiled.clone()];
             // Depth bits are those of a positive `f32` or 0 (empty), so they order as `i32`,
             // which compiles to fewer instructions than an unsigned minimum.
             columns.fill(i32::MAX);
             for row in band.chunks_exact(n) {
-                for (c, &k) in columns.iter_mut().zip(row) {
+                for (c, &k) in columns.iter_mut().zip(&row[tiled.clone()]) {
                     *c = (*c).min(k.depth_bits() as i32);
                 }
             }
-            tiles_from_columns(tiles, columns);
+            tiles_from_columns(&mut tiles[whole], columns);
         }
     }
 
@@ -314,25 +513,18 @@ impl<P: Pixel> KeyBuffer<P> {
     #[inline(always)]
     pub(crate) fn triangle_hidden(&self, tri: [ScreenVertex; 3], conservative: bool) -> bool {
         let [a, b, c] = tri;
-        let extent = [
-            a.x.min(b.x).min(c.x),
-            a.x.max(b.x).max(c.x),
-            a.y.min(b.y).min(c.y),
-            a.y.max(b.y).max(c.y),
-        ];
-        self.extent_hidden(extent, a.q.max(b.q).max(c.q), conservative)
+        self.extent_hidden(extent_of(tri), a.q.max(b.q).max(c.q), conservative)
     }
 
-    /// Whether triangles with every corner within the snapped screen rectangle `[min_x,
-    /// max_x, min_y, max_y]` and no corner depth above `q_max` provably change no pixel:
-    /// [`Self::triangle_hidden`] for all of them at once.
+    /// The inclusive pixel rectangle `[x0, y0, x1, y1]` of the pixels a triangle within the
+    /// snapped screen rectangle `extent` may write: whose centres `extent` holds, as in
+    /// `scan_triangle` (centres `p · 256 + 128`), or with `conservative` a superset of the
+    /// squares `scan_triangle_conservative` touches; clamped to the image, `None` if empty.
     #[inline(always)]
-    pub(crate) fn extent_hidden(&self, extent: [i32; 4], q_max: f32, conservative: bool) -> bool {
+    fn pixel_rect(&self, extent: [i32; 4], conservative: bool) -> Option<[usize; 4]> {
         const SUBPIXEL: i64 = 1 << SUBPIXEL_BITS;
         let last = self.resolution as i64 - 1;
         let [min_x, max_x, min_y, max_y] = extent.map(i64::from);
-        // As in `scan_triangle` (centres `p · 256 + 128`) or, conservatively, a superset of
-        // the squares `scan_triangle_conservative` touches.
         let (lo_bias, hi_bias) = if conservative {
             (-SUBPIXEL, 0)
         } else {
@@ -342,14 +534,22 @@ impl<P: Pixel> KeyBuffer<P> {
         let x1 = ((max_x + hi_bias) >> SUBPIXEL_BITS).min(last);
         let y0 = ((min_y + lo_bias) >> SUBPIXEL_BITS).max(0);
         let y1 = ((max_y + hi_bias) >> SUBPIXEL_BITS).min(last);
-        if x0 > x1 || y0 > y1 {
+        (x0 <= x1 && y0 <= y1).then_some([x0 as usize, y0 as usize, x1 as usize, y1 as usize])
+    }
+
+    /// Whether triangles with every corner within the snapped screen rectangle `[min_x,
+    /// max_x, min_y, max_y]` and no corner depth above `q_max` provably change no pixel:
+    /// [`Self::triangle_hidden`] for all of them at once.
+    #[inline(always)]
+    pub(crate) fn extent_hidden(&self, extent: [i32; 4], q_max: f32, conservative: bool) -> bool {
+        let Some(rect) = self.pixel_rect(extent, conservative) else {
             return true;
-        }
+        };
         let q = q_max * (1.0 + TRIANGLE_DEPTH_SLACK);
         if !(q.is_finite() && q > 0.0) {
             return false;
         }
-        let rect = [x0 as usize, y0 as usize, x1 as usize, y1 as usize];
+        let [x0, y0, x1, y1] = rect;
         if x1 - x0 < SMALL_RECT && y1 - y0 < SMALL_RECT {
             // A few pixels (most triangles): their own depths decide, as the tiles would
             // with their fallback, and without the indirection.
@@ -389,7 +589,7 @@ impl<P: Pixel> KeyBuffer<P> {
     #[inline(always)]
     fn pixels_all_nearer(&self, rect: [usize; 4], q_bits: u32) -> bool {
         let [x0, y0, x1, y1] = rect;
-        debug_assert!(x1 - x0 < SMALL_RECT as usize);
+        debug_assert!(x1 - x0 < SMALL_RECT);
         match x1 - x0 {
             0 => self.rows_all_nearer::<1>(x0, y0..=y1, q_bits),
             1 => self.rows_all_nearer::<2>(x0, y0..=y1, q_bits),
@@ -434,6 +634,18 @@ impl<P: Pixel> KeyBuffer<P> {
     }
 }
 
+/// The snapped screen rectangle `[min_x, max_x, min_y, max_y]` of triangle `tri`'s corners.
+#[inline(always)]
+fn extent_of(tri: [ScreenVertex; 3]) -> [i32; 4] {
+    let [a, b, c] = tri;
+    [
+        a.x.min(b.x).min(c.x),
+        a.x.max(b.x).max(c.x),
+        a.y.min(b.y).min(c.y),
+        a.y.max(b.y).max(c.y),
+    ]
+}
+
 /// The low half of patch `patch`'s keys among `patch_count` patches: `patch_count − patch`,
 /// so that a smaller patch id wins a depth tie and no fragment's low half is 0.
 #[inline(always)]
@@ -453,6 +665,94 @@ pub(crate) fn patch_slot(key: u64, patch_count: u32) -> usize {
 mod tests {
     use super::*;
 
+    /// `buffer`'s keys and tiles as if every pixel were in its band's span: the reference
+    /// for what the spans let the passes skip.
+    fn with_whole_spans<P: Pixel>(buffer: &KeyBuffer<P>) -> KeyBuffer<P> {
+        let n = buffer.resolution;
+        let mut whole = KeyBuffer::<P>::new(n as u32);
+        whole.keys.copy_from_slice(&buffer.keys);
+        whole.spans.fill(Span {
+            start: 0,
+            end: n as u32,
+        });
+        whole.build_tiles_body();
+        whole
+    }
+
+    #[test]
+    fn the_spans_change_nothing_view_after_view() {
+        // Views of a few triangles each, in buffers reused as the sampler reuses them: the
+        // shrink, both kinds of tiles and the drain give what they give over whole images,
+        // and a drained buffer is empty (also outside this view's spans, where the last
+        // view's pixels were).
+        let mut rng = crate::test_kit::rng::Rng::new(17);
+        let mut below = |m: u64| (rng.next_u64() % m) as i32;
+        let mut fragments = 0;
+        for n in [1usize, 8, 23, 64] {
+            let mut keys = KeyBuffer::new(n as u32);
+            let mut shrunk = DepthBuffer::new(n as u32);
+            let mut ring = Vec::new();
+            for view in 0..40 {
+                let size = n as i32 * 256;
+                for _ in 0..below(12) {
+                    // Triangles up to a third of the image, partly outside it now and then.
+                    let (x, y) = (
+                        below(size as u64 + 512) - 256,
+                        below(size as u64 + 512) - 256,
+                    );
+                    let reach = (size / 3).max(300) as u64;
+                    let mut corner = || ScreenVertex {
+                        x: x + below(reach),
+                        y: y + below(reach),
+                        q: 0.1 + below(50) as f32 * 0.01,
+                    };
+                    let tri = [corner(), corner(), corner()];
+                    let area = crate::sampler::raster::signed_area(tri);
+                    keys.draw(tri, area, 1 + below(9) as u32, view % 2 == 0);
+                }
+                let radius = below(4) as usize;
+                shrunk.shrink_from(&keys, radius, &mut ring);
+                let whole = with_whole_spans(&keys);
+                for y in 0..n {
+                    for x in 0..n {
+                        let window = |c: usize| c.saturating_sub(radius)..=(c + radius).min(n - 1);
+                        let far = window(y)
+                            .flat_map(|yy| window(x).map(move |xx| (xx, yy)))
+                            .map(|(xx, yy)| keys.depth_bits(yy * n + xx))
+                            .min()
+                            .unwrap();
+                        assert_eq!(
+                            shrunk.depth_bits(y * n + x),
+                            far,
+                            "{n}² view {view} at {x}, {y}"
+                        );
+                    }
+                }
+                assert_eq!(
+                    shrunk.tile_far,
+                    with_whole_spans(&shrunk).tile_far,
+                    "{n}² view {view}"
+                );
+                keys.build_tiles();
+                assert_eq!(keys.tile_far, whole.tile_far, "{n}² view {view}");
+                let mut drained: Vec<u64> = Vec::new();
+                keys.drain(|k| {
+                    if k != 0 {
+                        drained.push(k)
+                    }
+                });
+                let mut expected: Vec<u64> =
+                    whole.keys.iter().copied().filter(|&k| k != 0).collect();
+                drained.sort_unstable();
+                expected.sort_unstable();
+                fragments += drained.len();
+                assert_eq!(drained, expected, "{n}² view {view}");
+                assert!(keys.keys.iter().all(|&k| k == 0), "{n}² view {view}");
+            }
+        }
+        assert!(fragments > 5_000, "{fragments} fragments drawn");
+    }
+
     #[test]
     fn shrinking_takes_the_farthest_depth_of_each_square() {
         let n = 23;
@@ -462,7 +762,7 @@ mod tests {
             // A few empty pixels among depths of few distinct values.
             if !rng.next_u64().is_multiple_of(9) {
                 let q = 0.1 + (rng.next_u64() % 50) as f32 * 0.01;
-                source.plot(i, q, 1, true);
+                source.plot_marked(i, q, 1, true);
             }
         }
         let mut shrunk = DepthBuffer::new(n as u32);
@@ -488,10 +788,12 @@ mod tests {
             // and column of tiles are partial).
             let mut rebuilt = DepthBuffer::new(n as u32);
             rebuilt.keys.copy_from_slice(&shrunk.keys);
+            rebuilt.spans.copy_from_slice(&shrunk.spans);
             rebuilt.build_tiles();
             assert_eq!(rebuilt.tile_far, shrunk.tile_far, "radius {radius}");
             let mut body = DepthBuffer::new(n as u32);
             body.keys.copy_from_slice(&shrunk.keys);
+            body.spans.copy_from_slice(&shrunk.spans);
             body.build_tiles_body();
             assert_eq!(body.tile_far, shrunk.tile_far, "radius {radius}");
             // The portable build of the shrink, where `shrink_from` took the AVX2 one.
@@ -503,13 +805,14 @@ mod tests {
         // The packed keys' tiles, both builds (AVX2 where the CPU has it, and portable).
         let mut keys = KeyBuffer::new(n as u32);
         keys.keys.copy_from_slice(&source.keys);
+        keys.spans.copy_from_slice(&source.spans);
         keys.build_tiles();
         source.build_tiles_body();
         assert_eq!(keys.tile_far, source.tile_far);
         // A buffer of one pixel, and of one row's width.
         for n in [1u32, 2] {
             let mut one = KeyBuffer::new(n);
-            one.plot(0, 0.5, 1, true);
+            one.plot_marked(0, 0.5, 1, true);
             let mut shrunk = DepthBuffer::new(n);
             shrunk.shrink_from(&one, 1, &mut ring);
             let expect = if n == 1 { 0.5f32.to_bits() } else { 0 };
@@ -524,19 +827,19 @@ mod tests {
         let patch = |b: &KeyBuffer, i: usize| patch_slot(b.keys()[i], PATCHES);
         let mut b = KeyBuffer::new(2);
         assert_eq!(patch(&b, 0), PATCHES as usize);
-        b.plot(0, 0.5, low(7), true);
-        b.plot(0, 0.5, low(9), true);
+        b.plot_marked(0, 0.5, low(7), true);
+        b.plot_marked(0, 0.5, low(9), true);
         assert_eq!(patch(&b, 0), 7);
-        b.plot(0, 0.5, low(3), true);
+        b.plot_marked(0, 0.5, low(3), true);
         assert_eq!(patch(&b, 0), 3);
-        b.plot(0, 0.5, low(0), true);
+        b.plot_marked(0, 0.5, low(0), true);
         assert_eq!(patch(&b, 0), 0);
-        b.plot(0, 0.25, low(1), true);
+        b.plot_marked(0, 0.25, low(1), true);
         assert_eq!(patch(&b, 0), 0);
-        b.plot(0, 0.75, low(8), false);
-        b.plot(1, 0.0, low(8), true);
-        b.plot(1, -1.0, low(8), true);
-        b.plot(1, f32::NAN, low(8), true);
+        b.plot_marked(0, 0.75, low(8), false);
+        b.plot_marked(1, 0.0, low(8), true);
+        b.plot_marked(1, -1.0, low(8), true);
+        b.plot_marked(1, f32::NAN, low(8), true);
         assert_eq!(patch(&b, 0), 0);
         assert_eq!(b.keys()[1], 0);
     }
@@ -548,7 +851,7 @@ mod tests {
         let mut b = KeyBuffer::new(13);
         let pixels = [0, 7, 8, 100, 168];
         for (k, &i) in pixels.iter().enumerate() {
-            b.plot(i, 0.5, low_half(k as u32, PATCHES), true);
+            b.plot_marked(i, 0.5, low_half(k as u32, PATCHES), true);
         }
         let mut seen = Vec::new();
         b.drain(|key| {
@@ -567,7 +870,7 @@ mod tests {
     fn tiles_hold_the_farthest_depth_and_empty_pixels_never_occlude() {
         let mut b = KeyBuffer::new(16);
         for i in 0..256 {
-            b.plot(i, 0.5, !0, i != 200);
+            b.plot_marked(i, 0.5, !0, i != 200);
         }
         b.build_tiles();
         let half = 0.5f32.to_bits();
@@ -597,8 +900,8 @@ mod tests {
             // Mostly near depths, a few far ones and empty pixels: holes to be seen through.
             match below(40) {
                 0 => {}
-                1 | 2 => b.plot(i, 0.1, 1, true),
-                _ => b.plot(i, 0.6 + below(10) as f32 * 0.01, 1, true),
+                1 | 2 => b.plot_marked(i, 0.1, 1, true),
+                _ => b.plot_marked(i, 0.6 + below(10) as f32 * 0.01, 1, true),
             }
         }
         b.build_tiles();
@@ -650,7 +953,7 @@ mod tests {
         let mut b = KeyBuffer::new(16);
         for y in 0..8 {
             for x in 0..8 {
-                b.plot(y * 16 + x, 0.5, !0, true);
+                b.plot_marked(y * 16 + x, 0.5, !0, true);
             }
         }
         b.build_tiles();

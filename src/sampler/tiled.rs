@@ -53,7 +53,6 @@
 
 use super::camera::{Camera, SphereBounds, normalize, widen};
 use super::checkpoint;
-use super::conservative::scan_triangle_conservative;
 use super::finer::{FineViews, FinerViews};
 use super::key_buffer::{KeyBuffer, Pixel, low_half, patch_slot};
 use super::marks::Marks;
@@ -62,8 +61,8 @@ use super::patch_box::{PatchBox, patch_boxes};
 use super::patch_graph::faces_away;
 use super::patch_mesh::{PatchMesh, Section, Storage};
 use super::raster::{
-    DEFAULT_PATHS, ProjectedVertex, ScreenBatch, ScreenVertex, draw_triangle, prefetch, project,
-    scan_triangle_with_area, signed_area, sphere_needs_no_clip, view_planes,
+    ProjectedVertex, ScreenBatch, ScreenVertex, draw_triangle, prefetch, project, signed_area,
+    sphere_needs_no_clip, view_planes,
 };
 use super::solid::Cell;
 use super::{SamplingParams, VisibilityMatrix};
@@ -571,7 +570,6 @@ struct Placer<'c, 'a> {
     pass: Pass,
     /// The patch's key low half.
     low: u32,
-    resolution: u32,
 }
 
 impl Placer<'_, '_> {
@@ -606,7 +604,7 @@ impl Placer<'_, '_> {
                 signed_area(tri)
             }
         };
-        context.scan(tri, area, self.low, self.resolution, keys);
+        keys.draw(tri, area, self.low, context.options.conservative);
     }
 }
 
@@ -729,7 +727,7 @@ impl ViewContext<'_> {
         for &(screen, low) in deferred.iter() {
             if !keys.triangle_hidden(screen, self.options.conservative) {
                 let area = signed_area(screen);
-                self.scan(screen, area, low, camera.resolution(), keys);
+                keys.draw(screen, area, low, self.options.conservative);
             }
         }
         for w in 0..view.drawn.len() {
@@ -779,7 +777,6 @@ impl ViewContext<'_> {
             context: self,
             pass,
             low,
-            resolution: camera.resolution(),
         };
         if sphere_needs_no_clip(camera, patch.center, patch.radius) {
             // Every patch of a sampling view: packed projection, and the sub-pixel
@@ -865,24 +862,6 @@ impl ViewContext<'_> {
                     |tri| placer.place(keys, deferred, tri),
                 );
             }
-        }
-    }
-
-    /// Rasterizes one screen triangle with key low half `low` into `keys`.
-    #[inline(always)]
-    fn scan(
-        &self,
-        screen: [ScreenVertex; 3],
-        area: i64,
-        low: u32,
-        resolution: u32,
-        keys: &mut KeyBuffer,
-    ) {
-        let plot = |index, q, covered| keys.plot(index, q, low, covered);
-        if self.options.conservative {
-            scan_triangle_conservative(screen, resolution, plot);
-        } else {
-            scan_triangle_with_area(screen, area, resolution, DEFAULT_PATHS, plot);
         }
     }
 
