@@ -712,14 +712,13 @@ impl ViewContext<'_> {
         for w in 0..view.drawn.len() {
             for k in Patches::of_bits(&[view.drawn[w]]) {
                 let p = w * 64 + k as usize;
+                let patch = &self.tiling.patches[p];
+                let bounds = camera.sphere_bounds(patch.center, patch.radius);
                 // A cube face of a near view sees only some of the patches.
-                if near && {
-                    let patch = &self.tiling.patches[p];
-                    camera.sphere_bounds(patch.center, patch.radius) == SphereBounds::Outside
-                } {
+                if near && bounds == SphereBounds::Outside {
                     continue;
                 }
-                self.draw_patch(p, camera, view, draw, Pass::First);
+                self.draw_patch(p, bounds, camera, view, draw, Pass::First);
             }
         }
         view.keys.build_tiles();
@@ -735,10 +734,11 @@ impl ViewContext<'_> {
                 let p = w * 64 + k as usize;
                 let patch = &self.tiling.patches[p];
                 // The sphere first (cheap), then the tighter box (8 projections).
-                let visible = !hidden(camera.sphere_bounds(patch.center, patch.radius), &view.keys)
+                let bounds = camera.sphere_bounds(patch.center, patch.radius);
+                let visible = !hidden(bounds, &view.keys)
                     && !hidden(camera.hull_bounds(&self.boxes[p].corners()), &view.keys);
                 if visible {
-                    self.draw_patch(p, camera, view, draw, Pass::Tested);
+                    self.draw_patch(p, bounds, camera, view, draw, Pass::Tested);
                 }
             }
         }
@@ -753,18 +753,21 @@ impl ViewContext<'_> {
         }
     }
 
-    /// Draws the triangles of patch `p` into `view`'s key buffer: in the first pass all but
-    /// those facing away (which go to `view.deferred`), in the tested pass those the
-    /// occlusion tiles do not hide.
+    /// Draws the triangles of patch `p`, within `bounds` (its sphere's), into `view`'s key
+    /// buffer: in the first pass all but those facing away (which go to `view.deferred`), in
+    /// the tested pass those the occlusion tiles do not hide.
     fn draw_patch(
         &self,
         p: usize,
+        bounds: SphereBounds,
         camera: &Camera,
         view: &mut ViewScratch,
         draw: &mut DrawScratch,
         pass: Pass,
     ) {
         let ViewScratch { keys, deferred, .. } = view;
+        // Where its triangles, the put-off ones included, may write.
+        keys.mark(bounds);
         let DrawScratch {
             candidates,
             projected,
