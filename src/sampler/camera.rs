@@ -387,7 +387,9 @@ impl Camera {
         if x1 < 0.0 || y1 < 0.0 || x0 > last || y0 > last {
             return SphereBounds::Outside;
         }
-        let clamp = |v: f64| v.clamp(0.0, last).floor() as usize;
+        // Truncation is the floor of a clamped (non-negative) value, and needs no call to
+        // libm's `floor` (baseline x86-64 has no rounding instruction).
+        let clamp = |v: f64| v.clamp(0.0, last) as usize;
         SphereBounds::Rect {
             rect: [clamp(x0), clamp(y0), clamp(x1), clamp(y1)],
             nearest: (1.0 + SPHERE_DEPTH_SLACK) / w_near,

@@ -292,6 +292,7 @@ fn sample_rows(
         options,
         marks,
         back_winding: back_winding(mesh),
+        patch_ball: patch_ball(tiling),
         probe: options
             .probe
             .map(|radius| probe::Probe::new(radius, params, &pass, options, mesh, tiling)),
@@ -431,6 +432,8 @@ struct ViewContext<'a> {
     back_winding: i64,
     /// The probe pass, if any.
     probe: Option<probe::Probe>,
+    /// A ball holding every patch's bounding ball ([`patch_ball`]).
+    patch_ball: ([f32; 3], f32),
 }
 
 /// One view's buffers.
@@ -441,6 +444,8 @@ struct ViewScratch {
     drawn: Vec<u64>,
     /// First-pass triangles put off as facing away: screen corners and key low half.
     deferred: Vec<([ScreenVertex; 3], u32)>,
+    /// Whether the camera being drawn needs no clipping for any patch (`patch_ball`).
+    no_clip: bool,
 }
 
 /// What drawing one patch needs besides its view's buffers.
@@ -479,6 +484,7 @@ impl WorkerScratch {
                 keys: KeyBuffer::new(resolution),
                 drawn: vec![0; words],
                 deferred: Vec::new(),
+                no_clip: false,
             },
             draw: DrawScratch {
                 candidates: Box::new([0; CANDIDATE_BATCH]),
@@ -520,6 +526,43 @@ fn back_winding(mesh: &Mesh) -> i64 {
         })
         .sum();
     if volume < 0.0 { -1 } else { 1 }
+}
+
+/// A ball (centre, radius) holding every patch's bounding ball: a camera for which it needs
+/// no clipping ([`sphere_needs_no_clip`], every sampling view's camera) needs none for any
+/// patch, which is then tested once per camera instead of once per patch drawn.
+fn patch_ball(tiling: &Tiling) -> ([f32; 3], f32) {
+    let Some(first) = tiling.patches.first() else {
+        return ([0.0; 3], 0.0);
+    };
+    let (mut lo, mut hi) = (first.center, first.center);
+    for p in &tiling.patches {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p.center[k]);
+            hi[k] = hi[k].max(p.center[k]);
+        }
+    }
+    let center: [f32; 3] = std::array::from_fn(|k| lo[k] + (hi[k] - lo[k]) * 0.5);
+    let radius = tiling
+        .patches
+        .iter()
+        .map(|p| {
+            let d: f64 = (0..3)
+                .map(|k| (f64::from(p.center[k]) - f64::from(center[k])).powi(2))
+                .sum();
+            d.sqrt() + f64::from(p.radius)
+        })
+        .fold(0.0, f64::max);
+    // Rounded up to the next `f32`: the ball still holds every patch's.
+    let r = radius as f32;
+    (
+        center,
+        if f64::from(r) < radius {
+            r.next_up()
+        } else {
+            r
+        },
+    )
 }
 
 /// Whether contents within `bounds` provably change no pixel of `keys` (by its tiles).
@@ -694,6 +737,8 @@ impl ViewContext<'_> {
         let valid = |w: usize| valid_bits(w, patch_count);
         let WorkerScratch { view, draw, .. } = scratch;
         view.deferred.clear();
+        let (center, radius) = self.patch_ball;
+        view.no_clip = sphere_needs_no_clip(camera, center, radius);
         // A hinted patch that wholly faces away makes a poor occluder and is often hidden: it
         // is left to the tested pass. Always-visible patches are always drawn first.
         let eye = camera.eye();
@@ -765,7 +810,12 @@ impl ViewContext<'_> {
         draw: &mut DrawScratch,
         pass: Pass,
     ) {
-        let ViewScratch { keys, deferred, .. } = view;
+        let ViewScratch {
+            keys,
+            deferred,
+            no_clip,
+            ..
+        } = view;
         // Where its triangles, the put-off ones included, may write.
         keys.mark(bounds);
         let DrawScratch {
@@ -781,7 +831,7 @@ impl ViewContext<'_> {
             pass,
             low,
         };
-        if sphere_needs_no_clip(camera, patch.center, patch.radius) {
+        if *no_clip || sphere_needs_no_clip(camera, patch.center, patch.radius) {
             // Every patch of a sampling view: packed projection, and the sub-pixel
             // triangles (most of a mesh much finer than the image) leave after a box test.
             // Three loops, by how often a triangle holds a centre (`BoxTest`).
