@@ -528,6 +528,10 @@ fn back_winding(mesh: &Mesh) -> i64 {
     if volume < 0.0 { -1 } else { 1 }
 }
 
+/// Patches of at most this many triangles skip the test of their oriented box, whose eight
+/// projections cost more than the test of their vertices' extent that follows it.
+const FEW_TRIANGLES: u32 = 4;
+
 /// A ball (centre, radius) holding every patch's bounding ball: a camera for which it needs
 /// no clipping ([`sphere_needs_no_clip`], every sampling view's camera) needs none for any
 /// patch, which is then tested once per camera instead of once per patch drawn.
@@ -778,10 +782,12 @@ impl ViewContext<'_> {
             for k in Patches::of_bits(&[!view.drawn[w] & valid(w)]) {
                 let p = w * 64 + k as usize;
                 let patch = &self.tiling.patches[p];
-                // The sphere first (cheap), then the tighter box (8 projections).
+                // The sphere first (cheap), then the tighter box (8 projections; a patch of a
+                // few triangles is tested by its vertices' extent next instead).
                 let bounds = camera.sphere_bounds(patch.center, patch.radius);
                 let visible = !hidden(bounds, &view.keys)
-                    && !hidden(camera.hull_bounds(&self.boxes[p].corners()), &view.keys);
+                    && (patch.count <= FEW_TRIANGLES
+                        || !hidden(camera.hull_bounds(&self.boxes[p].corners()), &view.keys));
                 if visible {
                     self.draw_patch(p, bounds, camera, view, draw, Pass::Tested);
                 }

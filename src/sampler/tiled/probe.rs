@@ -28,7 +28,7 @@
 //! `CELL_PER_EDGE · edge · distance` around the eye. Every camera of a near view's cube map is
 //! probed, each against its own shrunk occluders.
 
-use super::{ViewContext, WorkerScratch, hidden, project_up_to, valid_bits};
+use super::{FEW_TRIANGLES, ViewContext, WorkerScratch, hidden, project_up_to, valid_bits};
 use crate::runtime::Patches;
 use crate::sampler::SamplingOptions;
 use crate::sampler::camera::{Camera, SphereBounds};
@@ -151,6 +151,8 @@ impl ViewContext<'_> {
             .solids
             .openings(camera, cell, probe.radius + 1, &ps.guard, &mut ps.openings);
         let guard = &ps.guard;
+        // The render of this camera tested its clipping for every patch at once.
+        let no_clip = scratch.view.no_clip;
         let screen = &mut scratch.draw.screen;
         let projected = &mut scratch.draw.projected;
         let patch_count = self.mesh.patch_count();
@@ -214,13 +216,14 @@ impl ViewContext<'_> {
                 cell,
                 openings,
             ) || hidden(bounds, guard)
-                || hidden(camera.hull_bounds(&self.boxes[p].corners()), guard)
+                || (patch.count > FEW_TRIANGLES
+                    && hidden(camera.hull_bounds(&self.boxes[p].corners()), guard))
             {
                 continue;
             }
             let mut found = false;
             let mut k = patch.first as usize;
-            if sphere_needs_no_clip(camera, patch.center, patch.radius) {
+            if no_clip || sphere_needs_no_clip(camera, patch.center, patch.radius) {
                 // Cluster by cluster, each first by the extent of the vertices holding its
                 // corners, projected only as far as the clusters tested so far use them (a
                 // hidden patch's clusters mostly lie wholly behind the shrunk occluders).
