@@ -4,11 +4,12 @@
 //! `cargo run --release --example zoo -- [--views N] [--seed S] [--modes default,conservative]
 //! [--models LIST] [--triangles T] [--shells N] [--json OUT.json] [--keep DIR]`
 //!
-//! Modes: `default`, `conservative`, `level5` (`--level 5 --probe 1 --fold-corners split`, the
-//! tightest setting measured that keeps ≥ 99 % of the views identical), `centroids` (the same
-//! with `--finer-views centroids`, two thirds of its finer views), and baselines measured
-//! in the same run: `thresholded` (the default before issue 20), `plain` (`--probe off`) and
-//! `conservative-all` (`--conservative` with the all-corner fold it had before the split fold).
+//! Modes: `default`, `conservative`, `level5` (`--level 5 --probe 1 --fold-corners split`),
+//! `centroids` (the same with `--finer-views centroids`, two thirds of its finer views: the
+//! files `--conservative` bakes), and baselines measured in the same run: `thresholded` (the
+//! default before issue 20), `plain` (`--probe off`), `probe2-split` (`--probe 2
+//! --fold-corners split`, `--conservative` before 2026-12-06) and `conservative-all`
+//! (`--conservative` with the all-corner fold).
 //!
 //! The zoo is the bundled `assets/bunny.ply` (a dense scan), `assets/ant.ply` (thin legs and
 //! antennae) and `assets/airplane.ply` (few large triangles, thin wings), plus two generated
@@ -25,7 +26,7 @@
 //! generated meshes and the `.pvis` files go to a temporary directory, or to `--keep DIR`.
 //!
 //! Cost: per model and mode one bake (level 4 supersampled from level 5: 5,124 ID buffers at
-//! 512², and with `--conservative` the probe pass over each; `level5` renders 16,386,
+//! 512², and the probe pass over each; `level5` renders 16,386, `conservative` and
 //! `centroids` 12,290) and 2 × 2 × N renders (full and culled, at 1× and 2×). On 2 cores the
 //! full default run takes about 5 minutes, two thirds of it baking; `--views 30 --models
 //! bunny,ant` takes about 2.
@@ -88,8 +89,11 @@ enum Mode {
     /// pixel, the split fold.
     Level5,
     /// `level5` with `--finer-views centroids`: the finer views at the level-5 faces'
-    /// centroids instead of level 6's vertices.
+    /// centroids instead of level 6's vertices: `--conservative`'s files.
     Centroids,
+    /// `--probe 2 --fold-corners split`: `--conservative` before it took level 5 and the
+    /// centroids (2026-12-06).
+    Probe2Split,
 }
 
 impl Mode {
@@ -102,6 +106,7 @@ impl Mode {
             Mode::Plain => "plain",
             Mode::Level5 => "level5",
             Mode::Centroids => "centroids",
+            Mode::Probe2Split => "probe2-split",
         }
     }
 }
@@ -278,23 +283,24 @@ fn bake_and_eval(
             Mode::Thresholded | Mode::Plain => Probe::Off,
             Mode::Default | Mode::Conservative | Mode::ConservativeAll => Probe::Default,
             Mode::Level5 | Mode::Centroids => Probe::Pixels(1),
+            Mode::Probe2Split => Probe::Pixels(2),
         },
         fold_min_pixels: (mode == Mode::Thresholded).then_some(4),
         fold_corners: match mode {
             Mode::Thresholded => Some(FoldCorners::One),
             Mode::ConservativeAll => Some(FoldCorners::All),
-            Mode::Level5 | Mode::Centroids => Some(FoldCorners::Split),
+            Mode::Level5 | Mode::Centroids | Mode::Probe2Split => Some(FoldCorners::Split),
             Mode::Default | Mode::Conservative | Mode::Plain => None,
         },
-        level: if matches!(mode, Mode::Level5 | Mode::Centroids) {
-            5
-        } else {
-            BakeSettings::default().level
+        level: match mode {
+            Mode::Level5 | Mode::Centroids => 5,
+            Mode::Conservative | Mode::ConservativeAll => BakeSettings::conservative().level,
+            _ => BakeSettings::default().level,
         },
-        finer_views: if mode == Mode::Centroids {
-            FinerViews::Centroids
-        } else {
-            FinerViews::Midpoints
+        finer_views: match mode {
+            Mode::Centroids => Some(FinerViews::Centroids),
+            Mode::Level5 => Some(FinerViews::Midpoints),
+            _ => None,
         },
         shells,
         memory,

@@ -205,27 +205,30 @@ const CONSERVATIVE: [&str; 9] = [
     "1",
 ];
 
-/// `--conservative`'s split fold: each pass's rows before the probe travel as a second pass,
-/// for the sampling sphere and a shell; three shards on one and two threads merge into the
-/// single bake.
+/// `--conservative`'s split fold with the finer level's vertices for finer views: each pass's
+/// rows before the probe travel as a second pass, for the sampling sphere and a shell; three
+/// shards on one and two threads merge into the single bake.
 #[test]
 fn conservative_split_passes_merge_into_the_single_bake() {
     let dir = TempDir::new().unwrap();
-    three_shards_merge_into_the_single_bake(dir.path(), &CONSERVATIVE);
+    let mut flags = CONSERVATIVE.to_vec();
+    flags.extend_from_slice(&["--finer-views", "midpoints"]);
+    three_shards_merge_into_the_single_bake(dir.path(), &flags);
 }
 
-/// `--finer-views centroids`: the sampling sphere's finer pass renders the stored faces'
-/// centroids (its shell the finer vertices); three shards, each rendering its centroids and
-/// the corners seeding them, merge into the single bake, which is not the midpoints'.
+/// `--conservative`'s centroid finer views: the sampling sphere's finer pass renders the
+/// stored faces' centroids (its shell the finer vertices); three shards, each rendering its
+/// centroids and the corners seeding them, merge into the single bake, which is not the
+/// midpoints'.
 #[test]
 fn centroid_finer_views_merge_into_the_single_bake() {
     let dir = TempDir::new().unwrap();
-    let mut flags = CONSERVATIVE.to_vec();
-    flags.extend_from_slice(&["--finer-views", "centroids"]);
-    let centroids = three_shards_merge_into_the_single_bake(dir.path(), &flags);
+    let centroids = three_shards_merge_into_the_single_bake(dir.path(), &CONSERVATIVE);
+    let mut midpoints = CONSERVATIVE.to_vec();
+    midpoints.extend_from_slice(&["--finer-views", "midpoints"]);
     assert!(
-        single(dir.path(), &CONSERVATIVE, "2") != centroids,
-        "the flag changed nothing"
+        single(dir.path(), &midpoints, "2") != centroids,
+        "the finer views changed nothing"
     );
 }
 

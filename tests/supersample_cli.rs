@@ -2,7 +2,7 @@
 //! file keeps the stored level's views, each row contains the plain bake's row of that view,
 //! the rows are exactly the fold of a plain bake at the finer level (with `--fold-min-pixels`:
 //! of a thresholded one into the plain stored rows), the default is the flag combination it is
-//! documented as, `--conservative`'s rows hold those of the default without its probe pass,
+//! documented as, and so is `--conservative`, whose rows hold more than the plain bake's,
 //! the stats record it, and out-of-range values are usage errors. The fold's tests sample
 //! plainly (`--probe off`) unless they ask for a probe, and keep the rows as sampled
 //! (`--sampled-rows`): the fold is what they check. The default's rows are those saturated.
@@ -254,8 +254,9 @@ fn defaults_and_conservative_are_the_documented_flag_combinations() {
     let default = bake(&["--level", "1"]);
     let spelled = bake(&folded_level_1("0", "all"));
     assert_eq!(default.bytes(), spelled.bytes());
-    // --conservative: the probe pass at 2 pixels, at the same resolution. Every row holds
-    // the all-corner fold's, and the probe finds more on the bunny.
+    // --conservative: the probe pass at 1 pixel with the split fold and the stored faces'
+    // centroids for finer views, at the same resolution, shells included; its rows hold more
+    // than the plain bake's.
     let conservative = bake(&["--level", "1", "--conservative"]);
     assert_eq!(
         Pvis::parse(&conservative.bytes())
@@ -266,21 +267,19 @@ fn defaults_and_conservative_are_the_documented_flag_combinations() {
     );
     let ((level, probed), (_, plain)) = (rows(&conservative), rows(&default));
     assert_eq!(level, 1);
-    for (a, b) in probed.words().iter().zip(plain.words()) {
-        assert_eq!(
-            a & b,
-            *b,
-            "a conservative row lacks a patch the default has"
-        );
-    }
     assert!(probed.count_ones() > plain.count_ones());
-    // --probe 2 with the split fold is --conservative, byte for byte; --probe alone folds
-    // with the cover fold, which keeps fewer bits than the split fold of the same rows.
-    let spelled = bake(&["--level", "1", "--probe", "2", "--fold-corners", "split"]);
+    let centroids = ["--level", "1", "--finer-views", "centroids", "--probe", "1"];
+    let spelled = bake(&[&centroids[..], &["--fold-corners", "split"]].concat());
     assert_eq!(spelled.bytes(), conservative.bytes());
-    let covered = bake(&["--level", "1", "--probe", "2"]);
-    let (_, covered) = rows(&covered);
+    // --probe alone folds with the cover fold, which keeps fewer bits than the split fold of
+    // the same rows.
+    let (_, covered) = rows(&bake(&centroids));
     assert!(covered.count_ones() < probed.count_ones());
+    // Unless --level is given, --conservative stores level 5, its shells level 4.
+    let five = bake(&["--conservative", "--shells", "1"]).bytes();
+    let file = Pvis::parse(&five).unwrap();
+    assert_eq!(file.sampling().level, 5);
+    assert_eq!((file.shell(0).level, file.shell(1).level), (5, 4));
 }
 
 #[test]

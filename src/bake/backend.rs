@@ -41,7 +41,7 @@ pub(crate) fn cpu_only_option(settings: &BakeSettings) -> Option<&'static str> {
         Some("--conservative-raster")
     } else if settings.resume {
         Some("--resume")
-    } else if settings.finer_views == crate::sampler::FinerViews::Centroids {
+    } else if settings.finer_views == Some(crate::sampler::FinerViews::Centroids) {
         Some("--finer-views centroids")
     } else {
         None
@@ -168,11 +168,11 @@ mod tests {
         assert_eq!(with(|_| {}), None);
         assert_eq!(with(|s| s.conservative = true), Some("--conservative"));
         assert_eq!(
-            with(|s| s.finer_views = FinerViews::Centroids),
+            with(|s| s.finer_views = Some(FinerViews::Centroids)),
             Some("--finer-views centroids")
         );
         let centroids = BakeSettings {
-            finer_views: FinerViews::Centroids,
+            finer_views: Some(FinerViews::Centroids),
             ..BakeSettings::default()
         };
         let err = Backend::open(BackendChoice::Gpu, &centroids).unwrap_err();

@@ -308,7 +308,7 @@ fn recipe_of(part: &Part) -> Result<Recipe, String> {
         view_supersample: Some(s.extra_levels),
         fold_min_pixels: Some(s.fold_min_pixels),
         fold_corners: Some(s.fold_corners),
-        finer_views: s.finer_views,
+        finer_views: Some(s.finer_views),
         patch_order: s.patch_order,
         encoding: s.encoding,
         shells: s.shells,

@@ -55,9 +55,10 @@ pub use part::{Part, PartSettings, PassRows};
 pub use recipe::{Baked, BakedShell, Outputs, Recipe};
 pub use rows::{SampledRows, SampledShell};
 pub use settings::{
-    BakeSettings, CONSERVATIVE_PROBE_PIXELS, DEFAULT_FOLD_CORNERS, DEFAULT_FOLD_MIN_PIXELS,
-    DEFAULT_PROBE_PIXELS, DEFAULT_VIEW_SUPERSAMPLE, MIN_RESOLUTION, PROBE_FOLD_CORNERS,
-    PassCheckpoints, PatchOrder, Probe, SettingsError, Supersample, WARN_RESOLUTION,
+    BakeSettings, CONSERVATIVE_LEVEL, CONSERVATIVE_PROBE_PIXELS, DEFAULT_FOLD_CORNERS,
+    DEFAULT_FOLD_MIN_PIXELS, DEFAULT_LEVEL, DEFAULT_PROBE_PIXELS, DEFAULT_VIEW_SUPERSAMPLE,
+    MIN_RESOLUTION, PROBE_FOLD_CORNERS, PassCheckpoints, PatchOrder, Probe, SettingsError,
+    Supersample, WARN_RESOLUTION,
 };
 pub use shard::{SHARD_COUNT_ENV, Shard, ShardError};
 pub use shard_run::ShardBaked;

@@ -15,6 +15,15 @@ use std::path::PathBuf;
 use super::shells::{DEFAULT_SHELL_MIN, DEFAULT_SHELLS, MAX_SHELLS};
 use super::{MemoryBudget, Recipe};
 
+/// `--level` unless given: 1,026 stored views.
+pub const DEFAULT_LEVEL: u32 = 4;
+/// `--level` unless given, with `--conservative` ([`BakeSettings::conservative`]): sphere faces
+/// half as wide as [`DEFAULT_LEVEL`]'s. A conservative level-4 file culls 12–14 points below
+/// the ideal on the model zoo, and even the rows of 45 views a face, folded into its corners,
+/// leave no room for a probe within 10 points; at level 5 with centroid finer views
+/// `--conservative` culls within 7.6–9.8 points (BENCHMARKS.md, "Quality on the model zoo").
+pub const CONSERVATIVE_LEVEL: u32 = 5;
+
 /// `--view-supersample` unless given: one level finer, which removes most misses between the
 /// stored views for ~4× the sampling time (BENCHMARKS.md, "Quality").
 pub const DEFAULT_VIEW_SUPERSAMPLE: u32 = 1;
@@ -38,10 +47,11 @@ pub const CONSERVATIVE_FOLD_CORNERS: FoldCorners = FoldCorners::Split;
 pub const PROBE_FOLD_CORNERS: FoldCorners = FoldCorners::Cover;
 /// `--conservative`'s probe pass shrinks each view's occluders by this many pixels
 /// (`sampler/tiled/probe.rs`). 0 catches sub-pixel parts only; more also the parts about to
-/// come out from behind an edge. The generated exposed engine's views at 2× the resolution
-/// are 97.3 % identical at 0, 98.7 % at 1 and 99.3 % at 2, for 1.3 points of culling from 1
-/// to 2 (BENCHMARKS.md, "Quality on the model zoo").
-pub const CONSERVATIVE_PROBE_PIXELS: u32 = 2;
+/// come out from behind an edge. With [`CONSERVATIVE_LEVEL`]'s centroid finer views every zoo
+/// model keeps ≥ 99 % of its views identical at 1 pixel; at level 4, with the edge midpoints
+/// for finer views, the exposed engine needed 2 (97.3 % identical at 0, 98.7 % at 1 and
+/// 99.3 % at 2; BENCHMARKS.md, "Quality on the model zoo").
+pub const CONSERVATIVE_PROBE_PIXELS: u32 = 1;
 /// The default bake's probe pass shrinks occluders by this many pixels. With the cover fold,
 /// every zoo model misses at most 0.4 pixels a view on average at 1× and 2× the resolution
 /// (p99 ≤ 2), the bunny culls 45.3 % (45.4 % without the probe), and the bunny's bake takes
@@ -108,7 +118,10 @@ pub struct BakeSettings {
     /// Patches never culled, in the tiling's spatial numbering (`--always-visible`).
     pub always_visible: Vec<PatchId>,
     /// The probe pass over every sphere of views, with occluders shrunk by
-    /// [`CONSERVATIVE_PROBE_PIXELS`], and the split fold (`--conservative`).
+    /// [`CONSERVATIVE_PROBE_PIXELS`], the split fold, the stored faces' centroids for finer
+    /// views (unless `finer_views` says otherwise) and shells at most at [`DEFAULT_LEVEL`]
+    /// (`--conservative`). Meant for [`CONSERVATIVE_LEVEL`], which
+    /// [`BakeSettings::conservative`] sets and `--conservative` defaults to.
     pub conservative: bool,
     /// The probe pass (`--probe`): the default's, off, or with occluders shrunk by a number of
     /// pixels; only the default with `conservative`.
@@ -126,8 +139,9 @@ pub struct BakeSettings {
     pub fold_corners: Option<FoldCorners>,
     /// Where the sampling sphere's finer views lie (`--finer-views`): the finer level's
     /// vertices, or, with one finer level, the centroids of the stored faces
-    /// (`sampler::FinerViews`). The shells' finer views are always the vertices.
-    pub finer_views: FinerViews,
+    /// (`sampler::FinerViews`); `None`: the centroids with `conservative` and one finer level,
+    /// else the vertices. The shells' finer views are always the vertices.
+    pub finer_views: Option<FinerViews>,
     /// Patch numbering (`--patch-order`).
     pub patch_order: PatchOrder,
     /// VISB encoding (`--encoding`).
@@ -162,7 +176,7 @@ impl Default for BakeSettings {
     fn default() -> BakeSettings {
         BakeSettings {
             patches: 1000,
-            level: 4,
+            level: DEFAULT_LEVEL,
             resolution: 512,
             fov_deg: 45.0,
             min_pixels: 0,
@@ -174,7 +188,7 @@ impl Default for BakeSettings {
             view_supersample: None,
             fold_min_pixels: None,
             fold_corners: None,
-            finer_views: FinerViews::Midpoints,
+            finer_views: None,
             patch_order: PatchOrder::default(),
             encoding: VisibilityEncoding::Tree,
             tiling: TilingMode::Auto,
@@ -265,6 +279,27 @@ impl Supersample {
 }
 
 impl BakeSettings {
+    /// `--conservative`'s settings: [`BakeSettings::default`] with `conservative` and
+    /// [`CONSERVATIVE_LEVEL`].
+    pub fn conservative() -> BakeSettings {
+        BakeSettings {
+            conservative: true,
+            level: CONSERVATIVE_LEVEL,
+            ..BakeSettings::default()
+        }
+    }
+
+    /// The shells' stored level: `shell_level`, else the stored level, with `conservative`
+    /// at most [`DEFAULT_LEVEL`] (each near view renders several frustums, and the shells'
+    /// figures were measured at that level).
+    pub fn shell_level_or_default(&self) -> u32 {
+        self.shell_level.unwrap_or(if self.conservative {
+            self.level.min(DEFAULT_LEVEL)
+        } else {
+            self.level
+        })
+    }
+
     /// The probe pass's occluder shrink in pixels, `None` for none: `--probe`'s,
     /// [`CONSERVATIVE_PROBE_PIXELS`] with `--conservative`, else [`DEFAULT_PROBE_PIXELS`]
     /// (which [`Recipe::for_mesh`] may turn off).
@@ -322,7 +357,7 @@ impl BakeSettings {
         if self.conservative && self.probe != Probe::Default {
             return fail(
                 "--probe with --conservative: expected one of them (--conservative is the probe \
-                 pass at 2 pixels with the split fold)"
+                 pass at 1 pixel with the split fold and centroid finer views)"
                     .into(),
             );
         }
@@ -364,14 +399,21 @@ impl BakeSettings {
                 finer: FinerViews::Midpoints,
             }
         };
-        if self.finer_views == FinerViews::Centroids && extra_levels != 1 {
+        let finer_views = self
+            .finer_views
+            .unwrap_or(if self.conservative && extra_levels == 1 {
+                FinerViews::Centroids
+            } else {
+                FinerViews::Midpoints
+            });
+        if finer_views == FinerViews::Centroids && extra_levels != 1 {
             return fail(format!(
                 "--finer-views centroids with --view-supersample {extra_levels}: expected one \
                  finer level (the centroids of the stored faces)"
             ));
         }
         let supersample = Supersample {
-            finer: self.finer_views,
+            finer: finer_views,
             ..resolve(extra_levels)
         };
         if self.shells > MAX_SHELLS {
@@ -396,7 +438,7 @@ impl BakeSettings {
             ));
         }
         // The shells' supersampling is the stored level's, capped at the finest level.
-        let shell_level = self.shell_level.unwrap_or(self.level);
+        let shell_level = self.shell_level_or_default();
         // Split needs the probe's rows: asking for it makes the probe a must.
         let default_probe = self.probe == Probe::Default
             && !self.conservative
@@ -531,7 +573,11 @@ mod tests {
         })
         .unwrap_err();
         assert!(err.0.contains("--view-supersample 1"), "{}", err.0);
-        let c = check(|s| s.conservative = true).unwrap();
+        let c = check(|s| {
+            s.conservative = true;
+            s.level = CONSERVATIVE_LEVEL
+        })
+        .unwrap();
         assert_eq!(
             (
                 c.supersample.extra_levels,
@@ -541,12 +587,40 @@ mod tests {
             (DEFAULT_VIEW_SUPERSAMPLE, 0, 512)
         );
         assert_eq!(c.probe(), Some(CONSERVATIVE_PROBE_PIXELS));
-        // The split fold: the finer pass keeps its seen rows, in a checkpoint of its own.
-        let suffix = format!(".p{CONSERVATIVE_PROBE_PIXELS}.vs1.split.ckpt");
+        // The centroids of the stored faces for finer views, and the split fold: the finer
+        // pass keeps its seen rows, in a checkpoint of its own.
+        assert_eq!(c.supersample.finer, FinerViews::Centroids);
+        let suffix = format!(".p{CONSERVATIVE_PROBE_PIXELS}.vs1.centroids.split.ckpt");
         assert_eq!(c.fine_checkpoint, Some(format!("out.pvis{suffix}").into()));
         assert!(!c.settings.conservative_raster);
         assert_eq!(c.supersample.fold_corners, FoldCorners::Split);
-        assert_eq!(c.pass_levels()[..2], [5, 5]);
+        assert_eq!(c.pass_levels()[..2], [6, 6]);
+        // The shells stay at the default level, with the vertices for finer views.
+        assert_eq!(c.shell_level(), DEFAULT_LEVEL);
+        assert_eq!(c.shell_supersample.finer, FinerViews::Midpoints);
+        assert_eq!(
+            c.settings,
+            BakeSettings {
+                checkpoint: Some("out.pvis".into()),
+                ..BakeSettings::conservative()
+            }
+        );
+        // Finer views asked for, and a level with no finer one, keep the vertices.
+        let asked = check(|s| {
+            s.conservative = true;
+            s.finer_views = Some(FinerViews::Midpoints)
+        })
+        .unwrap();
+        assert_eq!(asked.supersample.finer, FinerViews::Midpoints);
+        let finest = check(|s| {
+            s.conservative = true;
+            s.level = MAX_LEVEL
+        })
+        .unwrap();
+        assert_eq!(
+            (finest.supersample.extra_levels, finest.supersample.finer),
+            (0, FinerViews::Midpoints)
+        );
         // Asked for without the probe, or with a fold threshold: refused.
         let err = check(|s| {
             s.probe = Probe::Off;
@@ -670,7 +744,7 @@ mod tests {
     #[test]
     fn centroid_finer_views_need_one_finer_level_and_leave_the_shells_alone() {
         let c = check(|s| {
-            s.finer_views = FinerViews::Centroids;
+            s.finer_views = Some(FinerViews::Centroids);
             s.shells = 1
         })
         .unwrap();
@@ -682,7 +756,7 @@ mod tests {
         );
         for k in [0, 2] {
             let err = check(|s| {
-                s.finer_views = FinerViews::Centroids;
+                s.finer_views = Some(FinerViews::Centroids);
                 s.view_supersample = Some(k)
             })
             .unwrap_err();
@@ -697,7 +771,7 @@ mod tests {
         // At the finest level there is no finer one.
         assert!(
             check(|s| {
-                s.finer_views = FinerViews::Centroids;
+                s.finer_views = Some(FinerViews::Centroids);
                 s.level = MAX_LEVEL
             })
             .is_err()
@@ -738,8 +812,8 @@ mod tests {
         assert_eq!(
             c.shell_checkpoints,
             vec![PassCheckpoints {
-                coarse: Some("out.pvis.shell1.p2.ckpt".into()),
-                fine: Some("out.pvis.shell1.p2.vs1.m4.ckpt".into()),
+                coarse: Some("out.pvis.shell1.p1.ckpt".into()),
+                fine: Some("out.pvis.shell1.p1.vs1.m4.ckpt".into()),
             }]
         );
         assert_eq!(c.pass_levels(), vec![4, 5, 4, 5]);

@@ -105,9 +105,9 @@ pub fn bands(outer: f32, shells: &[f32]) -> Vec<Option<[f32; 2]>> {
 /// The shells' part of a [`Recipe`]: their level, distances and sampling passes, and what
 /// each adds to the file.
 impl Recipe {
-    /// The shells' stored sphere level (`--shell-level`, else the stored level).
+    /// The shells' stored sphere level ([`super::BakeSettings::shell_level_or_default`]).
     pub fn shell_level(&self) -> u32 {
-        self.settings.shell_level.unwrap_or(self.settings.level)
+        self.settings.shell_level_or_default()
     }
 
     /// The shells' camera distances for the sampling sphere `params`, outermost first

@@ -48,8 +48,9 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = 1000, value_name = "N")]
     pub patches: u32,
     /// Sphere subdivision level: 0..=7 gives 6, 18, 66, 258, 1026, 4098, 16386, 65538 views.
-    #[arg(long, default_value_t = 4, value_name = "L")]
-    pub level: u32,
+    /// [default: 4; 5 with --conservative]
+    #[arg(long, value_name = "L")]
+    pub level: Option<u32>,
     /// ID-buffer width and height in pixels.
     #[arg(long, default_value_t = 512, value_name = "PX")]
     pub resolution: u32,
@@ -87,23 +88,26 @@ pub struct BakeArgs {
     /// which a bake with `--patch-order spatial --mesh-out M.ply` shows.
     #[arg(long, value_name = "IDS|FILE")]
     pub always_visible: Option<String>,
-    /// Conservative mode: the default bake's probe pass at 2 pixels, with the split fold, on
-    /// any mesh --memory holds. After each sampled view (the stored level and the folded finer
-    /// one), every patch the view did not show is drawn again with conservative rasterization
-    /// (any part of a pixel, not only its centre) against the view's depths shrunk by 2
-    /// pixels, and added if a fragment lies in front.
-    /// Only triangles whose visible side may face a camera within 0.6 of a sphere-face edge of
-    /// the view are drawn: the outside of their solid, or its inside through an opening.
+    /// Conservative mode: stored level 5 (unless --level), the stored faces' centroids for
+    /// the finer views (unless --finer-views), the probe pass at 1 pixel with the split fold,
+    /// on any mesh --memory holds; shells at level 4 at most (unless --shell-level).
+    /// After each sampled view (the stored level's and the centroids), every patch the view
+    /// did not show is drawn again with conservative rasterization (any part of a pixel, not
+    /// only its centre) against the view's depths shrunk by 1 pixel, and added if a fragment
+    /// lies in front. Only triangles whose visible side may face a camera of the sphere faces
+    /// around the view are drawn: the outside of their solid, or its inside through an
+    /// opening.
     /// What it guarantees: every patch that touches a pixel of a sampled view, or lies within
-    /// 2 pixels of coming out from behind an occluder's edge there, is in the answer for every
+    /// 1 pixel of coming out from behind an occluder's edge there, is in the answer for every
     /// direction of the sphere faces around that view, at the sampling distance (and, with
-    /// shells, nearer). What it does not: a part that comes out by more than 2 pixels between
+    /// shells, nearer). What it does not: a part that comes out by more than 1 pixel between
     /// sampled views, and, without --far-views, rim that only cameras farther than the
     /// sampling distance see.
     /// Measured residual (300 random views at the sampling distance, at --resolution and
-    /// twice it): ≥ 99 % of views pixel-identical on every model of the zoo; BENCHMARKS.md,
-    /// "Quality on the model zoo". 1.05–1.25× the default's bake time on the zoo, CPU backend
-    /// only, and about 60 bytes a triangle of heap while sampling.
+    /// twice it): ≥ 99 % of views pixel-identical on every model of the zoo, culling within
+    /// 10 points of the ideal (7.6–9.8 below); BENCHMARKS.md, "Quality on the model zoo".
+    /// Costs 2.3–3.0× the default's bake time without shells and 1.8–2.2× its file on the
+    /// zoo; CPU backend only, and about 60 bytes a triangle of heap while sampling.
     #[arg(long)]
     pub conservative: bool,
     /// The probe pass: after each view, every patch it did not show is drawn again with
@@ -166,8 +170,9 @@ pub struct BakeArgs {
     /// each folded into its face's three corners; every point of a face then lies within a
     /// third of an edge of a view, and the probe's cells grow to match. The sampling sphere
     /// only (shells sample their vertices); the CPU sampler only.
-    #[arg(long, value_enum, value_name = "WHERE", default_value = "midpoints")]
-    pub finer_views: FinerViewsArg,
+    /// [default: midpoints; centroids with --conservative]
+    #[arg(long, value_enum, value_name = "WHERE")]
+    pub finer_views: Option<FinerViewsArg>,
     /// Sampling shells for near cameras: N nested spheres of near views between the sampling
     /// sphere (distance D = R / sin(fov/2), R the bounding radius) and F·R (--shell-min), at
     /// D·(F·R/D)^(s/N) for s = 1..N. Each near view records every patch visible from its eye
@@ -183,7 +188,7 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = patchvis::bake::DEFAULT_SHELL_MIN, value_name = "F")]
     pub shell_min: f64,
     /// Sphere level of the shells' views (0..=7), supersampled and folded as the stored level
-    /// is. [default: --level]
+    /// is. [default: --level; with --conservative, --level but at most 4]
     #[arg(long, value_name = "L")]
     pub shell_level: Option<u32>,
     /// Continue an interrupted bake from its checkpoint (OUT.pvis.ckpt, written after every

@@ -26,7 +26,11 @@ use std::time::Instant;
 pub(super) fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
     Ok(BakeSettings {
         patches: args.patches,
-        level: args.level,
+        level: args.level.unwrap_or(if args.conservative {
+            patchvis::bake::CONSERVATIVE_LEVEL
+        } else {
+            patchvis::bake::DEFAULT_LEVEL
+        }),
         resolution: args.resolution,
         fov_deg: args.fov,
         min_pixels: args.min_pixels,
@@ -46,10 +50,10 @@ pub(super) fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
             FoldCornersArg::Split => FoldCorners::Split,
             FoldCornersArg::Cover => FoldCorners::Cover,
         }),
-        finer_views: match args.finer_views {
+        finer_views: args.finer_views.map(|f| match f {
             FinerViewsArg::Midpoints => FinerViews::Midpoints,
             FinerViewsArg::Centroids => FinerViews::Centroids,
-        },
+        }),
         patch_order: match args.patch_order {
             PatchOrderArg::Covisibility => PatchOrder::Covisibility,
             PatchOrderArg::Spatial => PatchOrder::Spatial,
