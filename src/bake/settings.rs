@@ -55,9 +55,8 @@ pub const CONSERVATIVE_PROBE_PIXELS: u32 = 1;
 /// The default bake's probe pass shrinks occluders by this many pixels. With the cover fold,
 /// every zoo model misses at most 0.4 pixels a view on average at 1× and 2× the resolution
 /// (p99 ≤ 2), the bunny culls 45.3 % (45.4 % without the probe), and the bunny's bake takes
-/// 1.07× the thresholded bake's time with `--shells 0` (1.17× with its two shells, which it
-/// probes too); at 0 pixels the exposed engine misses 2.1 pixels a view at 2× (BENCHMARKS.md,
-/// "The probe with the cover fold").
+/// 0.99× the filing-day default's time with `--shells 0`; at 0 pixels the exposed engine
+/// misses 2.1 pixels a view at 2× (BENCHMARKS.md, "The probe with the cover fold").
 pub const DEFAULT_PROBE_PIXELS: u32 = 1;
 
 /// Smallest `--resolution`: coarser ID buffers miss nearly every patch. Measured on the
