@@ -20,8 +20,8 @@
 //! pixels on the airplane, 30 % on the bunny. So each band of [`TILE`] rows keeps the span of
 //! columns its patches may have written ([`Span`]; every pixel outside it is empty), and the
 //! passes over whole images (draining, the tiles, the shrink) visit the spans alone. The
-//! spans grow by each drawn patch's screen rectangle ([`KeyBuffer::mark`]), not by each
-//! triangle's: a triangle's cost 1.04× the bunny's CPU time.
+//! spans grow by each drawn patch's screen rectangle ([`KeyBuffer::mark`]): once per patch,
+//! as widening them per triangle costs more than the passes save on dense meshes.
 
 use super::camera::SphereBounds;
 use super::conservative::scan_triangle_conservative;
@@ -137,6 +137,11 @@ impl Span {
         };
         if first < end { first..end } else { 0..0 }
     }
+}
+
+/// The columns of the tiles `tiles` of a band `n` pixels wide.
+fn tile_columns(tiles: &Range<usize>, n: usize) -> Range<usize> {
+    tiles.start * TILE..(tiles.end * TILE).min(n)
 }
 
 /// The rows of band `band` of a `n`-row image.
@@ -352,7 +357,7 @@ impl DepthBuffer {
         for (y, out) in depths.chunks_exact_mut(n).enumerate() {
             let own = span_of(y);
             let whole = own.whole_tiles(n, *tiles_per_row);
-            let tiled = whole.start * TILE..(whole.end * TILE).min(n);
+            let tiled = tile_columns(&whole, n);
             if y % TILE == 0 {
                 columns[tiled.clone()].fill(i32::MAX);
             }
@@ -502,7 +507,7 @@ impl<P: Pixel> KeyBuffer<P> {
         {
             tiles.fill(0);
             let whole = span.whole_tiles(n, self.tiles_per_row);
-            let tiled = whole.start * TILE..(whole.end * TILE).min(n);
+            let tiled = tile_columns(&whole, n);
             let columns = &mut columns[tiled.clone()];
             // Depth bits are those of a positive `f32` or 0 (empty), so they order as `i32`,
             // which compiles to fewer instructions than an unsigned minimum.
