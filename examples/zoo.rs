@@ -33,7 +33,9 @@
 
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{Parser, ValueEnum};
-use patchvis::bake::{Backend, BakeSettings, MemoryBudget, Outputs, Probe, Stages};
+use patchvis::bake::{
+    Backend, BakeSettings, MemoryBudget, Outputs, Preset, Probe, Research, RowSettings, Stages,
+};
 use patchvis::eval::views::random_directions;
 use patchvis::eval::{EvalOptions, EvalSummary, Evaluator, sampling_params};
 use patchvis::generate::exposed::ExposedEngine;
@@ -278,31 +280,39 @@ fn bake_and_eval(
     shells: u32,
 ) -> Result<Vec<Row>> {
     let recipe = BakeSettings {
-        conservative: matches!(mode, Mode::Conservative | Mode::ConservativeAll),
-        probe: match mode {
-            Mode::Thresholded | Mode::Plain => Probe::Off,
-            Mode::Default | Mode::Conservative | Mode::ConservativeAll => Probe::Default,
-            Mode::Level5 | Mode::Centroids => Probe::Pixels(1),
-            Mode::Probe2Split => Probe::Pixels(2),
+        rows: RowSettings {
+            preset: match mode {
+                Mode::Conservative | Mode::ConservativeAll => Preset::Conservative,
+                _ => Preset::Default,
+            },
+            level: match mode {
+                Mode::Level5 | Mode::Centroids => Some(5),
+                _ => None,
+            },
+            shells,
+            research: Research {
+                probe: match mode {
+                    Mode::Thresholded | Mode::Plain => Probe::Off,
+                    Mode::Default | Mode::Conservative | Mode::ConservativeAll => Probe::Default,
+                    Mode::Level5 | Mode::Centroids => Probe::Pixels(1),
+                    Mode::Probe2Split => Probe::Pixels(2),
+                },
+                fold_min_pixels: (mode == Mode::Thresholded).then_some(4),
+                fold_corners: match mode {
+                    Mode::Thresholded => Some(FoldCorners::One),
+                    Mode::ConservativeAll => Some(FoldCorners::All),
+                    Mode::Level5 | Mode::Centroids | Mode::Probe2Split => Some(FoldCorners::Split),
+                    Mode::Default | Mode::Conservative | Mode::Plain => None,
+                },
+                finer_views: match mode {
+                    Mode::Centroids => Some(FinerViews::Centroids),
+                    Mode::Level5 => Some(FinerViews::Midpoints),
+                    _ => None,
+                },
+                ..Research::default()
+            },
+            ..RowSettings::default()
         },
-        fold_min_pixels: (mode == Mode::Thresholded).then_some(4),
-        fold_corners: match mode {
-            Mode::Thresholded => Some(FoldCorners::One),
-            Mode::ConservativeAll => Some(FoldCorners::All),
-            Mode::Level5 | Mode::Centroids | Mode::Probe2Split => Some(FoldCorners::Split),
-            Mode::Default | Mode::Conservative | Mode::Plain => None,
-        },
-        level: match mode {
-            Mode::Level5 | Mode::Centroids => 5,
-            Mode::Conservative | Mode::ConservativeAll => BakeSettings::conservative().level,
-            _ => BakeSettings::default().level,
-        },
-        finer_views: match mode {
-            Mode::Centroids => Some(FinerViews::Centroids),
-            Mode::Level5 => Some(FinerViews::Midpoints),
-            _ => None,
-        },
-        shells,
         memory,
         ..BakeSettings::default()
     }
@@ -345,7 +355,7 @@ fn bake_and_eval(
         .map_err(|e| anyhow!("{}: does not match {name}: {e}", outputs.pvis.display()))?;
     let mut rows = Vec::new();
     for scale in RESOLUTION_SCALES {
-        let resolution = recipe.settings.resolution * scale;
+        let resolution = recipe.resolution() * scale;
         let params = sampling_params(&pvis, resolution, 1.0);
         let cameras: Vec<Camera> = directions
             .iter()

@@ -120,6 +120,18 @@ pub struct MemoryBudget {
     total: u64,
 }
 
+/// The sampler's share of a budget ([`StageBudgets::sampling`]), in bytes, as the sampler
+/// takes it (`sampler::SamplingOptions::memory`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SamplingShare {
+    /// Per-worker buffers, the rows and the patch-ordered mesh copy together.
+    pub total: u64,
+    /// Above this, the sampler's patch-ordered mesh copy lives in a mapped temporary file.
+    pub mesh_copy: u64,
+    /// Host staging of the GPU upload (one vertex and index buffer pair at a time).
+    pub gpu_staging: u64,
+}
+
 /// The shares of [`MemoryBudget::split`], in bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StageBudgets {
@@ -127,12 +139,8 @@ pub struct StageBudgets {
     pub input: u64,
     /// Tiling (in core or out of core).
     pub tiling: u64,
-    /// Sampling: per-worker buffers and the rows.
-    pub sampling: u64,
-    /// Above this, the sampler's patch-ordered mesh copy lives in a mapped temporary file.
-    pub sampling_mesh: u64,
-    /// Host staging of the GPU upload (one vertex and index buffer pair at a time).
-    pub gpu_staging: u64,
+    /// Sampling: per-worker buffers, the rows, the mesh copy and the GPU upload.
+    pub sampling: SamplingShare,
     /// The `--dilate` patch graph.
     pub patch_graph: u64,
     /// `--conservative`'s solids, built before sampling and kept through it.
@@ -182,9 +190,11 @@ impl MemoryBudget {
         StageBudgets {
             input: self.total,
             tiling: self.total,
-            sampling: self.total,
-            sampling_mesh: quarter,
-            gpu_staging: quarter.min(MAX_GPU_STAGING),
+            sampling: SamplingShare {
+                total: self.total,
+                mesh_copy: quarter,
+                gpu_staging: quarter.min(MAX_GPU_STAGING),
+            },
             patch_graph: self.total,
             solids: self.total / 2,
             encoding: self.total,
@@ -228,16 +238,16 @@ mod tests {
             for share in [
                 s.input,
                 s.tiling,
-                s.sampling,
-                s.sampling_mesh,
-                s.gpu_staging,
+                s.sampling.total,
+                s.sampling.mesh_copy,
+                s.sampling.gpu_staging,
                 s.patch_graph,
                 s.encoding,
                 s.eval,
             ] {
                 assert!(share <= total, "{share} of {total}");
             }
-            assert!(s.gpu_staging <= MAX_GPU_STAGING);
+            assert!(s.sampling.gpu_staging <= MAX_GPU_STAGING);
         }
         assert!(MemoryBudget::from_available_memory().total() >= MIN_DEFAULT.min(FALLBACK));
     }

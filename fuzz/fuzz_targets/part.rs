@@ -13,8 +13,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use patchvis::bake::{Part, PartSettings, PassRows, PatchOrder, Shard};
-use patchvis::format::VisibilityEncoding;
+use patchvis::bake::{Part, PassRows, Plan, Probe, Research, RowSettings, Shard};
 use patchvis::sampler::{FinerViews, FoldCorners, SamplingParams};
 use patchvis::tiling::Patch;
 
@@ -46,39 +45,37 @@ fuzz_target!(|data: &[u8]| {
     let patches = u32::from(patches % (MAX_FUZZ_PATCHES + 1));
     let count = u32::from(count % 8) + 1;
     let shard = Shard::new(u32::from(index) % count, count).unwrap();
-    let settings = PartSettings {
-        level,
+    let extra_levels = u32::from(threshold >> 1 & 1);
+    let settings = RowSettings {
+        level: Some(level),
         resolution: 64,
-        fov_deg: 45.0,
-        min_pixels: 0,
-        dilate: threshold & 1 == 1,
-        conservative_raster: false,
-        probe: (threshold >> 5 & 1 == 1).then_some(1),
-        always_visible: Vec::new(),
-        extra_levels: u32::from(threshold >> 1 & 1),
-        fold_min_pixels: u32::from(threshold >> 2 & 7),
-        fold_corners: FoldCorners::All,
-        patch_order: PatchOrder::Covisibility,
-        encoding: VisibilityEncoding::Tree,
         // No sampling shells: the passes below are the sampling sphere's.
         shells: 0,
-        shell_min: 1.1,
-        shell_level: level,
-        shell_extra_levels: 0,
-        shell_fold_min_pixels: 0,
         far_views: threshold >> 6 & 1 == 1,
-        shell_probe: (threshold >> 7 & 1 == 1).then_some(1),
-        shell_fold_corners: FoldCorners::All,
-        sampled_rows: index >> 7 & 1 == 1,
-        finer_views: if index >> 6 & 1 == 1 {
-            FinerViews::Centroids
-        } else {
-            FinerViews::Midpoints
+        research: Research {
+            dilate: threshold & 1 == 1,
+            probe: if threshold >> 5 & 1 == 1 {
+                Probe::Pixels(1)
+            } else {
+                Probe::Off
+            },
+            view_supersample: Some(extra_levels),
+            fold_min_pixels: Some(u32::from(threshold >> 2 & 7)),
+            fold_corners: Some(FoldCorners::All),
+            finer_views: Some(if index >> 6 & 1 == 1 && extra_levels == 1 {
+                FinerViews::Centroids
+            } else {
+                FinerViews::Midpoints
+            }),
+            sampled_rows: index >> 7 & 1 == 1,
+            ..Research::default()
         },
+        ..RowSettings::default()
     };
+    let plan = Plan::new(settings.clone()).expect("the fuzzed settings plan");
     let words_per_row = (patches as usize).div_ceil(64);
     let mut next_bit = bits.iter().cycle();
-    let passes = settings
+    let passes = plan
         .pass_levels()
         .into_iter()
         .map(|pass_level| {

@@ -33,15 +33,16 @@ pub enum Backend {
 
 /// The first option of `settings` the GPU backend does not implement, if any.
 pub(crate) fn cpu_only_option(settings: &BakeSettings) -> Option<&'static str> {
-    if settings.conservative {
+    let research = &settings.rows.research;
+    if settings.rows.preset == super::Preset::Conservative {
         Some("--conservative")
-    } else if matches!(settings.probe, super::Probe::Pixels(_)) {
+    } else if matches!(research.probe, super::Probe::Pixels(_)) {
         Some("--probe")
-    } else if settings.conservative_raster {
+    } else if research.conservative_raster {
         Some("--conservative-raster")
     } else if settings.resume {
         Some("--resume")
-    } else if settings.finer_views == Some(crate::sampler::FinerViews::Centroids) {
+    } else if research.finer_views == Some(crate::sampler::FinerViews::Centroids) {
         Some("--finer-views centroids")
     } else {
         None
@@ -166,15 +167,16 @@ mod tests {
             cpu_only_option(&s)
         };
         assert_eq!(with(|_| {}), None);
-        assert_eq!(with(|s| s.conservative = true), Some("--conservative"));
         assert_eq!(
-            with(|s| s.finer_views = Some(FinerViews::Centroids)),
+            with(|s| s.rows.preset = crate::bake::Preset::Conservative),
+            Some("--conservative")
+        );
+        assert_eq!(
+            with(|s| s.rows.research.finer_views = Some(FinerViews::Centroids)),
             Some("--finer-views centroids")
         );
-        let centroids = BakeSettings {
-            finer_views: Some(FinerViews::Centroids),
-            ..BakeSettings::default()
-        };
+        let mut centroids = BakeSettings::default();
+        centroids.rows.research.finer_views = Some(FinerViews::Centroids);
         let err = Backend::open(BackendChoice::Gpu, &centroids).unwrap_err();
         assert!(err.to_string().contains("--finer-views centroids"), "{err}");
     }

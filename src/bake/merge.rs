@@ -12,9 +12,9 @@
 //! bake, and the parts in memory (together, the sampled rows once).
 
 use super::part::Part;
+use super::plan::{Plan, SphereSampling};
 use super::rows::SphereRows;
-use super::settings::{Probe, Supersample};
-use super::{BakeError, BakeSettings, Recipe};
+use super::{BakeError, encode};
 use crate::format::ShellRows;
 use crate::runtime::Pvis;
 use crate::sphere::view_count;
@@ -167,9 +167,15 @@ pub fn merge(parts: &[LoadedPart]) -> Result<Merged, MergeError> {
         )));
     }
     let first = &parts[0].part;
-    let recipe = recipe_of(first).map_err(|e| MergeError::part(&parts[0].path, e))?;
+    // The part's decoding checked that its settings plan.
+    let plan = Plan::new(first.settings.clone()).map_err(|e| {
+        MergeError::part(
+            &parts[0].path,
+            format!("its settings do not check: {e}; bake this shard again"),
+        )
+    })?;
     let patch_count = first.patches.len() as u32;
-    let levels = first.settings.pass_levels();
+    let levels = plan.pass_levels();
     let mut matrices: Vec<VisibilityMatrix> = levels
         .iter()
         .map(|&l| VisibilityMatrix::new(view_count(l), patch_count))
@@ -222,37 +228,32 @@ pub fn merge(parts: &[LoadedPart]) -> Result<Merged, MergeError> {
         )));
     }
     // Back into one sphere's rows per sphere: the sampling sphere's passes, then each shell's.
-    let (main_passes, shell_passes) = first.settings.sphere_pass_levels();
+    let params = first.params;
     let mut matrices = matrices.into_iter();
-    let mut sphere = |params: SamplingParams, supersample: Supersample, passes: usize| {
+    let mut stored = |sampling: SphereSampling| {
+        let passes = sampling.supersample.pass_levels(sampling.level).len();
         let plain = matrices.next().expect("the passes of pass_levels");
         SphereRows {
             plain,
             fine: if passes == 2 { matrices.next() } else { None },
-            params,
-            supersample,
-            saturate: !recipe.settings.sampled_rows,
+            params: SamplingParams {
+                level: sampling.level,
+                ..params
+            },
+            supersample: sampling.supersample,
+            saturate: !plan.rows.research.sampled_rows,
         }
+        .stored(sampling.level)
     };
     // What `Recipe::run` does after sampling, on the records instead of the tiling.
-    let level = recipe.settings.level;
-    let params = first.params;
-    let visibility = sphere(params, recipe.supersample, main_passes.len()).stored(level);
-    let shell_params = SamplingParams {
-        level: recipe.shell_level(),
-        ..params
-    };
-    let shells: Vec<VisibilityMatrix> = (0..recipe.settings.shells)
-        .map(|_| {
-            sphere(shell_params, recipe.shell_supersample, shell_passes.len())
-                .stored(recipe.shell_level())
-        })
-        .collect();
+    let visibility = stored(plan.main);
+    let shells: Vec<VisibilityMatrix> = (0..plan.rows.shells).map(|_| stored(plan.shell)).collect();
     // The parts carry the file's camera: the shells are where the single bake puts them.
-    let distances = recipe
+    let distances = plan
         .shell_distances(&params)
         .map_err(|e| MergeError::part(&parts[0].path, format!("{e}; bake this shard again")))?;
-    let (patches, visibility, shells) = match recipe.file_patch_order(&first.patches, &visibility) {
+    let order = encode::file_patch_order(plan.rows.patch_order, &first.patches, &visibility);
+    let (patches, visibility, shells) = match order {
         Some(order) => (
             renumbered_patches(&first.patches, &order),
             visibility.with_patch_order(&order),
@@ -268,7 +269,8 @@ pub fn merge(parts: &[LoadedPart]) -> Result<Merged, MergeError> {
             visibility,
         })
         .collect();
-    let bytes = recipe.encode_patches(
+    let bytes = encode::encode(
+        plan.rows.encoding,
         &params,
         first.triangle_count,
         &patches,
@@ -292,54 +294,6 @@ pub fn merge(parts: &[LoadedPart]) -> Result<Merged, MergeError> {
     })
 }
 
-/// The recipe of the bake `part` is a shard of: its recorded settings, checked again.
-fn recipe_of(part: &Part) -> Result<Recipe, String> {
-    let s = &part.settings;
-    BakeSettings {
-        patches: (part.patches.len() as u32).max(1),
-        level: s.level,
-        resolution: s.resolution,
-        fov_deg: s.fov_deg,
-        min_pixels: s.min_pixels,
-        dilate: s.dilate,
-        always_visible: s.always_visible.clone(),
-        probe: s.probe.map_or(Probe::Off, Probe::Pixels),
-        conservative_raster: s.conservative_raster,
-        view_supersample: Some(s.extra_levels),
-        fold_min_pixels: Some(s.fold_min_pixels),
-        fold_corners: Some(s.fold_corners),
-        finer_views: Some(s.finer_views),
-        patch_order: s.patch_order,
-        encoding: s.encoding,
-        shells: s.shells,
-        shell_min: s.shell_min,
-        shell_level: Some(s.shell_level),
-        sampled_rows: s.sampled_rows,
-        ..BakeSettings::default()
-    }
-    .check()
-    .map_err(|e| format!("its settings do not check: {e}; bake this shard again"))
-    .map(|mut recipe| {
-        // The shells' probe and fold as the shards resolved them: parts written before the
-        // default probed its shells have none there, which no flag asks for alone
-        // (`Recipe::shell_probe`).
-        recipe.shell_probe = s.shell_probe;
-        recipe.shell_supersample.fold_corners = s.shell_fold_corners;
-        recipe
-    })
-    .and_then(|recipe| {
-        if recipe.part_settings() == *s && part.params.level == s.level {
-            Ok(recipe)
-        } else {
-            Err(
-                "its settings do not resolve to themselves (written by another patchvis \
-                 build?); bake this shard again"
-                    .into(),
-            )
-        }
-    })
-}
-
 /// [`merge`] as a [`BakeError`], for callers that handle both.
 impl From<MergeError> for BakeError {
     fn from(e: MergeError) -> BakeError {
@@ -350,9 +304,62 @@ impl From<MergeError> for BakeError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bake::{Backend, Stages};
+    use crate::bake::{Backend, BakeSettings, Recipe, Research, RowSettings, Stages};
+    use crate::ooc::Mesh;
     use crate::progress::NoProgress;
     use crate::test_kit::bunny::bunny;
+
+    /// `recipe`'s parts of `mesh` in `count` shards, each read back from its bytes.
+    fn shards(recipe: &Recipe, mesh: &Mesh, count: u32) -> Vec<LoadedPart> {
+        (0..count)
+            .map(|index| {
+                let shard = crate::bake::Shard { index, count };
+                let baked = recipe
+                    .run_shard(
+                        mesh,
+                        None,
+                        shard,
+                        &Backend::Cpu,
+                        &NoProgress,
+                        &mut Stages::new(),
+                    )
+                    .unwrap();
+                let part = Part::decode(&baked.part.encode()).unwrap();
+                assert_eq!(part, baked.part);
+                LoadedPart {
+                    path: format!("p{index}").into(),
+                    part,
+                }
+            })
+            .collect()
+    }
+
+    /// Every row option, each changed alone from a small default bake, merges from two
+    /// shards into the single bake's bytes.
+    #[test]
+    fn every_row_option_merges_into_the_single_bake() {
+        let mesh = bunny();
+        for (name, change) in crate::bake::settings::tests::one_change_per_field() {
+            let mut rows = RowSettings {
+                level: Some(1),
+                resolution: 32,
+                ..RowSettings::default()
+            };
+            change(&mut rows);
+            let recipe = BakeSettings {
+                patches: 60,
+                rows,
+                ..BakeSettings::default()
+            }
+            .check()
+            .unwrap();
+            let single = recipe
+                .run(&mesh, &Backend::Cpu, &NoProgress, &mut Stages::new())
+                .unwrap();
+            let merged = merge(&shards(&recipe, &mesh, 2)).unwrap();
+            assert!(merged.bytes == single.bytes, "{name}: the merge differs");
+        }
+    }
 
     /// Shards of the bunny merge into the single bake's bytes and sampling shells, in any
     /// order, for a plain and a thresholded fold; a missing or repeated shard is refused.
@@ -381,31 +388,23 @@ mod tests {
         for (mesh, fold_min_pixels) in [(&near, None), (&near, Some(3)), (&far, None)] {
             let recipe = BakeSettings {
                 patches: 120,
-                level: 2,
-                resolution: 48,
-                fold_min_pixels,
+                rows: RowSettings {
+                    level: Some(2),
+                    resolution: 48,
+                    research: Research {
+                        fold_min_pixels,
+                        ..Research::default()
+                    },
+                    ..RowSettings::default()
+                },
                 ..BakeSettings::default()
             }
             .check()
             .unwrap();
-            let mut stages = Stages::new();
             let single = recipe
-                .run(mesh, &Backend::Cpu, &NoProgress, &mut stages)
+                .run(mesh, &Backend::Cpu, &NoProgress, &mut Stages::new())
                 .unwrap();
-            let mut parts: Vec<LoadedPart> = (0..3)
-                .map(|index| {
-                    let shard = crate::bake::Shard { index, count: 3 };
-                    let baked = recipe
-                        .run_shard(mesh, None, shard, &Backend::Cpu, &NoProgress, &mut stages)
-                        .unwrap();
-                    let part = Part::decode(&baked.part.encode()).unwrap();
-                    assert_eq!(part, baked.part);
-                    LoadedPart {
-                        path: format!("p{index}").into(),
-                        part,
-                    }
-                })
-                .collect();
+            let mut parts = shards(&recipe, mesh, 3);
             parts.reverse();
             let merged = merge(&parts).unwrap();
             assert_eq!(merged.bytes, single.bytes);

@@ -1,11 +1,13 @@
 //! The bake as one library call: settings in, a `.pvis` out.
 //!
-//! [`BakeSettings`] holds every option `patchvis bake` has; [`BakeSettings::check`] resolves
-//! the defaults that depend on each other into a [`Recipe`]; [`Backend`] is where the ID
-//! buffers are rendered; [`Recipe::run`] tiles, samples (supersampling and folding), numbers
-//! the patches by co-visibility and encodes, recording each stage's time and peak heap in
-//! [`Stages`]; [`Recipe::write`] writes the outputs so that they appear whole or not at all.
-//! The heap budget and its split between the stages is [`MemoryBudget`].
+//! [`BakeSettings`] holds every option `patchvis bake` has, with [`RowSettings`] for those
+//! that decide the rows; [`BakeSettings::check`] validates them and resolves the defaults that
+//! depend on each other (and on the [`Preset`]) into a [`Plan`], in a [`Recipe`]; [`Backend`]
+//! is where the ID buffers are rendered; [`Recipe::run`] tiles, samples each sphere of the
+//! plan (supersampling and folding), numbers the patches by co-visibility and encodes,
+//! recording each stage's time and peak heap in [`Stages`]; [`Recipe::write`] writes the
+//! outputs so that they appear whole or not at all. The heap budget and its split between the
+//! stages is [`MemoryBudget`].
 //!
 //! ```no_run
 //! use patchvis::bake::{Backend, BakeSettings, Outputs, Stages};
@@ -24,8 +26,10 @@
 //! file ([`write_tiling_file`]), [`Recipe::run_shard`] per [`Shard`] into a [`Part`], then
 //! [`merge`] writes the single bake's bytes.
 //!
-//! Files: `settings.rs` (options, defaults, checks), `recipe.rs` (the stages), `rows.rs`
-//! (sampled rows and the fold), `shells.rs` (the sampling shells' radii and bands),
+//! Files: `settings.rs` (options, defaults, their codec), `plan.rs` (what they resolve to,
+//! the spheres of views), `recipe.rs` (the stages), `sample.rs` (each sphere's passes),
+//! `rows.rs` (sampled rows and the fold), `encode.rs` (numbering and encoding),
+//! `outputs.rs` (writing them), `shells.rs` (the sampling shells' radii and bands),
 //! `backend.rs` (CPU or GPU), `stages.rs` (time and heap),
 //! `frame.rs` (the working frame of coordinates `f32` cameras cannot handle). Sharded bakes:
 //! `shard.rs` (which views a shard owns, `--shard auto`), `shard_run.rs` (a shard's bake and
@@ -33,12 +37,16 @@
 //! `fingerprint.rs` (mesh and tiling hashes), `wire.rs` (the files' fields).
 
 mod backend;
+mod encode;
 mod fingerprint;
 mod frame;
 mod merge;
+mod outputs;
 mod part;
+mod plan;
 mod recipe;
 mod rows;
+mod sample;
 mod settings;
 mod shard;
 mod shard_run;
@@ -47,18 +55,20 @@ mod stages;
 mod tiling_file;
 mod wire;
 
-pub use crate::memory::{FixedNeeds, MemoryBudget, StageBudgets};
+pub use crate::memory::{FixedNeeds, MemoryBudget, SamplingShare, StageBudgets};
 pub use backend::{Backend, BackendChoice};
 pub use fingerprint::{mesh_hash, tiling_hash};
 pub use merge::{LoadedPart, MergeError, Merged, merge, read_part};
-pub use part::{Part, PartSettings, PassRows};
-pub use recipe::{Baked, BakedShell, Outputs, Recipe};
-pub use rows::{SampledRows, SampledShell};
+pub use outputs::Outputs;
+pub use part::{Part, PassRows};
+pub use plan::{PassCheckpoints, Plan, Sphere, SphereKind, SphereSampling, Supersample};
+pub use recipe::{Baked, BakedShell, Recipe};
+pub use rows::{SampledRows, SampledSphere};
 pub use settings::{
-    BakeSettings, CONSERVATIVE_LEVEL, CONSERVATIVE_PROBE_PIXELS, DEFAULT_FOLD_CORNERS,
+    BakeSettings, CONSERVATIVE_FOLD_CORNERS, CONSERVATIVE_LEVEL, CONSERVATIVE_PROBE_PIXELS,
     DEFAULT_FOLD_MIN_PIXELS, DEFAULT_LEVEL, DEFAULT_PROBE_PIXELS, DEFAULT_VIEW_SUPERSAMPLE,
-    MIN_RESOLUTION, PROBE_FOLD_CORNERS, PassCheckpoints, PatchOrder, Probe, SettingsError,
-    Supersample, WARN_RESOLUTION,
+    MIN_RESOLUTION, PROBE_FOLD_CORNERS, PatchOrder, Preset, Probe, Research, RowSettings,
+    SettingsError, UNPROBED_FOLD_CORNERS, WARN_RESOLUTION,
 };
 pub use shard::{SHARD_COUNT_ENV, Shard, ShardError};
 pub use shard_run::ShardBaked;

@@ -13,27 +13,27 @@
 //! (`shells.rs`). The folded rows are then saturated (`sampler::saturate`: every bit no
 //! query's answer depends on is set), unless the bake keeps the rows as sampled.
 
-use super::Supersample;
+use super::plan::{SphereKind, Supersample};
 use crate::sampler::{FineViews, fold_views, saturate, split_fold_views};
 use crate::sphere::{MAX_LEVEL, view_count};
 use crate::visibility::{SamplingParams, VisibilityMatrix};
 
-/// The sampled rows of one tiling (see the module documentation): the sampling sphere's and
-/// the shells'.
+/// The sampled rows of one tiling (see the module documentation): one entry per sphere of
+/// views, in the plan's order (the sampling sphere first, then each shell).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SampledRows {
-    /// The sampling sphere's rows.
-    pub(crate) main: SphereRows,
-    /// The shells', outermost first (empty without shells).
-    pub(crate) shells: Vec<SampledShell>,
+    pub(crate) spheres: Vec<SampledSphere>,
 }
 
-/// The rows of one shell of near views.
+/// The rows of one sphere of views.
 #[derive(Clone, Debug, PartialEq)]
-pub struct SampledShell {
-    /// The views' distance from the centre, in the frame sampled in.
-    pub distance: f32,
-    /// Its rows; `params.level` is the shell's finest stored level.
+pub struct SampledSphere {
+    /// Which sphere it is.
+    pub kind: SphereKind,
+    /// A shell's camera distance from the centre, in the frame sampled in; `None`: the
+    /// sampling distance.
+    pub shell: Option<f32>,
+    /// Its rows; `params.level` is the sphere's finest stored level.
     pub(crate) rows: SphereRows,
     /// Seconds its passes took.
     pub seconds: f64,
@@ -135,28 +135,40 @@ impl SphereRows {
 }
 
 impl SampledRows {
+    /// The sampling sphere's rows.
+    fn main(&self) -> &SampledSphere {
+        &self.spheres[0]
+    }
+
     /// The finest stored level these rows serve.
     pub fn level(&self) -> u32 {
-        self.main.params.level
+        self.main().rows.params.level
     }
 
     /// Where the cameras of stored level `level` are: the sampled ones, at that level.
     pub fn params(&self, level: u32) -> SamplingParams {
         SamplingParams {
             level,
-            ..self.main.params
+            ..self.main().rows.params
         }
     }
 
     /// Views rendered to get the sampling sphere's rows, every pass counted (each shell's
-    /// are [`SampledShell::sampled_views`]).
+    /// are [`SampledSphere::sampled_views`]).
     pub fn sampled_views(&self) -> u32 {
-        self.main.sampled_views()
+        self.main().sampled_views()
+    }
+
+    /// Every sphere, in sampling order.
+    pub fn spheres(&self) -> &[SampledSphere] {
+        &self.spheres
     }
 
     /// The shells, outermost first.
-    pub fn shells(&self) -> &[SampledShell] {
-        &self.shells
+    pub fn shells(&self) -> impl Iterator<Item = &SampledSphere> {
+        self.spheres
+            .iter()
+            .filter(|s| matches!(s.kind, SphereKind::Shell(_)))
     }
 
     /// The matrix a bake at `level` (at most [`SampledRows::level`]) stores: the level's own
@@ -165,30 +177,28 @@ impl SampledRows {
     ///
     /// Panics (caller contract) if `level` is finer than the sampled level.
     pub fn stored(&self, level: u32) -> VisibilityMatrix {
-        self.main.stored(level)
+        self.main().rows.stored(level)
     }
 
-    /// Every pass's matrix in sampling order: the sampling sphere's, then each shell's
-    /// (`PartSettings::pass_levels` has their levels).
+    /// Every pass's matrix in sampling order: each sphere's, in the plan's order
+    /// (`Plan::pass_levels` has their levels).
     pub(crate) fn passes(&self) -> impl Iterator<Item = &VisibilityMatrix> {
-        self.main
-            .passes()
-            .chain(self.shells.iter().flat_map(|s| s.rows.passes()))
+        self.spheres.iter().flat_map(|s| s.rows.passes())
     }
 }
 
-impl SampledShell {
-    /// The finest stored level of the shell's rows.
+impl SampledSphere {
+    /// The finest stored level of the sphere's rows.
     pub fn level(&self) -> u32 {
         self.rows.params.level
     }
 
-    /// Views rendered for the shell.
+    /// Views rendered for the sphere, every pass counted.
     pub fn sampled_views(&self) -> u32 {
         self.rows.sampled_views()
     }
 
-    /// The matrix a bake storing the shell at `level` (at most [`SampledShell::level`])
+    /// The matrix a bake storing the sphere at `level` (at most [`SampledSphere::level`])
     /// stores, folded as [`SampledRows::stored`] folds the sampling sphere's.
     ///
     /// Panics (caller contract) if `level` is finer than the sampled level.

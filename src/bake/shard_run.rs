@@ -12,7 +12,7 @@
 
 use super::fingerprint::{mesh_hash, tiling_hash};
 use super::frame::Frame;
-use super::part::{PartSettings, PassRows};
+use super::part::PassRows;
 use super::tiling_file::TilingFile;
 use super::{Backend, BakeError, Part, Recipe, Shard, Stages};
 use crate::ooc::Mesh;
@@ -36,40 +36,10 @@ pub struct ShardBaked {
 }
 
 impl Recipe {
-    /// The settings a part records ([`PartSettings`]).
-    pub fn part_settings(&self) -> PartSettings {
-        let s = &self.settings;
-        PartSettings {
-            level: s.level,
-            resolution: self.resolution(),
-            fov_deg: s.fov_deg,
-            min_pixels: s.min_pixels,
-            dilate: s.dilate,
-            conservative_raster: s.conservative_raster,
-            probe: self.probe(),
-            shell_probe: self.shell_probe(),
-            always_visible: s.always_visible.clone(),
-            extra_levels: self.supersample.extra_levels,
-            fold_min_pixels: self.supersample.fold_min_pixels,
-            fold_corners: self.supersample.fold_corners,
-            patch_order: s.patch_order,
-            encoding: s.encoding,
-            shells: s.shells,
-            shell_min: s.shell_min,
-            shell_level: self.shell_level(),
-            shell_extra_levels: self.shell_supersample.extra_levels,
-            shell_fold_min_pixels: self.shell_supersample.fold_min_pixels,
-            far_views: s.far_views,
-            shell_fold_corners: self.shell_supersample.fold_corners,
-            finer_views: self.supersample.finer,
-            sampled_rows: s.sampled_rows,
-        }
-    }
-
     /// Tiles `mesh` as [`Recipe::run`] does, in the frame it samples in: the tiling a tiling
     /// file holds (`patchvis tile`).
     pub fn tile_framed(&self, mesh: &Mesh) -> Result<Tiling, BakeError> {
-        match Frame::choose(mesh, self.settings.fov_deg)? {
+        match Frame::choose(mesh, self.plan.rows.fov_deg)? {
             Some(frame) => self.tile(&frame.apply(mesh)?),
             None => self.tile(mesh),
         }
@@ -114,7 +84,7 @@ impl Recipe {
         let rows = stages.run("sampling", || {
             self.sample_share(work, &tiling, backend, Some(shard), progress)
         })?;
-        let mut params = rows.params(self.settings.level);
+        let mut params = rows.params(self.level());
         let patches = match frame {
             Some(_) => {
                 params = Frame::world_params(mesh, params);
@@ -122,12 +92,12 @@ impl Recipe {
             }
             None => tiling.patches.clone(),
         };
-        let settings = self.part_settings();
         let (mut owned_views, mut rendered_views) = (0, 0);
-        let passes: Vec<PassRows> = settings
+        let passes: Vec<PassRows> = self
+            .plan
             .pass_levels()
             .into_iter()
-            .zip(settings.pass_finer_views())
+            .zip(self.plan.pass_finer_views())
             .zip(rows.passes())
             .map(|((level, finer), matrix)| {
                 let views = shard.views(level);
@@ -148,7 +118,7 @@ impl Recipe {
                 tiling_hash: tiling_hash(&tiling),
                 shard,
                 triangle_count: mesh.triangle_count(),
-                settings,
+                settings: self.plan.rows.clone(),
                 params,
                 patches,
                 passes,
@@ -193,7 +163,7 @@ impl Recipe {
             )));
         }
         let count = file.tiling.patches.len() as u32;
-        if let Some(&bad) = self.settings.always_visible.iter().find(|&&p| p >= count) {
+        if let Some(&bad) = self.plan.rows.always_visible.iter().find(|&&p| p >= count) {
             return Err(BakeError::Settings(format!(
                 "--always-visible {bad}: the bake has patches 0 to {}",
                 count - 1

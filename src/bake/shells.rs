@@ -16,21 +16,12 @@
 //! (`SamplingOptions::band`): the sampling sphere `[D_1, D_0]`, shell `s` `[D_{s+1},
 //! D_{s-1}]`, the innermost `[D_K, D_{K-1}]`; without shells, no band.
 //!
-//! The [`Recipe`]'s shell stages live here too: the shells' level and distances, their
-//! sampling passes after the sampling sphere's, and the bytes each adds (`--stats`).
+//! The bake plan (`plan.rs`) lists the shells as spheres of views after the sampling sphere.
 //!
 //! Cost: each shell is one more sampling pass of the stored level (and its supersampling),
 //! with the near views' extra frustums, and one more matrix in the file.
 
-use super::recipe::{Baked, BakedShell, Recipe, SphereSampling};
-use super::rows::SampledShell;
-use super::{Backend, BakeError, Shard};
-use crate::format::ShellRows;
-use crate::ooc::Mesh;
-use crate::progress::Progress;
-use crate::tiling::Tiling;
 use crate::visibility::SamplingParams;
-use std::time::Instant;
 
 /// `--shells` unless given: two shells between the sampling sphere and 1.1 bounding radii
 /// (1.70 R and 1.10 R at the default field of view). On the bunny two already answer every
@@ -99,109 +90,6 @@ pub fn bands(outer: f32, shells: &[f32]) -> Vec<Option<[f32; 2]>> {
     let last = all.len() - 1;
     (0..=last)
         .map(|s| Some([all[(s + 1).min(last)], all[s.saturating_sub(1)]]))
-        .collect()
-}
-
-/// The shells' part of a [`Recipe`]: their level, distances and sampling passes, and what
-/// each adds to the file.
-impl Recipe {
-    /// The shells' stored sphere level ([`super::BakeSettings::shell_level_or_default`]).
-    pub fn shell_level(&self) -> u32 {
-        self.settings.shell_level_or_default()
-    }
-
-    /// The shells' camera distances for the sampling sphere `params`, outermost first
-    /// (`shells.rs`); a usage error if they cannot be used.
-    pub fn shell_distances(&self, params: &SamplingParams) -> Result<Vec<f32>, BakeError> {
-        shell_distances(params, self.settings.shells, self.settings.shell_min)
-            .map_err(BakeError::Settings)
-    }
-
-    /// Samples every shell's passes (after the sampling sphere `params`'s, in
-    /// [`Recipe::sample_share`]): at the shells' level, each with its own checkpoints and the
-    /// band of distances its rows answer for.
-    pub(super) fn sample_shells(
-        &self,
-        mesh: &Mesh,
-        tiling: &Tiling,
-        backend: &Backend,
-        progress: &dyn Progress,
-        params: &SamplingParams,
-        shard: Option<Shard>,
-    ) -> Result<Vec<SampledShell>, BakeError> {
-        let params = *params;
-        let distances = self.shell_distances(&params)?;
-        let bands = bands(params.distance(), &distances);
-        let mut shells = Vec::with_capacity(distances.len());
-        for (s, &distance) in distances.iter().enumerate() {
-            let start = Instant::now();
-            let rows = self.sample_sphere(
-                mesh,
-                tiling,
-                backend,
-                progress,
-                &SphereSampling {
-                    params: SamplingParams {
-                        level: self.shell_level(),
-                        ..params
-                    },
-                    supersample: self.shell_supersample,
-                    checkpoints: self.shell_checkpoints.get(s).cloned().unwrap_or_default(),
-                    shard,
-                    shell: Some(distance),
-                    band: bands[s + 1],
-                },
-            )?;
-            shells.push(SampledShell {
-                distance,
-                rows,
-                seconds: start.elapsed().as_secs_f64(),
-            });
-        }
-        Ok(shells)
-    }
-
-    /// Bytes each shell of `baked` adds to the file, outermost first: the file encoded with
-    /// the shells up to it, less the file with those before it (one encoding per shell; for
-    /// `--stats`).
-    pub fn shell_bytes(&self, baked: &Baked, triangle_count: u32) -> Vec<u64> {
-        let rows = shell_rows(&baked.shells);
-        let mut before = self
-            .encode(
-                &baked.params,
-                triangle_count,
-                &baked.tiling,
-                &baked.visibility,
-            )
-            .len() as u64;
-        (1..=rows.len())
-            .map(|k| {
-                let bytes = if k == rows.len() {
-                    baked.bytes.len() as u64
-                } else {
-                    let encoded = self.encode_with_shells(
-                        &baked.params,
-                        triangle_count,
-                        &baked.tiling,
-                        &baked.visibility,
-                        &rows[..k],
-                    );
-                    encoded.len() as u64
-                };
-                bytes - std::mem::replace(&mut before, bytes)
-            })
-            .collect()
-    }
-}
-
-/// The shells of a bake as the writer takes them.
-pub(super) fn shell_rows(shells: &[BakedShell]) -> Vec<ShellRows<'_>> {
-    shells
-        .iter()
-        .map(|s| ShellRows {
-            distance: s.distance,
-            visibility: &s.visibility,
-        })
         .collect()
 }
 

@@ -10,7 +10,8 @@ use super::out::{StdoutError, outln};
 use super::progress::Bars;
 use anyhow::{Result, anyhow};
 use patchvis::bake::{
-    Backend, BackendChoice, BakeError, BakeSettings, Baked, Outputs, PatchOrder, Recipe, Stages,
+    Backend, BackendChoice, BakeError, BakeSettings, Baked, Outputs, PatchOrder, Preset, Recipe,
+    Research, RowSettings, Stages,
 };
 use patchvis::format::VisibilityEncoding;
 use patchvis::ooc::Mesh;
@@ -24,36 +25,23 @@ use std::time::Instant;
 
 /// The library's settings for these flags.
 pub(super) fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
-    Ok(BakeSettings {
-        patches: args.patches,
-        level: args.level.unwrap_or(if args.conservative {
-            patchvis::bake::CONSERVATIVE_LEVEL
+    let rows = RowSettings {
+        preset: if args.conservative {
+            Preset::Conservative
         } else {
-            patchvis::bake::DEFAULT_LEVEL
-        }),
+            Preset::Default
+        },
+        level: args.level,
         resolution: args.resolution,
         fov_deg: args.fov,
-        min_pixels: args.min_pixels,
-        dilate: args.dilate,
+        shells: args.shells,
+        shell_min: args.shell_min,
+        shell_level: args.shell_level,
+        far_views: args.far_views,
         always_visible: match &args.always_visible {
             Some(spec) => parse_patch_ids(spec)?,
             None => Vec::new(),
         },
-        conservative: args.conservative,
-        probe: args.probe.unwrap_or_default(),
-        conservative_raster: args.conservative_raster,
-        view_supersample: args.view_supersample,
-        fold_min_pixels: args.fold_min_pixels,
-        fold_corners: args.fold_corners.map(|c| match c {
-            FoldCornersArg::All => FoldCorners::All,
-            FoldCornersArg::One => FoldCorners::One,
-            FoldCornersArg::Split => FoldCorners::Split,
-            FoldCornersArg::Cover => FoldCorners::Cover,
-        }),
-        finer_views: args.finer_views.map(|f| match f {
-            FinerViewsArg::Midpoints => FinerViews::Midpoints,
-            FinerViewsArg::Centroids => FinerViews::Centroids,
-        }),
         patch_order: match args.patch_order {
             PatchOrderArg::Covisibility => PatchOrder::Covisibility,
             PatchOrderArg::Spatial => PatchOrder::Spatial,
@@ -63,15 +51,33 @@ pub(super) fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
             EncodingArg::Table => VisibilityEncoding::Hierarchical,
             EncodingArg::Raw => VisibilityEncoding::Raw,
         },
+        research: Research {
+            min_pixels: args.min_pixels,
+            dilate: args.dilate,
+            probe: args.probe.unwrap_or_default(),
+            conservative_raster: args.conservative_raster,
+            view_supersample: args.view_supersample,
+            fold_min_pixels: args.fold_min_pixels,
+            fold_corners: args.fold_corners.map(|c| match c {
+                FoldCornersArg::All => FoldCorners::All,
+                FoldCornersArg::One => FoldCorners::One,
+                FoldCornersArg::Split => FoldCorners::Split,
+                FoldCornersArg::Cover => FoldCorners::Cover,
+            }),
+            finer_views: args.finer_views.map(|f| match f {
+                FinerViewsArg::Midpoints => FinerViews::Midpoints,
+                FinerViewsArg::Centroids => FinerViews::Centroids,
+            }),
+            sampled_rows: args.sampled_rows,
+        },
+    };
+    Ok(BakeSettings {
+        rows,
+        patches: args.patches,
         tiling: args.tiling.into(),
         memory: memory_budget(args.memory),
         checkpoint: Some(args.output.clone()),
         resume: args.resume,
-        shells: args.shells,
-        shell_min: args.shell_min,
-        shell_level: args.shell_level,
-        far_views: args.far_views,
-        sampled_rows: args.sampled_rows,
     })
 }
 
@@ -164,22 +170,23 @@ impl Summary<'_> {
 
     /// The `--stats` report.
     fn json(&self) -> serde_json::Value {
-        let (s, r, b) = (&self.recipe.settings, self.recipe, self.baked);
+        let (r, b) = (self.recipe, self.baked);
+        let (plan, rows) = (&b.plan, &b.plan.rows);
         let q = b.tiling.quality;
-        let split = s.memory.split();
+        let split = r.memory().split();
         json!({
             "input": self.args.input.display().to_string(),
             "output": self.args.output.display().to_string(),
             "triangles": self.mesh.triangle_count(),
             "vertices": self.mesh.vertex_count(),
             "mesh_source": format!("{:?}", self.mesh.source()),
-            "memory_budget_bytes": s.memory.total(),
+            "memory_budget_bytes": r.memory().total(),
             "memory_split_bytes": {
                 "input": split.input,
                 "tiling": split.tiling,
-                "sampling": split.sampling,
-                "sampling_mesh_on_heap_up_to": split.sampling_mesh,
-                "gpu_staging": split.gpu_staging,
+                "sampling": split.sampling.total,
+                "sampling_mesh_on_heap_up_to": split.sampling.mesh_copy,
+                "gpu_staging": split.sampling.gpu_staging,
                 "patch_graph": split.patch_graph,
                 "solids": split.solids,
                 "encoding": split.encoding,
@@ -193,27 +200,27 @@ impl Summary<'_> {
                 "merged_components": b.tiling.stats.merged_components,
                 "compactness": {"median": q.compactness_median, "p95": q.compactness_p95},
             },
-            "level": s.level,
+            "level": plan.level(),
             "views": b.visibility.views(),
-            "resolution": r.resolution(),
-            "fov_deg": s.fov_deg,
-            "min_pixels": s.min_pixels,
-            "dilate": s.dilate,
-            "conservative": s.conservative,
-            "probe": b.probe,
-            "conservative_raster": s.conservative_raster,
-            "far_views": s.far_views,
-            "sampled_rows": s.sampled_rows,
-            "view_supersample": r.supersample.extra_levels,
-            "fold_min_pixels": r.supersample.fold_min_pixels,
+            "resolution": rows.resolution,
+            "fov_deg": rows.fov_deg,
+            "min_pixels": rows.research.min_pixels,
+            "dilate": rows.research.dilate,
+            "conservative": rows.preset == Preset::Conservative,
+            "probe": plan.main.probe,
+            "conservative_raster": rows.research.conservative_raster,
+            "far_views": rows.far_views,
+            "sampled_rows": rows.research.sampled_rows,
+            "view_supersample": plan.main.supersample.extra_levels,
+            "fold_min_pixels": plan.main.supersample.fold_min_pixels,
             "backend": self.backend.describe(),
-            "fold_corners": format!("{:?}", b.fold_corners).to_lowercase(),
-            "finer_views": r.supersample.finer.name(),
+            "fold_corners": format!("{:?}", plan.main.supersample.fold_corners).to_lowercase(),
+            "finer_views": plan.main.supersample.finer.name(),
             "patch_order": if b.renumbered { "covisibility" } else { "spatial" },
             "encoding": format!("{:?}", self.args.encoding).to_lowercase(),
             "sampled_views": b.sampled_views,
             "shells": self.shells_json(),
-            "always_visible": s.always_visible.len(),
+            "always_visible": rows.always_visible.len(),
             "visible_fraction_mean": b.visible_fraction(),
             "bytes": {"total": b.bytes.len(), "visibility": b.visibility_bytes},
             "seconds": self.seconds,
@@ -236,7 +243,7 @@ impl Summary<'_> {
                 json!({
                     "distance": shell.distance,
                     "radii": f64::from(shell.distance) / f64::from(b.params.radius),
-                    "level": r.shell_level(),
+                    "level": b.plan.shell.level,
                     "views": shell.visibility.views(),
                     "sampled_views": shell.sampled_views,
                     "seconds": shell.seconds,
@@ -248,7 +255,8 @@ impl Summary<'_> {
 
     /// The summary on stdout.
     fn print(&self) -> Result<(), StdoutError> {
-        let (s, r, b) = (&self.recipe.settings, self.recipe, self.baked);
+        let b = self.baked;
+        let (plan, level) = (&b.plan, b.plan.level());
         let secs = |name| self.stages.seconds(name);
         let q = b.tiling.quality;
         let patch_count = b.tiling.patches.len();
@@ -286,33 +294,32 @@ impl Summary<'_> {
         outln!(
             "sampling: {} views (level {}) at {}x{} px, fov {}°; a query answers {:.1}% of the patches on average ({:.2} s)",
             b.visibility.views(),
-            s.level,
-            r.resolution(),
-            r.resolution(),
-            s.fov_deg,
+            level,
+            plan.rows.resolution,
+            plan.rows.resolution,
+            plan.rows.fov_deg,
             100.0 * b.visible_fraction(),
             secs("sampling")
         )?;
         if !self.backend.is_cpu() {
             outln!("          sampled on the {}", self.backend.describe())?;
         }
-        let k = r.supersample.extra_levels;
+        let supersample = plan.main.supersample;
+        let k = supersample.extra_levels;
         if k > 0 {
-            let views = FineViews::new(s.level, s.level + k, r.supersample.finer);
-            let which = match r.supersample.finer {
-                FinerViews::Midpoints => format!("level {}", s.level + k),
-                FinerViews::Centroids => format!("level {} and its faces' centroids", s.level),
+            let views = FineViews::new(level, level + k, supersample.finer);
+            let which = match supersample.finer {
+                FinerViews::Midpoints => format!("level {}", level + k),
+                FinerViews::Centroids => format!("level {level} and its faces' centroids"),
             };
             outln!(
-                "          view supersampling: sampled {} views ({which}), folded into level {}",
+                "          view supersampling: sampled {} views ({which}), folded into level {level}",
                 views.end(),
-                s.level
             )?;
-            if r.supersample.fold_min_pixels > 0 {
+            if supersample.fold_min_pixels > 0 {
                 outln!(
-                    "          folding only patches of at least {} pixels; level {} sampled plain too",
-                    r.supersample.fold_min_pixels,
-                    s.level
+                    "          folding only patches of at least {} pixels; level {level} sampled plain too",
+                    supersample.fold_min_pixels,
                 )?;
             }
         }
@@ -325,8 +332,8 @@ impl Summary<'_> {
             outln!(
                 "          near views: {} shells of {} views (level {}) at {} bounding radii, {} views sampled in {:.2} s",
                 b.shells.len(),
-                view_count(r.shell_level()),
-                r.shell_level(),
+                view_count(plan.shell.level),
+                plan.shell.level,
                 radii.join(", "),
                 b.shells.iter().map(|s| s.sampled_views).sum::<u32>(),
                 b.shells.iter().map(|s| s.seconds).sum::<f64>()

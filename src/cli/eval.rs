@@ -12,7 +12,7 @@ use super::progress::Bars;
 use anyhow::{Context, Result, anyhow};
 use patchvis::bake::{
     BakeSettings, DEFAULT_FOLD_MIN_PIXELS, DEFAULT_PROBE_PIXELS, DEFAULT_VIEW_SUPERSAMPLE,
-    MemoryBudget, PROBE_FOLD_CORNERS, Probe, Stages,
+    MemoryBudget, PROBE_FOLD_CORNERS, Probe, Research, RowSettings, Stages,
 };
 use patchvis::eval::plot::{self, Axis, Chart, Series};
 use patchvis::eval::shade::RgbImage;
@@ -746,17 +746,23 @@ fn run_sweep(args: &EvalArgs, distance_scale: f32) -> Result<()> {
         patches: args.sweep_patches.clone(),
         levels: args.sweep_levels.clone(),
         bake: BakeSettings {
-            resolution: args.resolution.unwrap_or(DEFAULT_SWEEP_RESOLUTION),
-            fov_deg: args.fov,
-            // Plain: the stored views' own patches (`bake --view-supersample 0 --probe off`);
-            // default: what a default `patchvis bake` writes at every level.
-            view_supersample: match args.sweep_mode {
-                SweepModeArg::Plain => Some(0),
-                SweepModeArg::Default => None,
-            },
-            probe: match args.sweep_mode {
-                SweepModeArg::Plain => Probe::Off,
-                SweepModeArg::Default => Probe::Default,
+            rows: RowSettings {
+                resolution: args.resolution.unwrap_or(DEFAULT_SWEEP_RESOLUTION),
+                fov_deg: args.fov,
+                // Plain: the stored views' own patches (`bake --view-supersample 0 --probe
+                // off`); default: what a default `patchvis bake` writes at every level.
+                research: Research {
+                    view_supersample: match args.sweep_mode {
+                        SweepModeArg::Plain => Some(0),
+                        SweepModeArg::Default => None,
+                    },
+                    probe: match args.sweep_mode {
+                        SweepModeArg::Plain => Probe::Off,
+                        SweepModeArg::Default => Probe::Default,
+                    },
+                    ..Research::default()
+                },
+                ..RowSettings::default()
             },
             tiling: args.tiling.into(),
             memory,
@@ -826,8 +832,8 @@ fn run_sweep(args: &EvalArgs, distance_scale: f32) -> Result<()> {
         let report = json!({
             "mesh": args.mesh.display().to_string(),
             "triangles": mesh.triangle_count(),
-            "resolution": settings.bake.resolution,
-            "fov_deg": settings.bake.fov_deg,
+            "resolution": settings.bake.rows.resolution,
+            "fov_deg": settings.bake.rows.fov_deg,
             "views": settings.views,
             "seed": settings.seed,
             "distance_scale": settings.distance_scale,
@@ -844,7 +850,7 @@ fn run_sweep(args: &EvalArgs, distance_scale: f32) -> Result<()> {
             mesh.triangle_count(),
             settings.views,
             settings.seed,
-            settings.bake.resolution
+            settings.bake.rows.resolution
         )?;
         outln!(
             "| patches | level | views | file bytes | culling | ideal culling | identical views | views with a miss | missed px mean / p95 / max |"

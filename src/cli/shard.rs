@@ -9,7 +9,7 @@ use super::out::outln;
 use super::progress::Bars;
 use anyhow::{Result, anyhow};
 use patchvis::bake::{
-    Backend, BackendChoice, BakeSettings, LoadedPart, Outputs, Recipe, Shard, Stages,
+    Backend, BackendChoice, BakeSettings, LoadedPart, Outputs, Recipe, RowSettings, Shard, Stages,
     merge as merge_parts, mesh_hash, read_part, read_tiling_file, write_tiling_file,
 };
 use patchvis::output::{NamedPath, check_outputs};
@@ -119,7 +119,10 @@ pub fn bake(args: &BakeArgs, shard: &str, recipe: &Recipe) -> Result<()> {
 pub fn tile(args: &TileArgs) -> Result<()> {
     let recipe = BakeSettings {
         patches: args.patches,
-        fov_deg: args.fov,
+        rows: RowSettings {
+            fov_deg: args.fov,
+            ..RowSettings::default()
+        },
         tiling: args.tiling.into(),
         memory: memory_budget(args.memory),
         ..BakeSettings::default()

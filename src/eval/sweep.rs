@@ -14,7 +14,7 @@
 use super::evaluator::{EvalError, Evaluator, sampling_params};
 use super::summary::EvalSummary;
 use super::views::random_directions;
-use crate::bake::{Backend, BakeSettings, Recipe};
+use crate::bake::{Backend, BakeSettings, Recipe, RowSettings};
 use crate::ooc::Mesh;
 use crate::progress::Progress;
 use crate::runtime::Pvis;
@@ -82,7 +82,7 @@ pub fn sweep(
             let (numbered, visibility, _) = recipe
                 .number(tiling.clone(), rows.stored(level))
                 .map_err(EvalError::bake)?;
-            let bytes = recipe.encode(&params, mesh.triangle_count(), &numbered, &visibility);
+            let bytes = recipe.encode(&params, mesh.triangle_count(), &numbered, &visibility, &[]);
             // The encoder's output always parses; a failure here is a bug in the writer.
             let pvis = Pvis::parse(&bytes).expect("the encoder wrote a file the reader rejects");
             let evaluator = Evaluator::from_tiling(mesh, &numbered, settings.bake.memory);
@@ -116,15 +116,19 @@ pub fn sweep(
 fn recipe_for(template: &BakeSettings, patches: u32, finest: u32) -> Result<Recipe, EvalError> {
     let mut recipe = BakeSettings {
         patches,
-        level: 0,
         checkpoint: None,
         resume: false,
-        // The sweep evaluates the sampling sphere's levels at the sampling distance: no shells.
-        shells: 0,
+        rows: RowSettings {
+            level: Some(0),
+            // The sweep evaluates the sampling sphere's levels at the sampling distance: no
+            // shells.
+            shells: 0,
+            ..template.rows.clone()
+        },
         ..template.clone()
     }
     .check()
     .map_err(|e| EvalError::Settings(e.0))?;
-    recipe.settings.level = finest;
+    recipe.plan.main.level = finest;
     Ok(recipe)
 }

@@ -45,7 +45,7 @@ use bytemuck::Pod;
 use rayon::prelude::*;
 
 use crate::mapped::{Array, RecordWriter};
-use crate::memory::MemoryBudget;
+use crate::memory::SamplingShare;
 use crate::ooc::Mesh;
 use crate::tiling::{Tiling, bounding_sphere};
 
@@ -71,17 +71,21 @@ pub(crate) enum Storage {
 }
 
 impl Storage {
-    /// Heap when the copy fits the sampling mesh's share of `budget`
-    /// ([`MemoryBudget::split`]: the rest is for the per-thread buffers, the tiling's maps and
+    /// Heap when the copy fits the mesh copy's part of the sampler's `share`
+    /// (`MemoryBudget::split`: the rest is for the per-thread buffers, the tiling's maps and
     /// the allocator's slack) and, built whole with its vectors growing by doubling, next to
     /// the sampler's `other_needs` ([`crate::memory::FixedNeeds::sampling`]); mapped
     /// otherwise; heap when there is no budget.
-    pub(crate) fn for_budget(triangles: u64, budget: Option<u64>, other_needs: u64) -> Storage {
+    pub(crate) fn for_budget(
+        triangles: u64,
+        share: Option<SamplingShare>,
+        other_needs: u64,
+    ) -> Storage {
         let copy = estimated_bytes(triangles);
-        match budget {
-            Some(budget)
-                if copy > MemoryBudget::new(budget).split().sampling_mesh
-                    || copy.saturating_mul(2).saturating_add(other_needs) > budget =>
+        match share {
+            Some(share)
+                if copy > share.mesh_copy
+                    || copy.saturating_mul(2).saturating_add(other_needs) > share.total =>
             {
                 Storage::Mapped
             }
@@ -559,20 +563,24 @@ mod tests {
         }
     }
 
+    fn share(total: u64) -> SamplingShare {
+        crate::memory::MemoryBudget::new(total).split().sampling
+    }
+
     #[test]
     fn the_budget_picks_the_storage() {
         assert_eq!(Storage::for_budget(20_000_000, None, 0), Storage::Heap);
         assert_eq!(
-            Storage::for_budget(20_000_000, Some(512 << 20), 0),
+            Storage::for_budget(20_000_000, Some(share(512 << 20)), 0),
             Storage::Mapped
         );
         assert_eq!(
-            Storage::for_budget(100_000, Some(512 << 20), 0),
+            Storage::for_budget(100_000, Some(share(512 << 20)), 0),
             Storage::Heap
         );
         // A copy that fits its share but not beside the sampler's other needs is mapped.
         assert_eq!(
-            Storage::for_budget(100_000, Some(8 << 20), 7 << 20),
+            Storage::for_budget(100_000, Some(share(8 << 20)), 7 << 20),
             Storage::Mapped
         );
     }

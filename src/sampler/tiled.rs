@@ -47,7 +47,7 @@
 //! `resolution² × 8`-byte buffer per thread, the result (one bit per view and patch), and
 //! the regrouped mesh (about 12 bytes per triangle) — on the heap, or in
 //! a mapped temporary file when it would take more than a quarter of
-//! [`SamplingOptions::memory_budget`], so that the heap stays independent of the mesh size.
+//! [`SamplingOptions::memory`], so that the heap stays independent of the mesh size.
 //! **Invariant**: the result is the same for any number of threads, and with or without a
 //! resumed checkpoint; a row rendered with `views` equals the row of a run without.
 
@@ -92,10 +92,10 @@ pub struct SamplingOptions {
     pub checkpoint: Option<PathBuf>,
     /// Continue from the checkpoint if one exists (it must match these inputs).
     pub resume: bool,
-    /// Heap budget in bytes: when the mesh regrouped by patch would take more than a quarter
-    /// of it, the copy lives in a memory-mapped temporary file instead (`patch_mesh.rs`).
-    /// `None`: on the heap. Never changes the result.
-    pub memory_budget: Option<u64>,
+    /// The sampler's share of the heap budget: when the mesh regrouped by patch would take
+    /// more than its mesh copy's part, the copy lives in a memory-mapped temporary file
+    /// instead (`patch_mesh.rs`). `None`: on the heap. Never changes the result.
+    pub memory: Option<crate::memory::SamplingShare>,
     /// Render only these views (ascending ids) and the coarser views that seed them (their
     /// ancestors through `sphere::parents` or a face's corners), so that each is rendered
     /// exactly as in a full run; the other rows stay empty. `None`: every view. A sharded
@@ -280,7 +280,7 @@ fn sample_rows(
     .sampling();
     let storage = Storage::for_budget(
         u64::from(mesh.triangle_count()),
-        options.memory_budget,
+        options.memory,
         other_needs,
     );
     let patch_mesh = PatchMesh::new(mesh, tiling, storage).map_err(SamplingError::TempFile)?;

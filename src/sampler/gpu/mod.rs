@@ -242,9 +242,7 @@ impl GpuSampler {
         let counting = options.min_pixels > 1;
         let batch = batch_views(params.resolution, patches, words32, counting, &limits)?;
         let starts = tiling.starts();
-        let host_bytes = options.memory_budget.map_or(u64::MAX, |b| {
-            crate::memory::MemoryBudget::new(b).split().gpu_staging
-        });
+        let host_bytes = options.memory.map_or(u64::MAX, |share| share.gpu_staging);
         let chunks = upload::upload_mesh(
             device,
             queue,

@@ -188,7 +188,7 @@ fn a_tiny_memory_budget_maps_the_mesh_and_changes_nothing() {
     // A 1-byte budget puts the regrouped mesh and the key table in mapped files.
     let (mesh, tiling, p) = small_bunny(2);
     let mapped = SamplingOptions {
-        memory_budget: Some(1),
+        memory: Some(crate::memory::MemoryBudget::new(1).split().sampling),
         ..SamplingOptions::default()
     };
     assert_same(
