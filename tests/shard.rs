@@ -304,7 +304,7 @@ fn merge_refuses_missing_repeated_foreign_and_damaged_parts() {
         1,
         &[
             s(&old_part),
-            "part file version 2, expected 7",
+            "part file version 2, expected 8",
             "bake this shard again",
         ],
     );
