@@ -642,6 +642,20 @@ fn default_bakes_sample_three_shells_and_shells_0_writes_the_version_4_bytes() {
     assert_eq!(added, (plain.bytes().len() - none.bytes().len()) as u64);
 }
 
+/// `--shell-resolution` renders the shells' views coarser and leaves the sampling sphere's
+/// rows as they are.
+#[test]
+fn the_shells_may_be_sampled_coarser() {
+    let small = ["--patches", "100", "--level", "1", "--resolution", "64"];
+    let full = bake(&small);
+    let coarse = Bake::new(&small).args(&["--shell-resolution", "32"]).run();
+    assert_ne!(coarse.bytes(), full.bytes());
+    assert_eq!(rows(&coarse.bytes()), rows(&full.bytes()));
+    // At --resolution, the same file.
+    let same = Bake::new(&small).args(&["--shell-resolution", "64"]).run();
+    assert_eq!(same.bytes(), full.bytes());
+}
+
 /// The shells' flags out of range: one line, exit code 2, no output.
 #[test]
 fn bad_shell_flags_are_usage_errors() {
@@ -655,6 +669,14 @@ fn bad_shell_flags_are_usage_errors() {
         (&["--shell-min", "NaN"], "--shell-min NaN"),
         (&["--fov", "120", "--shell-min", "1.2"], "below 1.155"),
         (&["--shell-level", "8"], "--shell-level 8"),
+        (
+            &["--shell-resolution", "8"],
+            "--shell-resolution 8: expected 16 to",
+        ),
+        (
+            &["--shell-resolution", "1024"],
+            "expected 16 to --resolution (",
+        ),
     ] {
         let mut args = vec![BUNNY];
         args.extend_from_slice(flags);

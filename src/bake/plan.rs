@@ -392,10 +392,15 @@ impl Plan {
                     SphereKind::Sampling => self.main,
                     SphereKind::Shell(_) => self.shell,
                 };
+                let resolution = match kind {
+                    SphereKind::Sampling => params.resolution,
+                    SphereKind::Shell(_) => self.rows.shell_resolution.unwrap_or(params.resolution),
+                };
                 Sphere {
                     kind,
                     params: SamplingParams {
                         level: sampling.level,
+                        resolution,
                         ..*params
                     },
                     sampling,

@@ -134,6 +134,9 @@ pub struct RowSettings {
     pub shell_min: f64,
     /// Sphere level of the shells' views (`--shell-level`); `None`: the preset's.
     pub shell_level: Option<u32>,
+    /// ID-buffer side of the shells' views (`--shell-resolution`), at most `resolution`;
+    /// `None`: `resolution`.
+    pub shell_resolution: Option<u32>,
     /// Each view of the sampling sphere is also rendered from far out, so that its rows hold
     /// what cameras farther than the sampling distance see (`--far-views`,
     /// `sampler::SamplingOptions::far_view`).
@@ -187,6 +190,7 @@ impl Default for RowSettings {
             shells: DEFAULT_SHELLS,
             shell_min: DEFAULT_SHELL_MIN,
             shell_level: None,
+            shell_resolution: None,
             far_views: false,
             always_visible: Vec::new(),
             patch_order: PatchOrder::default(),
@@ -311,6 +315,15 @@ impl RowSettings {
                 "--shell-level {level}: expected a sphere level from 0 to {MAX_LEVEL}"
             ));
         }
+        if let Some(px) = self
+            .shell_resolution
+            .filter(|&px| !(MIN_RESOLUTION..=self.resolution).contains(&px))
+        {
+            return fail(format!(
+                "--shell-resolution {px}: expected {MIN_RESOLUTION} to --resolution ({}) pixels",
+                self.resolution
+            ));
+        }
         Ok(())
     }
 
@@ -329,6 +342,7 @@ impl RowSettings {
         b.put_u32(self.shells);
         b.put_u64(self.shell_min.to_bits());
         put_option(&mut b, self.shell_level);
+        put_option(&mut b, self.shell_resolution);
         b.put_u8(u8::from(self.far_views));
         b.put_u32(self.always_visible.len() as u32);
         for &p in &self.always_visible {
@@ -381,6 +395,7 @@ impl RowSettings {
             shells: f.u32()?,
             shell_min: f64::from_bits(f.u64()?),
             shell_level: option(&mut f)?,
+            shell_resolution: option(&mut f)?,
             far_views: flag(f.u8()?)?,
             always_visible: {
                 let n = f.u32()?;
@@ -494,6 +509,7 @@ pub(crate) mod tests {
             ("shells", |s| s.shells = 1),
             ("shell_min", |s| s.shell_min = 1.3),
             ("shell_level", |s| s.shell_level = Some(2)),
+            ("shell_resolution", |s| s.shell_resolution = Some(24)),
             ("far_views", |s| s.far_views = true),
             ("always_visible", |s| s.always_visible = vec![0, 5]),
             ("patch_order", |s| s.patch_order = PatchOrder::Spatial),
@@ -575,7 +591,7 @@ pub(crate) mod tests {
         assert_eq!(RowSettings::decode(&longer), None);
         // A count of always-visible ids past the bytes left, and a flag of 2.
         let mut huge = RowSettings::default().encode();
-        let at = 1 + 8 + 4 + 4 + 4 + 8 + 8 + 1;
+        let at = 1 + 8 + 4 + 4 + 4 + 8 + 8 + 8 + 1;
         huge[at..at + 4].copy_from_slice(&u32::MAX.to_le_bytes());
         assert_eq!(RowSettings::decode(&huge), None);
         let mut flag = RowSettings::default().encode();
@@ -643,6 +659,10 @@ pub(crate) mod tests {
             (
                 &|s: &mut BakeSettings| s.rows.shell_level = Some(MAX_LEVEL + 1),
                 "--shell-level",
+            ),
+            (
+                &|s: &mut BakeSettings| s.rows.shell_resolution = Some(1024),
+                "--shell-resolution",
             ),
         ] {
             let mut s = BakeSettings::default();

@@ -191,6 +191,10 @@ pub struct BakeArgs {
     /// is. [default: --level; with --conservative, --level but at most 4]
     #[arg(long, value_name = "L")]
     pub shell_level: Option<u32>,
+    /// ID-buffer side of the shells' views in pixels, at most --resolution: a near eye sees
+    /// the model larger, so each patch covers more pixels. [default: --resolution]
+    #[arg(long, value_name = "PX")]
+    pub shell_resolution: Option<u32>,
     /// Continue an interrupted bake from its checkpoint (OUT.pvis.ckpt, written after every
     /// sphere level); a checkpoint of other inputs or settings is refused.
     #[arg(long)]

@@ -37,6 +37,7 @@ pub(super) fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
         shells: args.shells,
         shell_min: args.shell_min,
         shell_level: args.shell_level,
+        shell_resolution: args.shell_resolution,
         far_views: args.far_views,
         always_visible: match &args.always_visible {
             Some(spec) => parse_patch_ids(spec)?,
