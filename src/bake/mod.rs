@@ -29,7 +29,7 @@
 //! Files: `settings.rs` (options, defaults, their codec), `plan.rs` (what they resolve to,
 //! the spheres of views), `recipe.rs` (the stages), `sample.rs` (each sphere's passes),
 //! `rows.rs` (sampled rows and the fold), `encode.rs` (numbering and encoding),
-//! `outputs.rs` (writing them), `shells.rs` (the sampling shells' radii and bands),
+//! `outputs.rs` (writing them), `checks.rs` (what is refused before any work), `shells.rs` (the sampling shells' radii and bands),
 //! `backend.rs` (CPU or GPU), `stages.rs` (time and heap),
 //! `frame.rs` (the working frame of coordinates `f32` cameras cannot handle). Sharded bakes:
 //! `shard.rs` (which views a shard owns, `--shard auto`), `shard_run.rs` (a shard's bake and
@@ -37,6 +37,7 @@
 //! `fingerprint.rs` (mesh and tiling hashes), `wire.rs` (the files' fields).
 
 mod backend;
+mod checks;
 mod encode;
 mod fingerprint;
 mod frame;

@@ -4,15 +4,18 @@
 //! patch count and cutting every level it evaluates from those rows ([`SampledRows::stored`]).
 
 use super::frame::Frame;
-use super::{Backend, BakeError, BakeSettings, Plan, SampledRows, Shard, Stages, encode};
+use super::{
+    Backend, BakeError, BakeSettings, Plan, SampledRows, SampledSphere, Shard, Stages, encode,
+};
 use crate::format::ShellRows;
-use crate::memory::{FixedNeeds, MemoryBudget};
-use crate::ooc::{Mesh, MeshError, MeshErrorKind, OpenOptions, default_cache_dir};
+use crate::memory::MemoryBudget;
+use crate::ooc::{Mesh, OpenOptions, default_cache_dir};
 use crate::progress::Progress;
 use crate::runtime::Pvis;
 use crate::tiling::{self, Tiling, TilingOptions};
 use crate::visibility::{SamplingParams, VisibilityMatrix};
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 /// Checked settings and their plan ([`BakeSettings::check`]): what a bake does.
 #[derive(Clone, Debug, PartialEq)]
@@ -151,70 +154,12 @@ impl Recipe {
         Ok(Mesh::open_with(path, &self.open_options())?)
     }
 
-    /// Checks what depends on the mesh before any work: the `--dilate` patch graph and the
-    /// `--conservative` solids against the budget, that some triangle has an area, and that the budget is at least what the
-    /// stages need whatever it is ([`MemoryBudget::minimum`]).
+    /// Checks what depends on the mesh before any work (`checks.rs`): the `--dilate` patch
+    /// graph and the probe's solids against the budget, that some triangle has an area, and
+    /// that the budget is at least what the stages need whatever it is
+    /// ([`MemoryBudget::minimum`]).
     pub fn check_mesh(&self, mesh: &Mesh) -> Result<(), BakeError> {
-        if self.plan.rows.research.dilate && !self.memory().fits_patch_graph(mesh.triangle_count())
-        {
-            return Err(BakeError::Budget(format!(
-                "--dilate builds a patch graph of about {} MiB for {} triangles, more than --memory {} MiB",
-                (u64::from(mesh.triangle_count()) * crate::memory::PATCH_GRAPH_BYTES_PER_TRIANGLE)
-                    >> 20,
-                mesh.triangle_count(),
-                self.memory().total() >> 20
-            )));
-        }
-        // The default's probe is turned off instead (`for_mesh`).
-        if self.plan.probes()
-            && !self.plan.default_probe
-            && !self.memory().fits_solids(mesh.triangle_count())
-        {
-            return Err(BakeError::Budget(format!(
-                "the probe pass (--conservative, --probe) finds the mesh's solids in about {} MiB for {} triangles, \
-                 more than half of --memory {} MiB; raise --memory",
-                (u64::from(mesh.triangle_count()) * crate::memory::SOLIDS_BYTES_PER_TRIANGLE) >> 20,
-                mesh.triangle_count(),
-                self.memory().total() >> 20
-            )));
-        }
-        if crate::tiling::first_with_area(mesh).is_none() {
-            return Err(BakeError::Mesh(MeshError::whole(
-                mesh.path(),
-                MeshErrorKind::Degenerate,
-                format!(
-                    "all {} triangles are degenerate (zero area); nothing to bake",
-                    mesh.triangle_count()
-                ),
-            )));
-        }
-        let patches = u64::from(self.settings.patches.min(mesh.triangle_count()));
-        // Every pass's rows live until the encoding: the sampling sphere's and each shell's.
-        let views = self.plan.sampled_view_count();
-        let needs = FixedNeeds {
-            triangles: mesh.triangle_count(),
-            resolution: self.resolution(),
-            workers: rayon::current_num_threads(),
-            row_bytes: views * patches.div_ceil(64) * 8,
-            probe: self.plan.probes(),
-        };
-        let minimum = MemoryBudget::minimum(&needs);
-        if self.memory().total() < minimum {
-            return Err(BakeError::Settings(format!(
-                "--memory {}: below the {} MiB this bake needs whatever its budget ({} \
-                 triangles, {} px ID buffers on {} threads, {} views × {} patches); use at \
-                 least {} MiB",
-                size_text(self.memory().total()),
-                minimum >> 20,
-                mesh.triangle_count(),
-                self.resolution(),
-                needs.workers,
-                views,
-                patches,
-                minimum >> 20
-            )));
-        }
-        Ok(())
+        super::checks::check_mesh(&self.plan, &self.settings, mesh)
     }
 
     /// The warning for ID buffers coarse enough to miss many patches (below
@@ -277,15 +222,26 @@ impl Recipe {
             progress.warn(&why);
             return recipe.sample_share(mesh, tiling, backend, shard, progress);
         }
-        super::sample::sample_spheres(
-            &self.plan,
-            &self.settings,
-            mesh,
-            tiling,
-            backend,
-            shard,
-            progress,
-        )
+        let params = self.sampling_params(mesh);
+        let spheres = self
+            .plan
+            .spheres(&params, self.settings.checkpoint.as_deref())?;
+        let run = super::sample::Run {
+            plan: &self.plan,
+            settings: &self.settings,
+        };
+        let mut sampled = Vec::with_capacity(spheres.len());
+        for sphere in &spheres {
+            let start = Instant::now();
+            let rows = run.sphere(mesh, tiling, backend, progress, sphere, shard)?;
+            sampled.push(SampledSphere {
+                kind: sphere.kind,
+                shell: sphere.shell,
+                rows,
+                seconds: start.elapsed().as_secs_f64(),
+            });
+        }
+        Ok(SampledRows { spheres: sampled })
     }
 
     /// The file's patch numbering: by co-visibility (patches seen from the same views get
@@ -477,17 +433,6 @@ pub(super) fn shell_rows(shells: &[BakedShell]) -> Vec<ShellRows<'_>> {
             visibility: &s.visibility,
         })
         .collect()
-}
-
-/// A byte count as `--memory` spells it: whole MiB, KiB or bytes.
-fn size_text(bytes: u64) -> String {
-    if bytes >= 1 << 20 && bytes.is_multiple_of(1 << 20) {
-        format!("{} MiB", bytes >> 20)
-    } else if bytes >= 1 << 10 && bytes.is_multiple_of(1 << 10) {
-        format!("{} KiB", bytes >> 10)
-    } else {
-        format!("{bytes} bytes")
-    }
 }
 
 /// Runs `f` as an indeterminate progress step (a spinner with elapsed time in the binary).

@@ -7,7 +7,7 @@
 //! owns in each pass, each seeded and rendered as in the whole bake.
 
 use super::plan::{Plan, Sphere, SphereKind};
-use super::rows::{SampledRows, SampledSphere, SphereRows};
+use super::rows::SphereRows;
 use super::{Backend, BakeError, BakeSettings, Shard};
 use crate::ooc::Mesh;
 use crate::progress::Progress;
@@ -15,45 +15,17 @@ use crate::sampler::{FoldCorners, SamplingOptions};
 use crate::tiling::Tiling;
 use crate::visibility::SamplingParams;
 use std::path::PathBuf;
-use std::time::Instant;
 
-/// Samples every sphere of `plan` around the mesh, the views `shard` owns or every view, with
-/// the checkpoints, resumption and budget of `settings`.
-pub(super) fn sample_spheres(
-    plan: &Plan,
-    settings: &BakeSettings,
-    mesh: &Mesh,
-    tiling: &Tiling,
-    backend: &Backend,
-    shard: Option<Shard>,
-    progress: &dyn Progress,
-) -> Result<SampledRows, BakeError> {
-    let params = plan.sampling_params(mesh);
-    let spheres = plan.spheres(&params, settings.checkpoint.as_deref())?;
-    let run = Run { plan, settings };
-    let mut sampled = Vec::with_capacity(spheres.len());
-    for sphere in &spheres {
-        let start = Instant::now();
-        let rows = run.sphere(mesh, tiling, backend, progress, sphere, shard)?;
-        sampled.push(SampledSphere {
-            kind: sphere.kind,
-            shell: sphere.shell,
-            rows,
-            seconds: start.elapsed().as_secs_f64(),
-        });
-    }
-    Ok(SampledRows { spheres: sampled })
-}
-
-/// What every sphere's sampling takes from the bake.
-struct Run<'a> {
-    plan: &'a Plan,
-    settings: &'a BakeSettings,
+/// What every sphere's sampling takes from the bake: the plan, and the checkpoints'
+/// resumption and the budget of the settings.
+pub(super) struct Run<'a> {
+    pub(super) plan: &'a Plan,
+    pub(super) settings: &'a BakeSettings,
 }
 
 impl Run<'_> {
-    /// Samples one sphere of views.
-    fn sphere(
+    /// Samples one sphere of views, the views `shard` owns or every view.
+    pub(super) fn sphere(
         &self,
         mesh: &Mesh,
         tiling: &Tiling,

@@ -94,10 +94,10 @@ pub fn bands(outer: f32, shells: &[f32]) -> Vec<Option<[f32; 2]>> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn params(radius: f32) -> SamplingParams {
+    pub(crate) fn params(radius: f32) -> SamplingParams {
         SamplingParams {
             level: 2,
             resolution: 64,

@@ -327,13 +327,7 @@ fn the_default_probe_turns_itself_off_where_it_cannot_run() {
 
 #[test]
 fn the_spheres_lie_at_the_shells_and_answer_their_bands() {
-    let params = SamplingParams {
-        level: 0,
-        resolution: 64,
-        fov_deg: 45.0,
-        center: [0.0; 3],
-        radius: 2.0,
-    };
+    let params = shells::tests::params(2.0);
     let c = plan(|s| s.far_views = true).unwrap();
     let spheres = c.spheres(&params, None).unwrap();
     let distances = c.shell_distances(&params).unwrap();
