@@ -52,7 +52,7 @@ pub const SOLIDS_BYTES_PER_TRIANGLE: u64 = 60;
 
 /// The largest mesh whose solids fit the solids' share of the smallest default budget: the
 /// default bake's probe pass runs on meshes up to this many triangles (2,236,962), on every
-/// machine alike (`bake::Recipe::for_mesh`).
+/// machine alike (`bake::Plan::for_mesh`).
 pub const DEFAULT_PROBE_MAX_TRIANGLES: u32 = (MIN_DEFAULT / 2 / SOLIDS_BYTES_PER_TRIANGLE) as u32;
 
 /// Heap of the sampler per triangle of the batch of its patch-ordered mesh being built

@@ -575,7 +575,7 @@ const SHELL_FLAGS: [&str; 6] = ["--patches", "200", "--level", "2", "--resolutio
 /// `--shells 0` writes the bytes bakes wrote before shells, and the bytes each shell adds
 /// are the difference.
 #[test]
-fn default_bakes_sample_three_shells_and_shells_0_writes_the_version_4_bytes() {
+fn default_bakes_sample_two_shells_and_shells_0_writes_the_version_4_bytes() {
     let default = Bake::new(&SHELL_FLAGS).stats().run();
     let out = common::stdout(&default.output);
     assert!(

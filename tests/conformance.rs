@@ -420,7 +420,7 @@ fn valid_specs() -> Vec<ValidSpec> {
             )
         },
         ValidSpec {
-            encoding: VisibilityEncoding::Hierarchical,
+            encoding: VisibilityEncoding::Table,
             ..base(
                 "009-level2-65-patches-table",
                 2,
@@ -514,7 +514,7 @@ fn valid_specs() -> Vec<ValidSpec> {
             )
         },
         ValidSpec {
-            encoding: VisibilityEncoding::Hierarchical,
+            encoding: VisibilityEncoding::Table,
             ..v5(
                 "020-v5-level2-two-shells-table",
                 2,

@@ -156,7 +156,7 @@ fn gpu_refuses_what_it_does_not_implement() {
     let params = SamplingParams::for_mesh(mesh, 0, 16, 45.0);
     for options in [
         SamplingOptions {
-            conservative: true,
+            conservative_raster: true,
             ..SamplingOptions::default()
         },
         SamplingOptions {

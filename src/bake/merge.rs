@@ -99,10 +99,30 @@ fn consensus(parts: &[LoadedPart], key: impl Fn(&Part) -> u64) -> u64 {
 
 /// Merges `parts` (in any order) into the `.pvis` a single bake with their settings writes.
 pub fn merge(parts: &[LoadedPart]) -> Result<Merged, MergeError> {
-    let whole = |reason: String| MergeError { part: None, reason };
     if parts.is_empty() {
         return Err(whole("no parts to merge".into()));
     }
+    let count = check_set(parts)?;
+    let first = &parts[0].part;
+    // The part's decoding checked that its settings plan.
+    let plan = Plan::new(first.settings.clone()).map_err(|e| {
+        MergeError::part(
+            &parts[0].path,
+            format!("its settings do not check: {e}; bake this shard again"),
+        )
+    })?;
+    let matrices = gather_passes(parts, &plan)?;
+    encode_passes(&parts[0], &plan, matrices, count)
+}
+
+/// A fault of the whole set of parts.
+fn whole(reason: String) -> MergeError {
+    MergeError { part: None, reason }
+}
+
+/// Checks that `parts` are one bake's, of the same mesh, settings, tiling and shard count,
+/// each shard once and none missing; returns the shard count.
+fn check_set(parts: &[LoadedPart]) -> Result<u32, MergeError> {
     let mesh = consensus(parts, |p| p.mesh_hash);
     let settings = consensus(parts, |p| p.settings.hash());
     let tiling = consensus(parts, |p| p.tiling_hash);
@@ -166,14 +186,14 @@ pub fn merge(parts: &[LoadedPart]) -> Result<Merged, MergeError> {
             parts.len()
         )));
     }
+    Ok(count)
+}
+
+/// Every pass's rows of the bake `plan` describes, put together from the views each part
+/// holds; refuses a part with other passes, patches or views than its shard's, a view held
+/// twice, and a view no part holds.
+fn gather_passes(parts: &[LoadedPart], plan: &Plan) -> Result<Vec<VisibilityMatrix>, MergeError> {
     let first = &parts[0].part;
-    // The part's decoding checked that its settings plan.
-    let plan = Plan::new(first.settings.clone()).map_err(|e| {
-        MergeError::part(
-            &parts[0].path,
-            format!("its settings do not check: {e}; bake this shard again"),
-        )
-    })?;
     let patch_count = first.patches.len() as u32;
     let levels = plan.pass_levels();
     let mut matrices: Vec<VisibilityMatrix> = levels
@@ -227,6 +247,20 @@ pub fn merge(parts: &[LoadedPart]) -> Result<Merged, MergeError> {
             "no part holds view {view} of level {level}; bake every shard with one patchvis build"
         )));
     }
+    Ok(matrices)
+}
+
+/// What `Recipe::run` does after sampling, on the part's records instead of the tiling: each
+/// sphere's passes `matrices` folded into its stored rows, the patches numbered and the file
+/// encoded (of a bake in `shards` shards).
+fn encode_passes(
+    first: &LoadedPart,
+    plan: &Plan,
+    matrices: Vec<VisibilityMatrix>,
+    shards: u32,
+) -> Result<Merged, MergeError> {
+    let (path, first) = (&first.path, &first.part);
+    let patch_count = first.patches.len() as u32;
     // Back into one sphere's rows per sphere: the sampling sphere's passes, then each shell's.
     let params = first.params;
     let mut matrices = matrices.into_iter();
@@ -245,13 +279,12 @@ pub fn merge(parts: &[LoadedPart]) -> Result<Merged, MergeError> {
         }
         .stored(sampling.level)
     };
-    // What `Recipe::run` does after sampling, on the records instead of the tiling.
     let visibility = stored(plan.main);
     let shells: Vec<VisibilityMatrix> = (0..plan.rows.shells).map(|_| stored(plan.shell)).collect();
     // The parts carry the file's camera: the shells are where the single bake puts them.
     let distances = plan
         .shell_distances(&params)
-        .map_err(|e| MergeError::part(&parts[0].path, format!("{e}; bake this shard again")))?;
+        .map_err(|e| MergeError::part(path, format!("{e}; bake this shard again")))?;
     let order = encode::file_patch_order(plan.rows.patch_order, &first.patches, &visibility);
     let (patches, visibility, shells) = match order {
         Some(order) => (
@@ -289,7 +322,7 @@ pub fn merge(parts: &[LoadedPart]) -> Result<Merged, MergeError> {
         visibility_bytes,
         views: visibility.views(),
         patches: patch_count,
-        shards: count,
+        shards,
         shells: distances.into_iter().zip(shells).collect(),
     })
 }

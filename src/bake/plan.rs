@@ -330,7 +330,7 @@ impl Plan {
     }
 
     /// The layout of each pass's views, in [`Plan::pass_levels`]' order: the sampling
-    /// sphere's finer pass has `--finer-views`' (`sampler::FineViews::pass`), every other pass
+    /// sphere's finer pass has `--finer-views`' (`sampler::PassViews::pass`), every other pass
     /// the sphere's vertices.
     pub fn pass_finer_views(&self) -> Vec<FinerViews> {
         let main = &self.main;

@@ -14,7 +14,7 @@
 //! query's answer depends on is set), unless the bake keeps the rows as sampled.
 
 use super::plan::{SphereKind, Supersample};
-use crate::sampler::{FineViews, fold_views, saturate, split_fold_views};
+use crate::sampler::{PassViews, fold_views, saturate, split_fold_views};
 use crate::sphere::{MAX_LEVEL, view_count};
 use crate::visibility::{SamplingParams, VisibilityMatrix};
 
@@ -81,10 +81,10 @@ impl SphereRows {
     /// The views of the pass folded into stored level `level`: the sampled level's finer
     /// views are laid out as the bake asked, those of a coarser level cut from the same rows
     /// (`eval --sweep`) are sphere vertices of the sampled level.
-    fn fine_views(&self, level: u32) -> FineViews {
+    fn fine_views(&self, level: u32) -> PassViews {
         let fine_level = (level + self.supersample.extra_levels).min(MAX_LEVEL);
         let finer = self.supersample.finer_views(self.params.level, fine_level);
-        FineViews::new(level, fine_level, finer)
+        PassViews::new(level, fine_level, finer)
     }
 
     /// The matrices of the passes, in sampling order: the plain pass, then the thresholded

@@ -109,7 +109,7 @@ impl Run<'_> {
             min_pixels,
             dilate: rows.research.dilate,
             always_visible: rows.always_visible.clone(),
-            conservative: rows.research.conservative_raster,
+            conservative_raster: rows.research.conservative_raster,
             checkpoint,
             resume: self.settings.resume,
             memory: Some(self.settings.memory.split().sampling),

@@ -354,7 +354,7 @@ impl RowSettings {
         });
         b.put_u8(match self.encoding {
             VisibilityEncoding::Raw => 0,
-            VisibilityEncoding::Hierarchical => 1,
+            VisibilityEncoding::Table => 1,
             VisibilityEncoding::Tree => 2,
         });
         b.put_u32(r.min_pixels);
@@ -413,7 +413,7 @@ impl RowSettings {
             },
             encoding: match f.u8()? {
                 0 => VisibilityEncoding::Raw,
-                1 => VisibilityEncoding::Hierarchical,
+                1 => VisibilityEncoding::Table,
                 2 => VisibilityEncoding::Tree,
                 _ => return None,
             },
@@ -513,9 +513,7 @@ pub(crate) mod tests {
             ("far_views", |s| s.far_views = true),
             ("always_visible", |s| s.always_visible = vec![0, 5]),
             ("patch_order", |s| s.patch_order = PatchOrder::Spatial),
-            ("encoding", |s| {
-                s.encoding = VisibilityEncoding::Hierarchical
-            }),
+            ("encoding", |s| s.encoding = VisibilityEncoding::Table),
             ("min_pixels", |s| s.research.min_pixels = 2),
             ("dilate", |s| s.research.dilate = true),
             ("probe", |s| s.research.probe = Probe::Pixels(2)),

@@ -17,7 +17,7 @@ use super::tiling_file::TilingFile;
 use super::{Backend, BakeError, Part, Recipe, Shard, Stages};
 use crate::ooc::Mesh;
 use crate::progress::Progress;
-use crate::sampler::FineViews;
+use crate::sampler::PassViews;
 use crate::tiling::Tiling;
 use crate::visibility::VisibilityMatrix;
 use std::path::Path;
@@ -102,7 +102,7 @@ impl Recipe {
             .map(|((level, finer), matrix)| {
                 let views = shard.views(level);
                 owned_views += views.len() as u32;
-                let pass = FineViews::pass(level, finer);
+                let pass = PassViews::pass(level, finer);
                 debug_assert_eq!(pass.slots(), matrix.views());
                 rendered_views += crate::sampler::rendered_view_count(&pass, &views);
                 PassRows {

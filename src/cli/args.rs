@@ -161,7 +161,8 @@ pub struct BakeArgs {
     /// covers every finer sample of a face, culls more, misses more), or, with
     /// --conservative, what the view showed to all of them and what only the probe pass added
     /// to one (split), or to one per sphere face holding it, chosen over the whole sphere
-    /// (cover). [default: all; split with --conservative; cover with --probe]
+    /// (cover). [default: cover with the probe pass (the default's, --probe); split with
+    /// --conservative; all with --probe off]
     #[arg(long, value_enum, value_name = "WHICH")]
     pub fold_corners: Option<FoldCornersArg>,
     /// With one level of view supersampling: where the finer views lie. midpoints: the finer
@@ -666,7 +667,7 @@ pub fn parse_size(s: &str) -> Result<u64, String> {
 }
 
 /// The largest `--probe PX`: occluders shrunk further than this hide nothing near an edge
-/// (`--conservative` shrinks by 2).
+/// (the default and `--conservative` shrink by 1).
 const MAX_PROBE_PIXELS: u32 = 16;
 
 /// `--probe PX|off`.

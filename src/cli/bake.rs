@@ -16,7 +16,7 @@ use patchvis::bake::{
 use patchvis::format::VisibilityEncoding;
 use patchvis::ooc::Mesh;
 use patchvis::output::{NamedPath, check_outputs};
-use patchvis::sampler::{FineViews, FinerViews, FoldCorners};
+use patchvis::sampler::{FinerViews, FoldCorners, PassViews};
 use patchvis::sphere::view_count;
 use patchvis::tiling::PatchId;
 use serde_json::json;
@@ -49,7 +49,7 @@ pub(super) fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
         },
         encoding: match args.encoding {
             EncodingArg::Tree => VisibilityEncoding::Tree,
-            EncodingArg::Table => VisibilityEncoding::Hierarchical,
+            EncodingArg::Table => VisibilityEncoding::Table,
             EncodingArg::Raw => VisibilityEncoding::Raw,
         },
         research: Research {
@@ -308,7 +308,7 @@ impl Summary<'_> {
         let supersample = plan.main.supersample;
         let k = supersample.extra_levels;
         if k > 0 {
-            let views = FineViews::new(level, level + k, supersample.finer);
+            let views = PassViews::new(level, level + k, supersample.finer);
             let which = match supersample.finer {
                 FinerViews::Midpoints => format!("level {}", level + k),
                 FinerViews::Centroids => format!("level {level} and its faces' centroids"),

@@ -74,7 +74,7 @@ pub enum VisibilityEncoding {
     Raw,
     /// Encoding 1: each view range-coded given its two parent views, with a 32-context table
     /// per level. Readable by version-2 readers.
-    Hierarchical,
+    Table,
     /// Encoding 2: as encoding 1, with probabilities from a context tree over wider features
     /// of the parents' rows (5–9% smaller on the bunny, spec/FORMAT.md). The default.
     Tree,
@@ -109,7 +109,7 @@ pub fn encode_with(contents: &BakeContents, encoding: VisibilityEncoding) -> Vec
     let layout = match encoding {
         VisibilityEncoding::Tree => PatchTableLayout::Compact,
         // Written for readers of version 2, which know neither the tree nor the compact table.
-        VisibilityEncoding::Raw | VisibilityEncoding::Hierarchical => PatchTableLayout::Full,
+        VisibilityEncoding::Raw | VisibilityEncoding::Table => PatchTableLayout::Full,
     };
     encode_as(contents, encoding, layout)
 }
@@ -168,7 +168,7 @@ pub fn encode_as(
     };
     let body = |matrix: &VisibilityMatrix, level: u32| match encoding {
         VisibilityEncoding::Raw => encode_raw(matrix),
-        VisibilityEncoding::Hierarchical => encode_hierarchical(matrix, level),
+        VisibilityEncoding::Table => encode_hierarchical(matrix, level),
         VisibilityEncoding::Tree => encode_tree(matrix, &facing_axes),
     };
     let visb = body(contents.visibility, params.level.min(MAX_LEVEL));

@@ -116,7 +116,7 @@ fn round_trip_as(
     let pvis = Pvis::parse(&bytes).expect("the writer's output parses");
     let expected_encoding = match encoding {
         VisibilityEncoding::Raw => ENCODING_RAW,
-        VisibilityEncoding::Hierarchical => ENCODING_HIERARCHICAL,
+        VisibilityEncoding::Table => ENCODING_HIERARCHICAL,
         VisibilityEncoding::Tree => ENCODING_TREE,
     };
     assert_eq!(pvis.encoding(), expected_encoding);
@@ -466,7 +466,7 @@ proptest! {
         seed in any::<u64>(),
         encoding in proptest::sample::select(vec![
             VisibilityEncoding::Raw,
-            VisibilityEncoding::Hierarchical,
+            VisibilityEncoding::Table,
             VisibilityEncoding::Tree,
         ]),
     ) {
@@ -503,7 +503,7 @@ fn coded_file(encoding: VisibilityEncoding) -> Vec<u8> {
 
 #[test]
 fn every_truncated_prefix_trailing_byte_and_bit_flip_of_a_coded_file_is_refused() {
-    for encoding in [VisibilityEncoding::Hierarchical, VisibilityEncoding::Tree] {
+    for encoding in [VisibilityEncoding::Table, VisibilityEncoding::Tree] {
         every_change_is_refused(coded_file(encoding));
     }
 }
@@ -533,7 +533,7 @@ fn with_crc(mut bytes: Vec<u8>) -> Vec<u8> {
 
 #[test]
 fn coded_visb_structure_errors() {
-    let bytes = coded_file(VisibilityEncoding::Hierarchical);
+    let bytes = coded_file(VisibilityEncoding::Table);
     let visb = u64::from_le_bytes(bytes[32 + 48 + 8..32 + 48 + 16].try_into().unwrap()) as usize;
     // A zero probability would collapse the range.
     let mut zero_prob = bytes.clone();
@@ -659,7 +659,7 @@ fn tree_coding_beats_the_table_on_structured_rows() {
             }
         }
     }
-    let table = round_trip_with(level, &counts, &matrix, VisibilityEncoding::Hierarchical);
+    let table = round_trip_with(level, &counts, &matrix, VisibilityEncoding::Table);
     let tree = round_trip_with(level, &counts, &matrix, VisibilityEncoding::Tree);
     assert!(
         tree.len() < table.len(),
@@ -722,7 +722,7 @@ fn shells_are_written_to_shel_in_version_5() {
     assert!(!plain.windows(4).any(|w| w == TAG_SHEL));
     for encoding in [
         VisibilityEncoding::Raw,
-        VisibilityEncoding::Hierarchical,
+        VisibilityEncoding::Table,
         VisibilityEncoding::Tree,
     ] {
         let bytes = encode_shells(&counts, &main, &shells, encoding);

@@ -178,14 +178,10 @@ fn every_mode_answers_like_the_band_rule() {
     let cases: [(&[u32], VisibilityEncoding, [f32; 3]); 6] = [
         (&[2, 2], VisibilityEncoding::Tree, [0.0; 3]),
         (&[2, 1, 3], VisibilityEncoding::Tree, [1.0, -2.0, 0.5]),
-        (&[3, 2, 2, 0], VisibilityEncoding::Hierarchical, [0.0; 3]),
+        (&[3, 2, 2, 0], VisibilityEncoding::Table, [0.0; 3]),
         (&[1, 3, 1], VisibilityEncoding::Raw, [0.0; 3]),
         (&[2, 0, 2, 3], VisibilityEncoding::Raw, [-3.0, 0.25, 7.0]),
-        (
-            &[3, 3, 2],
-            VisibilityEncoding::Hierarchical,
-            [0.5, 0.5, 0.5],
-        ),
+        (&[3, 3, 2], VisibilityEncoding::Table, [0.5, 0.5, 0.5]),
     ];
     let mut rng = Rng::new(0x5EED_5E11);
     for (case, &(levels, encoding, center)) in cases.iter().enumerate() {

@@ -65,7 +65,7 @@ pub(crate) fn input_hash(
     }
     h.word(u64::from(params.radius.to_bits()));
     h.word(u64::from(options.min_pixels));
-    h.word(u64::from(options.dilate) | u64::from(options.conservative) << 1);
+    h.word(u64::from(options.dilate) | u64::from(options.conservative_raster) << 1);
     h.word(options.always_visible.len() as u64);
     for &p in &options.always_visible {
         h.word(u64::from(p));

@@ -1,8 +1,8 @@
 //! Conservative rasterization for `bake --conservative-raster`: a triangle marks every pixel
 //! whose square it touches, with the nearest depth it can have inside that pixel.
 //!
-//! Not what `bake --conservative` does: measured on the bunny (BENCHMARKS.md, "Quality
-//! (issue 6)"), this rasterization made view-supersampled bakes *worse* (98.5% instead of
+//! Not what `bake --conservative` does: measured on the bunny (BENCHMARKS.md, "Quality"),
+//! this rasterization made view-supersampled bakes *worse* (98.5% instead of
 //! 99.5% identical views), because a pixel keeps one winner at the nearest depth a triangle
 //! reaches anywhere in it, so widened occluders also hide patches that point sampling sees
 //! through a gap; its rows are not a superset of point-sampled rows. The variant that would
@@ -10,8 +10,8 @@
 //! square as occluder; mark every touching triangle in front of it) finds almost no occluder
 //! on scanned meshes: the bunny's visible triangles cover ~1.8 pixels each at 512², too small
 //! to contain a pixel square, so nearly every touched triangle would be marked. `bake
-//! --conservative` therefore point-samples at twice the resolution instead (measured: ≥ 99% of
-//! random bunny views identical at the resolution and at twice it).
+//! --conservative` point-samples instead, and adds what may show near each view with the
+//! probe pass (`tiled/probe.rs`).
 //!
 //! Point-sampled ID buffers miss patches that show only as sub-pixel slivers (a triangle
 //! between pixel centres draws nothing). Here coverage is the exact overlap test of the closed

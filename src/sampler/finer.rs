@@ -51,7 +51,7 @@ impl FinerViews {
 /// module documentation): which indices name a view, and each one's direction, seeds and
 /// fold targets.
 #[derive(Clone, Debug)]
-pub struct FineViews {
+pub struct PassViews {
     level: u32,
     fine_level: u32,
     /// The leaf faces of `level` when the finer views are their centroids.
@@ -80,12 +80,12 @@ impl Seeds {
     }
 }
 
-impl FineViews {
+impl PassViews {
     /// The views of a pass at `fine_level` folded into `level`, laid out as `finer` says.
     ///
     /// Panics (caller contract) if `fine_level < level`, or with centroids unless
     /// `fine_level == level + 1`.
-    pub fn new(level: u32, fine_level: u32, finer: FinerViews) -> FineViews {
+    pub fn new(level: u32, fine_level: u32, finer: FinerViews) -> PassViews {
         assert!(
             fine_level >= level,
             "fine level {fine_level} is coarser than the stored level {level}"
@@ -101,7 +101,7 @@ impl FineViews {
                 Some(leaf_faces(level))
             }
         };
-        FineViews {
+        PassViews {
             level,
             fine_level,
             faces,
@@ -113,12 +113,12 @@ impl FineViews {
     /// parents.
     ///
     /// Panics (caller contract) with centroids at level 0.
-    pub fn pass(level: u32, finer: FinerViews) -> FineViews {
+    pub fn pass(level: u32, finer: FinerViews) -> PassViews {
         match finer {
-            FinerViews::Midpoints => FineViews::new(level, level, finer),
+            FinerViews::Midpoints => PassViews::new(level, level, finer),
             FinerViews::Centroids => {
                 assert!(level > 0, "centroid views need a coarser level");
-                FineViews::new(level - 1, level, finer)
+                PassViews::new(level - 1, level, finer)
             }
         }
     }
@@ -241,7 +241,7 @@ mod tests {
     #[test]
     fn every_centroid_lies_in_its_face_and_folds_into_its_corners() {
         for level in 0..=4 {
-            let views = FineViews::new(level, level + 1, FinerViews::Centroids);
+            let views = PassViews::new(level, level + 1, FinerViews::Centroids);
             let faces = leaf_faces(level);
             assert_eq!(views.end() - view_count(level), faces.len() as u32);
             assert!(views.end() <= views.slots());
@@ -263,7 +263,7 @@ mod tests {
 
     #[test]
     fn midpoints_are_the_sphere_vertices() {
-        let views = FineViews::new(2, 3, FinerViews::Midpoints);
+        let views = PassViews::new(2, 3, FinerViews::Midpoints);
         assert_eq!(views.end(), view_count(3));
         for u in 0..view_count(3) {
             assert_eq!(views.direction(u), direction(u));
@@ -280,7 +280,7 @@ mod tests {
         // Points spread over every face of level 2: the nearest of the corners and the
         // centroid is within max_seed_angle / √3 (with the rounding's margin).
         let level = 2;
-        let views = FineViews::new(level, level + 1, FinerViews::Centroids);
+        let views = PassViews::new(level, level + 1, FinerViews::Centroids);
         let bound = views.max_seed_angle() / 3f64.sqrt() * 1.0001;
         let angle = |a: [f32; 3], b: [f32; 3]| {
             let dot: f64 = (0..3).map(|k| f64::from(a[k]) * f64::from(b[k])).sum();

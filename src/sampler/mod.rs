@@ -40,7 +40,7 @@ pub use camera::{Camera, MAX_RESOLUTION, NEAR_FRACTION};
 /// The checkpoint file's bytes without a mesh, for the `checkpoint` fuzz target.
 #[doc(hidden)]
 pub use checkpoint::{decode as decode_checkpoint, encode as encode_checkpoint};
-pub use finer::{FineViews, FinerViews, Seeds};
+pub use finer::{FinerViews, PassViews, Seeds};
 pub use id_buffer::{IdBuffer, NO_PATCH};
 pub use near::{MAX_NEAR_CAMERAS, NearCameras, near_camera_count, near_cameras};
 pub use raster::{Rasterizer, SUBPIXEL_BITS, render_ids, render_ids_filtered};

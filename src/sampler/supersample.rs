@@ -20,7 +20,7 @@
 //! With centroid finer views (`bake --finer-views centroids`, `finer.rs`), each finer view
 //! lies strictly inside one level-`L` face and goes to its three corners: the coverage below
 //! holds as for a face-interior vertex. The `*_views` folds take the pass's layout
-//! ([`FineViews`]); the others fold sphere vertices.
+//! ([`PassViews`]); the others fold sphere vertices.
 //!
 //! Both are decided on the integer lattice of `sphere::numbering` (a level-`L + K` point lies
 //! on a level-`L` edge exactly when one of its coordinates is a multiple of `2^K`), not with
@@ -58,7 +58,7 @@
 //! point location for face-interior views) and 2 or 3 row ORs per fine view.
 
 use super::VisibilityMatrix;
-use super::finer::{FineViews, FinerViews};
+use super::finer::{FinerViews, PassViews};
 use crate::sphere::{
     LatticePoint, ViewIndex, direction, lattice_point, leaf_faces, locate, view_count, view_index,
 };
@@ -197,7 +197,7 @@ pub fn fold_into_with(
     level: u32,
     corners: FoldCorners,
 ) -> VisibilityMatrix {
-    let views = FineViews::new(level, fine_level, FinerViews::Midpoints);
+    let views = PassViews::new(level, fine_level, FinerViews::Midpoints);
     fold_views(coarse, fine, &views, corners)
 }
 
@@ -208,7 +208,7 @@ pub fn fold_into_with(
 pub fn fold_views(
     mut coarse: VisibilityMatrix,
     fine: &VisibilityMatrix,
-    views: &FineViews,
+    views: &PassViews,
     corners: FoldCorners,
 ) -> VisibilityMatrix {
     check_shapes(&coarse, fine, views);
@@ -234,7 +234,7 @@ pub fn fold_views(
 
 /// Checks the fold's caller contracts: one row of `fine` per slot of `views`, one row of
 /// `coarse` per stored view, the same patches.
-fn check_shapes(coarse: &VisibilityMatrix, fine: &VisibilityMatrix, views: &FineViews) {
+fn check_shapes(coarse: &VisibilityMatrix, fine: &VisibilityMatrix, views: &PassViews) {
     assert_eq!(
         fine.views(),
         views.slots(),
@@ -275,7 +275,7 @@ pub fn split_fold(
     fine_level: u32,
     level: u32,
 ) -> VisibilityMatrix {
-    let views = FineViews::new(level, fine_level, FinerViews::Midpoints);
+    let views = PassViews::new(level, fine_level, FinerViews::Midpoints);
     split_fold_views(coarse, full, seen, &views)
 }
 
@@ -286,7 +286,7 @@ pub fn split_fold_views(
     coarse: VisibilityMatrix,
     full: &VisibilityMatrix,
     seen: &VisibilityMatrix,
-    views: &FineViews,
+    views: &PassViews,
 ) -> VisibilityMatrix {
     assert_eq!(
         (full.views(), full.patches()),
@@ -362,7 +362,7 @@ pub fn cover_fold(
     fine_level: u32,
     level: u32,
 ) -> VisibilityMatrix {
-    let views = FineViews::new(level, fine_level, FinerViews::Midpoints);
+    let views = PassViews::new(level, fine_level, FinerViews::Midpoints);
     check_shapes(&coarse, fine, &views);
     cover_fold_views(coarse, fine, &views)
 }
@@ -371,7 +371,7 @@ pub fn cover_fold(
 fn cover_fold_views(
     mut coarse: VisibilityMatrix,
     fine: &VisibilityMatrix,
-    views: &FineViews,
+    views: &PassViews,
 ) -> VisibilityMatrix {
     let (faces, around) = faces_around(views.level());
     let words = coarse.words_per_row();

@@ -36,7 +36,7 @@
 //!
 //! Options: `min_pixels` (a patch counts only if it covers that many pixels), `dilate` (also
 //! mark edge neighbours of visible patches that may face the eye), `always_visible` (patches
-//! set in every row), `conservative` (conservative rasterization, `conservative.rs`), a
+//! set in every row), `conservative_raster` (conservative rasterization, `conservative.rs`), a
 //! checkpoint written after each level (`checkpoint.rs`), `views` (render only some views
 //! and the ancestors that seed them: a shard of a sharded bake, `bake::Shard`), and
 //! `folds_into` (the probe of a finer view leaves out what its parents hold where the fold
@@ -53,7 +53,7 @@
 
 use super::camera::{Camera, SphereBounds, normalize, widen};
 use super::checkpoint;
-use super::finer::{FineViews, FinerViews};
+use super::finer::{FinerViews, PassViews};
 use super::key_buffer::{KeyBuffer, Pixel, low_half, patch_slot};
 use super::marks::Marks;
 use super::near::{near_camera_count, near_cameras};
@@ -87,7 +87,7 @@ pub struct SamplingOptions {
     pub always_visible: Vec<PatchId>,
     /// Conservative rasterization: a triangle marks every pixel it touches, at its nearest
     /// depth there, so patches seen only as sub-pixel slivers are caught.
-    pub conservative: bool,
+    pub conservative_raster: bool,
     /// Where to write a checkpoint after each sphere level; `None` writes none.
     pub checkpoint: Option<PathBuf>,
     /// Continue from the checkpoint if one exists (it must match these inputs).
@@ -240,7 +240,7 @@ fn sample_rows(
         "a near pass renders sphere vertices only"
     );
     let views = view_count(params.level);
-    let pass = FineViews::pass(params.level, options.finer);
+    let pass = PassViews::pass(params.level, options.finer);
     // Words of one row of the patches: the rows' prefix of the matrix's rows.
     let words = (patch_count as usize).div_ceil(64);
     let mut matrix = if split {
@@ -348,7 +348,7 @@ fn sample_rows(
 
 /// How many views of the pass `pass` a run with [`SamplingOptions::views`] `wanted`
 /// renders: those that exist, and their ancestors.
-pub fn rendered_view_count(pass: &FineViews, wanted: &[u32]) -> u32 {
+pub fn rendered_view_count(pass: &PassViews, wanted: &[u32]) -> u32 {
     rendered_views(pass, Some(wanted))
         .map_or(pass.end(), |r| r.iter().filter(|&&b| b).count() as u32)
 }
@@ -356,7 +356,7 @@ pub fn rendered_view_count(pass: &FineViews, wanted: &[u32]) -> u32 {
 /// Which views of `pass` a run renders when it wants `wanted` (ascending ids below its slot
 /// count): those that exist and every ancestor that seeds them; `None` when it wants every
 /// view.
-fn rendered_views(pass: &FineViews, wanted: Option<&[u32]>) -> Option<Vec<bool>> {
+fn rendered_views(pass: &PassViews, wanted: Option<&[u32]>) -> Option<Vec<bool>> {
     let wanted = wanted?;
     let views = pass.slots();
     let mut rendered = vec![false; views as usize];
@@ -645,13 +645,13 @@ impl Placer<'_, '_> {
                 area
             }
             Pass::Tested => {
-                if keys.triangle_hidden(tri, context.options.conservative) {
+                if keys.triangle_hidden(tri, context.options.conservative_raster) {
                     return;
                 }
                 signed_area(tri)
             }
         };
-        keys.draw(tri, area, self.low, context.options.conservative);
+        keys.draw(tri, area, self.low, context.options.conservative_raster);
     }
 }
 
@@ -682,7 +682,7 @@ impl ViewContext<'_> {
             let cell = self.probe.as_ref().map(|p| p.cell(d, camera.eye()));
             self.render_camera(&camera, cell.as_ref(), hint, known, scratch, row, seen);
             if self.options.far_view {
-                let (far, cell) = self.far_camera(d);
+                let (far, cell) = self.far_camera(d, camera.eye());
                 let mut part = std::mem::take(&mut scratch.camera_row);
                 self.render_camera(&far, cell.as_ref(), hint, known, scratch, &mut part, seen);
                 for (r, p) in row.iter_mut().zip(&part) {
@@ -706,13 +706,14 @@ impl ViewContext<'_> {
     }
 
     /// The far camera of [`SamplingOptions::far_view`] along unit direction `d`, and its probe
-    /// cell (the view's, scaled with the distance).
-    fn far_camera(&self, d: [f64; 3]) -> (Camera, Option<Cell>) {
+    /// cell: every camera from the view's own eye `near` out to the far one, within the
+    /// view's angular cell (the view's cell radius at `near`, growing with the distance).
+    fn far_camera(&self, d: [f64; 3], near: [f64; 3]) -> (Camera, Option<Cell>) {
         let camera = far_view_camera(self.params, d);
-        let cell = self
-            .probe
-            .as_ref()
-            .map(|p| Cell::ball(camera.eye(), p.cell_radius() * FAR_VIEW_FACTOR));
+        let cell = self.probe.as_ref().map(|p| Cell {
+            ends: [near, camera.eye()],
+            radii: [p.cell_radius(), p.cell_radius() * FAR_VIEW_FACTOR],
+        });
         (camera, cell)
     }
 
@@ -773,9 +774,9 @@ impl ViewContext<'_> {
         view.keys.build_tiles();
         let ViewScratch { keys, deferred, .. } = &mut *view;
         for &(screen, low) in deferred.iter() {
-            if !keys.triangle_hidden(screen, self.options.conservative) {
+            if !keys.triangle_hidden(screen, self.options.conservative_raster) {
                 let area = signed_area(screen);
-                keys.draw(screen, area, low, self.options.conservative);
+                keys.draw(screen, area, low, self.options.conservative_raster);
             }
         }
         for w in 0..view.drawn.len() {
@@ -831,7 +832,7 @@ impl ViewContext<'_> {
         } = draw;
         let patch = &self.tiling.patches[p];
         let low = low_half(p as u32, self.mesh.patch_count() as u32);
-        let conservative = self.options.conservative;
+        let conservative = self.options.conservative_raster;
         let placer = Placer {
             context: self,
             pass,

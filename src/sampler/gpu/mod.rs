@@ -125,7 +125,7 @@ impl GpuSampler {
         options: &SamplingOptions,
         progress: &dyn Progress,
     ) -> Result<VisibilityMatrix, GpuError> {
-        if options.conservative {
+        if options.conservative_raster {
             return Err(GpuError::Unsupported("conservative rasterization"));
         }
         if options.probe.is_some() {

@@ -33,7 +33,7 @@ use crate::runtime::Patches;
 use crate::sampler::SamplingOptions;
 use crate::sampler::camera::{Camera, SphereBounds};
 use crate::sampler::conservative::scan_triangle_conservative;
-use crate::sampler::finer::FineViews;
+use crate::sampler::finer::PassViews;
 use crate::sampler::key_buffer::DepthBuffer;
 use crate::sampler::raster::{
     ScreenVertex, draw_triangle, project, sphere_needs_no_clip, view_planes,
@@ -79,7 +79,7 @@ impl ProbeScratch {
 
 /// The cell's radius in `edge`s (see the module documentation). A query from a sphere face
 /// joins the rows of its corners, which hold its finer views' rows, and every point of a face
-/// lies within `1/√3 ≈ 0.577 · edge` of one of them (`FineViews::max_seed_angle`); 0.6
+/// lies within `1/√3 ≈ 0.577 · edge` of one of them (`PassViews::max_seed_angle`); 0.6
 /// leaves a margin.
 const CELL_PER_EDGE: f64 = 0.6;
 
@@ -89,7 +89,7 @@ impl Probe {
     pub(super) fn new(
         radius: u32,
         params: &SamplingParams,
-        pass: &FineViews,
+        pass: &PassViews,
         options: &SamplingOptions,
         mesh: &crate::ooc::Mesh,
         tiling: &crate::tiling::Tiling,
@@ -119,7 +119,7 @@ impl Probe {
             None => Cell::ball(eye, self.cell),
             Some(band) => Cell {
                 ends: band.map(|t| std::array::from_fn(|k| self.center[k] + d[k] * t)),
-                radius: self.cell,
+                radii: [self.cell; 2],
             },
         }
     }

@@ -276,7 +276,7 @@ fn min_pixels_and_conservative_match_a_sequential_reference() {
     let p = params_for(&mesh, 2, 48);
     for (conservative, min_pixels) in [(false, 4), (true, 0), (true, 3)] {
         let options = SamplingOptions {
-            conservative,
+            conservative_raster: conservative,
             min_pixels,
             ..SamplingOptions::default()
         };
@@ -373,7 +373,7 @@ fn tiled_output_is_identical_for_one_and_two_threads() {
     for options in [
         SamplingOptions::default(),
         SamplingOptions {
-            conservative: true,
+            conservative_raster: true,
             min_pixels: 2,
             dilate: true,
             ..SamplingOptions::default()
@@ -594,7 +594,7 @@ fn near_passes_are_independent_of_threads_shards_and_resuming() {
             &p,
             1.2,
             SamplingOptions {
-                conservative: true,
+                conservative_raster: true,
                 min_pixels: 2,
                 dilate: true,
                 always_visible: vec![3],
@@ -912,7 +912,7 @@ fn centroid_views_render_each_face_centre_exactly_whatever_the_threads_or_shards
     assert_eq!(rows.views(), view_count(2));
     let plain = tiled(&mesh, &tiling, &p, &SamplingOptions::default());
     assert_same(&rows.prefix(view_count(1)), &plain.prefix(view_count(1)));
-    let pass = FineViews::pass(2, FinerViews::Centroids);
+    let pass = PassViews::pass(2, FinerViews::Centroids);
     let patches = tiling.patches.len() as u32;
     for u in pass.finer_range() {
         let camera = Camera::sampling(&p, pass.direction(u));
@@ -981,7 +981,7 @@ fn a_centroid_probe_leaving_out_what_the_corners_hold_folds_to_the_same_rows() {
         lean.count_ones() < rows.count_ones(),
         "nothing was left out"
     );
-    let pass = FineViews::new(1, 2, FinerViews::Centroids);
+    let pass = PassViews::new(1, 2, FinerViews::Centroids);
     let coarse = |m: &VisibilityMatrix| m.prefix(view_count(1));
     assert_same(
         &split_fold_views(coarse(&lean), &lean, &seen, &pass),
