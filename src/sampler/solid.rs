@@ -108,17 +108,15 @@ fn widen(p: [f32; 3]) -> [f64; 3] {
     p.map(f64::from)
 }
 
-/// The cameras whose queries may use a view's row, for the facing tests: the convex hull of
-/// a ball around each of the two `ends` (one ball when they coincide). The ends lie along the
-/// view's direction at the nearest and farthest camera distances the row answers
-/// (`SamplingOptions::band`); each ball's radius is the cell's width there (equal radii: a
-/// capsule; radii growing with the distance: a truncated cone of directions).
+/// The cameras whose queries may use a view's row, for the facing tests: every point within
+/// `radius` of the segment between `ends` (a ball when they coincide). The segment runs along
+/// the view's direction over the camera distances the row answers (`SamplingOptions::band`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Cell {
-    /// The balls' centres.
+    /// The segment's ends.
     pub(crate) ends: [[f64; 3]; 2],
-    /// Their radii.
-    pub(crate) radii: [f64; 2],
+    /// Distance from the segment.
+    pub(crate) radius: f64,
 }
 
 impl Cell {
@@ -126,19 +124,18 @@ impl Cell {
     pub(crate) fn ball(eye: [f64; 3], radius: f64) -> Cell {
         Cell {
             ends: [eye, eye],
-            radii: [radius; 2],
+            radius,
         }
     }
 
-    /// The distinct balls, as (centre, radius). A half-space holds the cell when it holds
-    /// the balls, since the cell is their convex hull, so every facing test runs on them.
-    fn balls(&self) -> impl Iterator<Item = ([f64; 3], f64)> + '_ {
-        let one = self.ends[0] == self.ends[1] && self.radii[0] == self.radii[1];
-        self.ends
-            .iter()
-            .copied()
-            .zip(self.radii)
-            .take(if one { 1 } else { 2 })
+    /// The distinct ends. A half-space holds the cell when it holds the balls around its
+    /// ends, since the cell is their convex hull, so every facing test runs on them.
+    fn balls(&self) -> &[[f64; 3]] {
+        if self.ends[0] == self.ends[1] {
+            &self.ends[..1]
+        } else {
+            &self.ends
+        }
     }
 }
 
@@ -151,7 +148,8 @@ pub(crate) fn may_face(point: [f64; 3], normal: [f64; 3], cell: &Cell) -> bool {
         || len == 0.0
         || cell
             .balls()
-            .any(|(eye, radius)| dot(normal, sub(eye, point)) >= -radius * len)
+            .iter()
+            .any(|&eye| dot(normal, sub(eye, point)) >= -cell.radius * len)
 }
 
 fn find(parent: &mut [u32], mut x: u32) -> u32 {
@@ -530,9 +528,9 @@ impl Solids {
         // (for each ball, and so for the cell, their convex hull).
         let sign = f64::from(self.orientation_of_component(c));
         let axis = axis.map(|x| f64::from(x) * sign);
-        cell.balls().all(|(eye, reach)| {
+        cell.balls().iter().all(|&eye| {
             let d = sub(center.map(f64::from), eye);
-            let rho = f64::from(radius) + reach;
+            let rho = f64::from(radius) + cell.radius;
             let len = dot(d, d).sqrt();
             if len.is_nan() || len <= rho {
                 return false;

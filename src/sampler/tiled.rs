@@ -682,7 +682,7 @@ impl ViewContext<'_> {
             let cell = self.probe.as_ref().map(|p| p.cell(d, camera.eye()));
             self.render_camera(&camera, cell.as_ref(), hint, known, scratch, row, seen);
             if self.options.far_view {
-                let (far, cell) = self.far_camera(d, camera.eye());
+                let (far, cell) = self.far_camera(d);
                 let mut part = std::mem::take(&mut scratch.camera_row);
                 self.render_camera(&far, cell.as_ref(), hint, known, scratch, &mut part, seen);
                 for (r, p) in row.iter_mut().zip(&part) {
@@ -706,14 +706,13 @@ impl ViewContext<'_> {
     }
 
     /// The far camera of [`SamplingOptions::far_view`] along unit direction `d`, and its probe
-    /// cell: every camera from the view's own eye `near` out to the far one, within the
-    /// view's angular cell (the view's cell radius at `near`, growing with the distance).
-    fn far_camera(&self, d: [f64; 3], near: [f64; 3]) -> (Camera, Option<Cell>) {
+    /// cell (the view's, scaled with the distance).
+    fn far_camera(&self, d: [f64; 3]) -> (Camera, Option<Cell>) {
         let camera = far_view_camera(self.params, d);
-        let cell = self.probe.as_ref().map(|p| Cell {
-            ends: [near, camera.eye()],
-            radii: [p.cell_radius(), p.cell_radius() * FAR_VIEW_FACTOR],
-        });
+        let cell = self
+            .probe
+            .as_ref()
+            .map(|p| Cell::ball(camera.eye(), p.cell_radius() * FAR_VIEW_FACTOR));
         (camera, cell)
     }
 

@@ -119,7 +119,7 @@ impl Probe {
             None => Cell::ball(eye, self.cell),
             Some(band) => Cell {
                 ends: band.map(|t| std::array::from_fn(|k| self.center[k] + d[k] * t)),
-                radii: [self.cell; 2],
+                radius: self.cell,
             },
         }
     }
