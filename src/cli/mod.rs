@@ -2,6 +2,7 @@
 
 pub mod args;
 pub mod bake;
+mod bake_common;
 pub mod eval;
 pub mod eval_bands;
 pub mod eval_frame;
