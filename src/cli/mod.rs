@@ -10,6 +10,7 @@ pub mod generate;
 pub mod inspect;
 pub mod out;
 pub mod progress;
+mod query_bench;
 pub mod shard;
 pub mod verify;
 pub mod view;
