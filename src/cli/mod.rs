@@ -6,6 +6,8 @@ mod bake_common;
 pub mod eval;
 pub mod eval_bands;
 pub mod eval_frame;
+mod eval_json;
+mod eval_sweep;
 pub mod generate;
 pub mod inspect;
 pub mod out;
@@ -26,3 +28,12 @@ impl std::fmt::Display for UsageError {
 }
 
 impl std::error::Error for UsageError {}
+
+/// A usage error with `message` when `condition` holds.
+fn usage(condition: bool, message: impl FnOnce() -> String) -> Result<(), UsageError> {
+    if condition {
+        Err(UsageError(message()))
+    } else {
+        Ok(())
+    }
+}
