@@ -6,21 +6,20 @@ use super::UsageError;
 use super::args::{
     BackendArg, BakeArgs, EncodingArg, FinerViewsArg, FoldCornersArg, PatchOrderArg, memory_budget,
 };
+use super::bake_common::{check_paths, report};
 use super::out::{StdoutError, outln};
 use super::progress::Bars;
 use anyhow::{Result, anyhow};
 use patchvis::bake::{
-    Backend, BackendChoice, BakeError, BakeSettings, Baked, Outputs, PatchOrder, Preset, Recipe,
-    Research, RowSettings, Stages,
+    Backend, BackendChoice, BakeSettings, Baked, Outputs, PatchOrder, Preset, Recipe, Research,
+    RowSettings, Stages,
 };
 use patchvis::format::VisibilityEncoding;
 use patchvis::ooc::Mesh;
-use patchvis::output::{NamedPath, check_outputs};
 use patchvis::sampler::{FinerViews, FoldCorners, PassViews};
 use patchvis::sphere::view_count;
 use patchvis::tiling::PatchId;
 use serde_json::json;
-use std::path::Path;
 use std::time::Instant;
 
 /// The library's settings for these flags.
@@ -80,16 +79,6 @@ pub(super) fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
         checkpoint: Some(args.output.clone()),
         resume: args.resume,
     })
-}
-
-/// A bake error as the command reports it: settings are usage errors (exit 2), the rest
-/// name the input where the library's message does not.
-pub(super) fn report(input: &Path, e: BakeError) -> anyhow::Error {
-    match e {
-        BakeError::Settings(message) => UsageError(message).into(),
-        BakeError::Tiling(_) => anyhow!("{}: {e}", input.display()),
-        other => other.into(),
-    }
 }
 
 /// Runs `patchvis bake`.
@@ -395,26 +384,4 @@ fn parse_patch_ids(spec: &str) -> Result<Vec<PatchId>, UsageError> {
         ))
     })?;
     list(&text, spec)
-}
-
-/// Every file the bake writes, checked against its inputs, each other and the file system
-/// before any work: a clash, a device node or an unwritable directory is a usage error.
-pub(super) fn check_paths(
-    args: &BakeArgs,
-    recipe: &Recipe,
-    outputs: &Outputs,
-) -> Result<(), UsageError> {
-    let mut inputs = vec![NamedPath::new("the input mesh", "INPUT", &args.input)];
-    if let Some(spec) = &args.always_visible {
-        inputs.push(NamedPath::new(
-            "the --always-visible file",
-            "--always-visible",
-            spec,
-        ));
-    }
-    let mut written = outputs.paths(recipe);
-    if let Some(stats) = &args.stats {
-        written.push(NamedPath::flag("--stats", stats));
-    }
-    check_outputs(&inputs, &written).map_err(|e| UsageError(e.to_string()))
 }

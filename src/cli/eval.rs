@@ -1,46 +1,37 @@
-//! `patchvis eval`: checked settings, then the library's evaluation (`patchvis::eval`) over
-//! random views, sampling views or a path, at one distance or a band per distance
-//! (`eval_bands.rs`), or a sweep of bakes; a text or JSON report, PNGs of the worst views and
-//! SVG plots.
+//! `patchvis eval`: flags → the library's evaluation (`patchvis::eval`) of random views,
+//! sampling views or a path, at one distance or a band per distance (`eval::Band`), or a
+//! sweep of bakes (`eval::sweep`); then a text or JSON report, PNGs of the worst views and
+//! the library's SVG figures. The binary checks flags, reads and writes files and prints.
 
-use super::UsageError;
-use super::args::{EvalArgs, SweepModeArg, memory_budget};
-use super::eval_bands::{Band, parse_distance_scales, print_bands};
+use super::args::{EvalArgs, memory_budget};
+use super::eval_bands::{BandReport, parse_distance_scales, print_bands};
 use super::eval_frame::{FrameBackend, frame_json, gpu_json, print_frame};
+use super::eval_json::{merge, per_view_json, stats_culling_json, summary_json};
 use super::out::{StdoutError, outln};
 use super::progress::Bars;
+use super::{UsageError, usage};
 use anyhow::{Context, Result, anyhow};
-use patchvis::bake::{
-    BakeSettings, DEFAULT_FOLD_MIN_PIXELS, DEFAULT_PROBE_PIXELS, DEFAULT_VIEW_SUPERSAMPLE,
-    MemoryBudget, PROBE_FOLD_CORNERS, Probe, Research, RowSettings, Stages,
-};
-use patchvis::eval::plot::{self, Axis, Chart, Series};
+use patchvis::bake::{MemoryBudget, Stages};
 use patchvis::eval::shade::RgbImage;
 use patchvis::eval::views::{self, PathCamera};
 use patchvis::eval::{
-    EvalOptions, EvalSummary, Evaluator, SweepPoint, SweepSettings, ViewMetrics, metrics::Summary,
-    sampling_params,
+    Band, BandViews, EvalOptions, EvalSummary, Evaluator, ViewSet, metrics::Summary, open_mesh,
+    path_plot,
 };
 use patchvis::format::{PvisFile, write_atomic};
-use patchvis::memory::DEFAULT_PROBE_MAX_TRIANGLES;
 use patchvis::ooc::Mesh;
 use patchvis::output::{NamedPath, check_outputs};
 use patchvis::runtime::Pvis;
-use patchvis::sampler::FoldCorners;
-use patchvis::sampler::{Camera, MAX_RESOLUTION};
-use patchvis::sphere::{MAX_LEVEL, view_count};
+use patchvis::sampler::MAX_RESOLUTION;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Frames of `--path orbit` without a count.
 const DEFAULT_ORBIT_FRAMES: u32 = 120;
-/// Resolution of `--sweep`'s bakes unless `--resolution` says otherwise (the bake default).
-const DEFAULT_SWEEP_RESOLUTION: u32 = 512;
-/// Identical frames have infinite PSNR; the path plot draws them at this height.
-const PSNR_PLOT_CAP_DB: f64 = 60.0;
 
-/// Which cameras to evaluate.
+/// Which cameras the flags ask for; a path file is read once the `.pvis` is open
+/// ([`Views::view_set`]).
 #[derive(Debug)]
 enum Views {
     /// Seeded random positions on the (scaled) sampling sphere.
@@ -53,6 +44,54 @@ enum Views {
     PathFile(PathBuf),
 }
 
+impl Views {
+    /// The views of `--path`, `--sampling-level` or else `--views` and `--seed`.
+    fn of(args: &EvalArgs) -> Result<Views, UsageError> {
+        Ok(match (&args.path, args.sampling_level) {
+            (Some(spec), _) => parse_path(spec)?,
+            (None, Some(level)) => Views::Sampling { level },
+            (None, None) => {
+                usage(args.views == 0, || "--views 0: expected at least 1".into())?;
+                Views::Random {
+                    count: args.views,
+                    seed: args.seed,
+                }
+            }
+        })
+    }
+
+    /// The library's view set; a path file's cameras look at `center` unless they name a
+    /// target.
+    fn view_set(&self, center: [f32; 3]) -> Result<ViewSet> {
+        Ok(match self {
+            Views::Random { count, seed } => ViewSet::Random {
+                count: *count,
+                seed: *seed,
+            },
+            Views::Sampling { level } => ViewSet::Sampling { level: *level },
+            Views::Orbit { frames } => ViewSet::Orbit { frames: *frames },
+            Views::PathFile(path) => ViewSet::path(&read_camera_path(path)?, center)
+                .map_err(|e| anyhow!("{}: {e}", path.display()))?,
+        })
+    }
+
+    /// Whether the views are frames of a path.
+    fn is_path(&self) -> bool {
+        matches!(self, Views::Orbit { .. } | Views::PathFile(_))
+    }
+
+    /// How the report names them.
+    fn name(&self) -> String {
+        match self {
+            Views::Random { .. } => "random".to_string(),
+            Views::Sampling { level } => format!("sampling level {level}"),
+            Views::Orbit { frames } => format!("orbit of {frames} frames"),
+            Views::PathFile(p) => format!("path {}", p.display()),
+        }
+    }
+}
+
+/// `--path orbit`, `orbit:N` or a camera path file.
 fn parse_path(spec: &str) -> Result<Views, UsageError> {
     let Some(rest) = spec.strip_prefix("orbit") else {
         return Ok(Views::PathFile(PathBuf::from(spec)));
@@ -73,16 +112,109 @@ fn parse_path(spec: &str) -> Result<Views, UsageError> {
     Ok(Views::Orbit { frames })
 }
 
-fn usage(condition: bool, message: impl FnOnce() -> String) -> Result<(), UsageError> {
-    if condition {
-        Err(UsageError(message()))
-    } else {
-        Ok(())
-    }
-}
-
 /// Runs `patchvis eval`.
 pub fn run(args: EvalArgs) -> Result<()> {
+    let scales = check_flags(&args)?;
+    if args.sweep {
+        return super::eval_sweep::run(&args, scales[0]);
+    }
+    let views = Views::of(&args)?;
+    let file = args
+        .file
+        .clone()
+        .ok_or_else(|| UsageError("expected FILE.pvis (or --sweep)".into()))?;
+    if let Some(stats) = &args.stats {
+        let inputs = [
+            NamedPath::new("the mesh", "MESH", &args.mesh),
+            NamedPath::new("the .pvis file", "FILE", &file),
+        ];
+        check_outputs(&inputs, &[NamedPath::flag("--stats", stats)])
+            .map_err(|e| UsageError(e.to_string()))?;
+    }
+    let bars = Bars::new(!args.quiet && !args.json);
+    let start = Instant::now();
+    let options = EvalOptions {
+        memory: memory_budget(args.memory),
+        tiling: args.tiling.into(),
+    };
+    let mut stages = Stages::new();
+    // The file first: refusing it costs nothing, converting the mesh may cost minutes.
+    let bytes = PvisFile::open(&file).map_err(|e| anyhow!("{}: {e}", file.display()))?;
+    let pvis = Pvis::parse(&bytes).map_err(|e| anyhow!("{}: {e}", file.display()))?;
+    let mesh = stages.run("input", || open_mesh(&args.mesh, options.memory))?;
+    let evaluator = stages
+        .run("patches", || Evaluator::new(&mesh, &pvis, &options))
+        .map_err(|e| {
+            anyhow!(
+                "{} was not baked from {} with these settings: {e}",
+                file.display(),
+                args.mesh.display()
+            )
+        })?;
+    // After the inputs are checked, so that their errors come first and alone (probing for
+    // an adapter can make the driver write to stderr), before the long evaluation, so that a
+    // missing GPU fails soon.
+    let frame_backend = FrameBackend::open(args.frame_backend)?;
+    let sampling = pvis.sampling();
+    if let Views::Sampling { level } = views {
+        usage(level > sampling.level, || {
+            format!(
+                "--sampling-level {level}: expected at most the file's level {}",
+                sampling.level
+            )
+        })?;
+    }
+    let band_views = BandViews {
+        views: views.view_set(sampling.center)?,
+        resolution: args.resolution.unwrap_or(sampling.resolution),
+        look_jitter_deg: args.look_jitter,
+        seed: args.seed,
+    };
+    let mut bands = Vec::with_capacity(scales.len());
+    for &scale in &scales {
+        let band = Band::evaluate(&evaluator, &pvis, &band_views, scale, &bars, &mut stages);
+        // After the CPU evaluation, never beside it: a software GPU shares its cores.
+        let gpu = frame_backend.measure(&evaluator, &pvis, &band.cameras, &bars)?;
+        bands.push(BandReport {
+            band,
+            gpu,
+            pictures: Vec::new(),
+        });
+    }
+    let report = Report {
+        args: &args,
+        file: &file,
+        pvis: &pvis,
+        mesh: &mesh,
+        evaluator: &evaluator,
+        frame_backend: &frame_backend,
+        views: &views,
+        scales: &scales,
+        resolution: band_views.resolution,
+        memory: options.memory,
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    if let Some(path) = &args.stats {
+        let text = serde_json::to_string_pretty(&report.stats_json(&bands, &stages))? + "\n";
+        write_atomic(path, text.as_bytes())
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+    }
+    let written = match &args.png {
+        Some(dir) => report.write_pictures(dir, &mut bands)?,
+        None => Vec::new(),
+    };
+    if args.json {
+        let json = report.json(&bands, &written);
+        outln!("{}", serde_json::to_string_pretty(&json)?)?;
+        return Ok(());
+    }
+    report.print(&bands, &written)?;
+    Ok(())
+}
+
+/// Checks the flags that need no file: returns the distances of `--distance-scale`, and
+/// creates the `--png` directory.
+fn check_flags(args: &EvalArgs) -> Result<Vec<f32>> {
     let scales = parse_distance_scales(&args.distance_scale)?;
     if let Some(r) = args.resolution {
         usage(r == 0 || r > MAX_RESOLUTION, || {
@@ -115,129 +247,53 @@ pub fn run(args: EvalArgs) -> Result<()> {
     if let Some(dir) = &args.png {
         check_output_dir(dir)?;
     }
-    if args.sweep {
-        return run_sweep(&args, scales[0]);
-    }
-    let views = match (&args.path, args.sampling_level) {
-        (Some(spec), _) => parse_path(spec)?,
-        (None, Some(level)) => Views::Sampling { level },
-        (None, None) => {
-            usage(args.views == 0, || "--views 0: expected at least 1".into())?;
-            Views::Random {
-                count: args.views,
-                seed: args.seed,
-            }
-        }
-    };
-    let file = args
-        .file
-        .clone()
-        .ok_or_else(|| UsageError("expected FILE.pvis (or --sweep)".into()))?;
+    Ok(scales)
+}
 
-    if let Some(stats) = &args.stats {
-        let inputs = [
-            NamedPath::new("the mesh", "MESH", &args.mesh),
-            NamedPath::new("the .pvis file", "FILE", &file),
-        ];
-        check_outputs(&inputs, &[NamedPath::flag("--stats", stats)])
-            .map_err(|e| UsageError(e.to_string()))?;
-    }
-    let bars = Bars::new(!args.quiet && !args.json);
-    let start = Instant::now();
-    let options = EvalOptions {
-        memory: memory_budget(args.memory),
-        tiling: args.tiling.into(),
-    };
-    let mut stages = Stages::new();
-    // The file first: refusing it costs nothing, converting the mesh may cost minutes.
-    let bytes = PvisFile::open(&file).map_err(|e| anyhow!("{}: {e}", file.display()))?;
-    let pvis = Pvis::parse(&bytes).map_err(|e| anyhow!("{}: {e}", file.display()))?;
-    let mesh = stages.run("input", || open_mesh(&args, options.memory))?;
-    let evaluator = stages
-        .run("patches", || Evaluator::new(&mesh, &pvis, &options))
-        .map_err(|e| {
-            anyhow!(
-                "{} was not baked from {} with these settings: {e}",
-                file.display(),
-                args.mesh.display()
-            )
-        })?;
-    // After the inputs are checked, so that their errors come first and alone (probing for
-    // an adapter can make the driver write to stderr), before the long evaluation, so that a
-    // missing GPU fails soon.
-    let frame_backend = FrameBackend::open(args.frame_backend)?;
-    let sampling = pvis.sampling();
-    let resolution = args.resolution.unwrap_or(sampling.resolution);
-    if let Views::Sampling { level } = views {
-        usage(level > sampling.level, || {
-            format!(
-                "--sampling-level {level}: expected at most the file's level {}",
-                sampling.level
-            )
-        })?;
-    }
-    let is_path = matches!(views, Views::Orbit { .. } | Views::PathFile(_));
-    let banded = scales.len() > 1;
-    let mut bands = Vec::with_capacity(scales.len());
-    for &scale in &scales {
-        let params = sampling_params(&pvis, resolution, scale);
-        let cameras: Vec<Camera> = match &views {
-            Views::Random { count, seed } => views::random_directions(*count, *seed)
-                .into_iter()
-                .map(|d| Camera::sampling(&params, d))
-                .collect(),
-            Views::Sampling { level } => (0..view_count(*level))
-                .map(|v| Camera::sampling_view(&params, v))
-                .collect(),
-            Views::Orbit { frames } => views::orbit_directions(*frames)
-                .into_iter()
-                .map(|d| Camera::sampling(&params, d))
-                .collect(),
-            Views::PathFile(path) => {
-                path_cameras(path, &sampling.center, sampling.fov_deg, resolution)?
-            }
-        };
-        // The same seed in every band: the same turn for the same camera.
-        let cameras = views::jitter_looks(&cameras, f64::from(args.look_jitter), args.seed);
-        let metrics = stages.run("eval", || evaluator.evaluate(&pvis, &cameras, &bars));
-        let summary = EvalSummary::of(&metrics);
-        // After the CPU evaluation, never beside it: a software GPU shares its cores.
-        let gpu = frame_backend.measure(&evaluator, &pvis, &cameras, &bars)?;
-        bands.push(Band {
-            scale,
-            distance: params.distance(),
-            cameras,
-            metrics,
-            summary,
-            gpu,
-            pictures: Vec::new(),
-        });
-    }
-    let seconds = start.elapsed().as_secs_f64();
-    if let Some(path) = &args.stats {
+/// A finished evaluation, for its reports.
+struct Report<'a> {
+    args: &'a EvalArgs,
+    file: &'a Path,
+    pvis: &'a Pvis<'a>,
+    mesh: &'a Mesh,
+    evaluator: &'a Evaluator<'a>,
+    frame_backend: &'a FrameBackend,
+    views: &'a Views,
+    scales: &'a [f32],
+    /// Render resolution.
+    resolution: u32,
+    memory: MemoryBudget,
+    /// Wall time of the evaluation, inputs included.
+    seconds: f64,
+}
+
+impl Report<'_> {
+    /// The `--stats` report: inputs, time and heap per stage, and the culling figures (per
+    /// band with a list of distances).
+    fn stats_json(&self, bands: &[BandReport], stages: &Stages) -> Value {
         let mut report = json!({
-            "mesh": args.mesh.display().to_string(),
-            "file": file.display().to_string(),
-            "triangles": mesh.triangle_count(),
-            "patches_from": if evaluator.order().is_some() { "tiling" } else { "mesh order" },
-            "memory_budget_bytes": options.memory.total(),
-            "workers": evaluator.workers(&bands[0].cameras[0]),
-            "seconds": seconds,
+            "mesh": self.args.mesh.display().to_string(),
+            "file": self.file.display().to_string(),
+            "triangles": self.mesh.triangle_count(),
+            "patches_from": if self.evaluator.order().is_some() { "tiling" } else { "mesh order" },
+            "memory_budget_bytes": self.memory.total(),
+            "workers": self.evaluator.workers(&bands[0].band.cameras[0]),
+            "seconds": self.seconds,
             "peak_heap_bytes": stages.peak_heap_bytes(),
-            "look_jitter_deg": args.look_jitter,
+            "look_jitter_deg": self.args.look_jitter,
         });
-        if banded {
+        if bands.len() > 1 {
             let rows = bands
                 .iter()
                 .map(|b| {
-                    let mut row = json!({"distance_scale": b.scale});
-                    merge(&mut row, stats_culling_json(&b.summary));
+                    let mut row = json!({"distance_scale": b.band.scale});
+                    merge(&mut row, stats_culling_json(&b.band.summary));
                     row
                 })
                 .collect::<Vec<_>>();
             merge(&mut report, json!({ "bands": rows }));
         } else {
-            merge(&mut report, stats_culling_json(&bands[0].summary));
+            merge(&mut report, stats_culling_json(&bands[0].band.summary));
         }
         merge(
             &mut report,
@@ -247,17 +303,20 @@ pub fn run(args: EvalArgs) -> Result<()> {
                 })).collect::<Vec<_>>(),
             }),
         );
-        let text = serde_json::to_string_pretty(&report)? + "\n";
-        write_atomic(path, text.as_bytes())
-            .with_context(|| format!("{}: cannot write", path.display()))?;
+        report
     }
 
-    let mut written = Vec::new();
-    if let Some(dir) = &args.png {
+    /// Writes into `dir` the pictures of each band's `--worst` views and, for a path, its
+    /// figure; returns their paths.
+    fn write_pictures(&self, dir: &Path, bands: &mut [BandReport]) -> Result<Vec<PathBuf>> {
+        let banded = bands.len() > 1;
+        let is_path = self.views.is_path();
         let prefix = if is_path { "frame" } else { "view" };
-        for band in &mut bands {
-            for index in worst(&band.metrics, args.worst) {
-                let pictures = evaluator.pictures(&pvis, &band.cameras[index]);
+        let mut written = Vec::new();
+        for report in bands.iter_mut() {
+            let band = &report.band;
+            for index in band.worst(self.args.worst) {
+                let pictures = self.evaluator.pictures(self.pvis, &band.cameras[index]);
                 let image = RgbImage::side_by_side(&[
                     &pictures.full,
                     &pictures.reconstruction,
@@ -270,191 +329,155 @@ pub fn run(args: EvalArgs) -> Result<()> {
                 };
                 let path = dir.join(name);
                 write_png(&path, &image)?;
-                band.pictures.push(path.clone());
+                report.pictures.push(path.clone());
                 written.push(path);
             }
         }
         if is_path {
             let path = dir.join("path.svg");
-            write_atomic(&path, path_plot(&bands[0].metrics).as_bytes())
+            write_atomic(&path, path_plot(&bands[0].band.metrics).as_bytes())
                 .with_context(|| format!("{}: cannot write", path.display()))?;
             written.push(path);
         }
+        Ok(written)
     }
 
-    let mode = match &views {
-        Views::Random { .. } => "random".to_string(),
-        Views::Sampling { level } => format!("sampling level {level}"),
-        Views::Orbit { frames } => format!("orbit of {frames} frames"),
-        Views::PathFile(p) => format!("path {}", p.display()),
-    };
-    if args.json {
+    /// The `--json` report: the figures (per band with a list of distances), per view, and
+    /// the frame backend's.
+    fn json(&self, bands: &[BandReport], written: &[PathBuf]) -> Value {
+        let (pvis, sampling) = (self.pvis, self.pvis.sampling());
+        let banded = bands.len() > 1;
+        let first = &bands[0];
         let mut report = if banded {
             json!({})
         } else {
-            summary_json(&bands[0].summary)
+            summary_json(&first.band.summary)
         };
         let extra = json!({
-            "mesh": args.mesh.display().to_string(),
-            "file": file.display().to_string(),
-            "mode": mode,
-            "seed": args.seed,
+            "mesh": self.args.mesh.display().to_string(),
+            "file": self.file.display().to_string(),
+            "mode": self.views.name(),
+            "seed": self.args.seed,
         });
         merge(&mut report, extra);
         if banded {
             merge(
                 &mut report,
-                json!({"distance_scales": scales, "views_per_band": bands[0].summary.views}),
+                json!({"distance_scales": self.scales, "views_per_band": first.band.summary.views}),
             );
         } else {
             merge(
                 &mut report,
                 json!({
-                    "distance_scale": bands[0].scale,
-                    "distance": bands[0].distance,
-                    "distance_radii": bands[0].radii(&pvis),
+                    "distance_scale": first.band.scale,
+                    "distance": first.band.distance,
+                    "distance_radii": first.band.radii(pvis),
                 }),
             );
         }
         let extra = json!({
-            "look_jitter_deg": args.look_jitter,
-            "resolution": resolution,
+            "look_jitter_deg": self.args.look_jitter,
+            "resolution": self.resolution,
             "patches": pvis.patch_count(),
-            "triangles": mesh.triangle_count(),
+            "triangles": self.mesh.triangle_count(),
             "level": sampling.level,
             "sampling_views": sampling.views,
             "file_bytes": pvis.total_bytes(),
-            "seconds": seconds,
+            "seconds": self.seconds,
             "pictures": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
         });
         merge(&mut report, extra);
         if banded {
-            merge(&mut report, frame_json(&frame_backend, None));
-            let rows = bands
-                .iter()
-                .map(|b| {
-                    let mut row = json!({
-                        "distance_scale": b.scale,
-                        "distance": b.distance,
-                        "distance_radii": b.radii(&pvis),
-                    });
-                    merge(&mut row, summary_json(&b.summary));
-                    merge(
-                        &mut row,
-                        json!({
-                            "pictures": b.pictures.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
-                            "per_view": per_view_json(b),
-                        }),
-                    );
-                    merge(&mut row, gpu_json(b.gpu.as_ref()));
-                    row
-                })
-                .collect::<Vec<_>>();
+            merge(&mut report, frame_json(self.frame_backend, None));
+            let rows = bands.iter().map(|b| self.band_json(b)).collect::<Vec<_>>();
             merge(&mut report, json!({ "bands": rows }));
         } else {
-            merge(&mut report, json!({ "per_view": per_view_json(&bands[0]) }));
+            merge(&mut report, json!({ "per_view": per_view_json(first) }));
             merge(
                 &mut report,
-                frame_json(&frame_backend, bands[0].gpu.as_ref()),
+                frame_json(self.frame_backend, first.gpu.as_ref()),
             );
         }
-        outln!("{}", serde_json::to_string_pretty(&report)?)?;
-        return Ok(());
+        report
     }
-    outln!(
-        "{} with {}: {} patches over {} triangles, level {} ({} views), {} bytes",
-        args.mesh.display(),
-        file.display(),
-        pvis.patch_count(),
-        mesh.triangle_count(),
-        sampling.level,
-        sampling.views,
-        pvis.total_bytes()
-    )?;
-    if evaluator.shared_records() > 0 {
-        outln!(
-            "patches sharing their stored bounds with another: {} (matched in the order the \
-             bake keeps them in; for a file numbered otherwise, evaluate its --mesh-out mesh)",
-            evaluator.shared_records()
-        )?;
+
+    /// One band's row of the `--json` report.
+    fn band_json(&self, b: &BandReport) -> Value {
+        let mut row = json!({
+            "distance_scale": b.band.scale,
+            "distance": b.band.distance,
+            "distance_radii": b.band.radii(self.pvis),
+        });
+        merge(&mut row, summary_json(&b.band.summary));
+        merge(
+            &mut row,
+            json!({
+                "pictures": b.pictures.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+                "per_view": per_view_json(b),
+            }),
+        );
+        merge(&mut row, gpu_json(b.gpu.as_ref()));
+        row
     }
-    let seeded = match views {
-        Views::Random { seed, .. } => format!(", seed {seed}"),
-        _ => String::new(),
-    };
-    if banded {
+
+    /// The text report: the inputs, then the figures (a table row per band with a list of
+    /// distances), the frame cost and the pictures written.
+    fn print(&self, bands: &[BandReport], written: &[PathBuf]) -> Result<(), StdoutError> {
+        let (pvis, sampling) = (self.pvis, self.pvis.sampling());
+        let (resolution, seconds, mode) = (self.resolution, self.seconds, self.views.name());
         outln!(
-            "eval: {} views ({mode}{seeded}) at {resolution}x{resolution} px at each of {} distances ({seconds:.1} s)",
-            bands[0].summary.views,
-            bands.len(),
+            "{} with {}: {} patches over {} triangles, level {} ({} views), {} bytes",
+            self.args.mesh.display(),
+            self.file.display(),
+            pvis.patch_count(),
+            self.mesh.triangle_count(),
+            sampling.level,
+            sampling.views,
+            pvis.total_bytes()
         )?;
-        print_bands(&bands, &pvis)?;
-        for band in &bands {
-            if band.gpu.is_some() {
-                outln!("distance x{}:", band.scale)?;
-            }
-            print_frame(&frame_backend, band.gpu.as_ref())?;
-            if band.gpu.is_none() {
-                // The same reason for every band.
-                break;
-            }
+        if self.evaluator.shared_records() > 0 {
+            outln!(
+                "patches sharing their stored bounds with another: {} (matched in the order the \
+                 bake keeps them in; for a file numbered otherwise, evaluate its --mesh-out mesh)",
+                self.evaluator.shared_records()
+            )?;
         }
-    } else {
-        let band = &bands[0];
-        outln!(
-            "eval: {} views ({mode}{seeded}) at {resolution}x{resolution} px, distance x{} ({seconds:.1} s)",
-            band.summary.views,
-            band.scale
-        )?;
-        print_summary(&band.summary, is_path)?;
-        print_frame(&frame_backend, band.gpu.as_ref())?;
-    }
-    for path in &written {
-        outln!("wrote {}", path.display())?;
-    }
-    Ok(())
-}
-
-/// The culling fields of `--stats`.
-fn stats_culling_json(s: &EvalSummary) -> Value {
-    json!({
-        "answered_views": s.answered_views,
-        "culling_rate_mean": s.culling_rate.mean,
-        "frustum_culling_rate_mean": s.frustum_culling_rate.mean,
-        "ideal_culling_rate_mean": s.ideal_culling_rate.mean,
-        "ideal_culling_rate_all_directions_mean": s.ideal_culling_rate_all_directions.mean,
-        "views_losing_a_patch_to_the_frustum": s.views_losing_a_patch_to_the_frustum,
-    })
-}
-
-/// The `per_view` entries of a band, with the GPU's timings where measured.
-fn per_view_json(band: &Band) -> Vec<Value> {
-    band.metrics
-        .iter()
-        .enumerate()
-        .map(|(i, m)| {
-            let mut view = view_json(i, m);
-            if let Some(g) = &band.gpu {
-                let (full, culled) = g.per_view_ms[i];
-                merge(
-                    &mut view,
-                    json!({"gpu_full_ms": full, "gpu_culled_ms": culled}),
-                );
+        let seeded = match self.views {
+            Views::Random { seed, .. } => format!(", seed {seed}"),
+            _ => String::new(),
+        };
+        if bands.len() > 1 {
+            outln!(
+                "eval: {} views ({mode}{seeded}) at {resolution}x{resolution} px at each of {} distances ({seconds:.1} s)",
+                bands[0].band.summary.views,
+                bands.len(),
+            )?;
+            print_bands(bands, pvis)?;
+            for band in bands {
+                if band.gpu.is_some() {
+                    outln!("distance x{}:", band.band.scale)?;
+                }
+                print_frame(self.frame_backend, band.gpu.as_ref())?;
+                if band.gpu.is_none() {
+                    // The same reason for every band.
+                    break;
+                }
             }
-            view
-        })
-        .collect()
-}
-
-/// Opens MESH within the input's share of `memory`.
-fn open_mesh(args: &EvalArgs, memory: MemoryBudget) -> Result<Mesh> {
-    Ok(Mesh::open_with(
-        &args.mesh,
-        &patchvis::ooc::OpenOptions {
-            memory_budget: memory.split().input,
-            ..Default::default()
-        },
-    )?)
+        } else {
+            let band = &bands[0];
+            outln!(
+                "eval: {} views ({mode}{seeded}) at {resolution}x{resolution} px, distance x{} ({seconds:.1} s)",
+                band.band.summary.views,
+                band.band.scale
+            )?;
+            print_summary(&band.band.summary, self.views.is_path())?;
+            print_frame(self.frame_backend, band.gpu.as_ref())?;
+        }
+        for path in written {
+            outln!("wrote {}", path.display())?;
+        }
+        Ok(())
+    }
 }
 
 /// The picture directory: created if missing; anything else there is a usage error.
@@ -469,7 +492,8 @@ fn check_output_dir(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))
 }
 
-fn path_cameras(path: &Path, center: &[f32; 3], fov: f32, resolution: u32) -> Result<Vec<Camera>> {
+/// A path file's cameras: a regular file, read whole, then parsed.
+fn read_camera_path(path: &Path) -> Result<Vec<PathCamera>> {
     // A FIFO would block the read, a device never end it.
     let metadata =
         std::fs::metadata(path).with_context(|| format!("{}: cannot read", path.display()))?;
@@ -481,33 +505,10 @@ fn path_cameras(path: &Path, center: &[f32; 3], fov: f32, resolution: u32) -> Re
     }
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("{}: cannot read", path.display()))?;
-    let cameras =
-        views::parse_camera_path(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
-    cameras
-        .iter()
-        .enumerate()
-        .map(|(i, &PathCamera { eye, target })| {
-            let target = target.unwrap_or(*center);
-            if eye == target {
-                return Err(anyhow!(
-                    "{}: camera {}: the eye is at the model's centre, expected it elsewhere",
-                    path.display(),
-                    i + 1
-                ));
-            }
-            Ok(Camera::look_at(eye, target, fov, resolution))
-        })
-        .collect()
+    views::parse_camera_path(&text).map_err(|e| anyhow!("{}: {e}", path.display()))
 }
 
-/// Indices of the `n` views with the most missed pixels (ties: lower index first).
-fn worst(metrics: &[ViewMetrics], n: u32) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..metrics.len()).collect();
-    order.sort_by_key(|&i| (std::cmp::Reverse(metrics[i].missed_pixels), i));
-    order.truncate(n as usize);
-    order
-}
-
+/// Writes `image` as an 8-bit RGB PNG.
 fn write_png(path: &Path, image: &RgbImage) -> Result<()> {
     let mut bytes = Vec::new();
     {
@@ -521,90 +522,7 @@ fn write_png(path: &Path, image: &RgbImage) -> Result<()> {
     write_atomic(path, &bytes).with_context(|| format!("{}: cannot write", path.display()))
 }
 
-fn summary_fields(out: &mut serde_json::Map<String, Value>, name: &str, s: &Summary) {
-    out.insert(format!("{name}_mean"), json!(s.mean));
-    out.insert(format!("{name}_p95"), json!(s.p95));
-    out.insert(format!("{name}_p99"), json!(s.p99));
-    out.insert(format!("{name}_max"), json!(s.max));
-    out.insert(format!("{name}_min"), json!(s.min));
-}
-
-/// The aggregate as flat JSON fields (`missed_pixels_mean`, …).
-fn summary_json(s: &EvalSummary) -> Value {
-    let mut out = serde_json::Map::new();
-    out.insert("views".into(), json!(s.views));
-    out.insert("answered_views".into(), json!(s.answered_views));
-    out.insert("identical_views".into(), json!(s.identical_views));
-    out.insert(
-        "identical_views_fraction".into(),
-        json!(s.identical_views_fraction()),
-    );
-    out.insert(
-        "views_missing_a_patch".into(),
-        json!(s.views_missing_a_patch),
-    );
-    summary_fields(&mut out, "missed_pixels", &s.missed_pixels);
-    summary_fields(&mut out, "missed_patches", &s.missed_patches);
-    summary_fields(&mut out, "triangles_drawn", &s.triangles_drawn);
-    summary_fields(&mut out, "culling_rate", &s.culling_rate);
-    summary_fields(&mut out, "ideal_culling_rate", &s.ideal_culling_rate);
-    summary_fields(
-        &mut out,
-        "ideal_culling_rate_all_directions",
-        &s.ideal_culling_rate_all_directions,
-    );
-    summary_fields(&mut out, "frustum_culling_rate", &s.frustum_culling_rate);
-    out.insert(
-        "views_losing_a_patch_to_the_frustum".into(),
-        json!(s.views_losing_a_patch_to_the_frustum),
-    );
-    if let Some(p) = &s.psnr_db_differing {
-        summary_fields(&mut out, "psnr_db_differing", p);
-    }
-    out.insert(
-        "frame_cost".into(),
-        json!({
-            "full_ms_median": s.frame_cost.full_ms_median,
-            "culled_ms_median": s.frame_cost.culled_ms_median,
-            "speedup": s.frame_cost.speedup,
-        }),
-    );
-    Value::Object(out)
-}
-
-fn view_json(index: usize, m: &ViewMetrics) -> Value {
-    json!({
-        "index": index,
-        "eye": m.eye,
-        "inside_sphere": m.inside_sphere,
-        "covered_pixels": m.covered_pixels,
-        "missed_pixels": m.missed_pixels,
-        "tied_pixels": m.tied_pixels,
-        "visible_patches": m.visible_patches,
-        "answer_patches": m.answer_patches,
-        "missed_patches": m.missed_patches,
-        "triangles_drawn": m.triangles_drawn,
-        "culling_rate": m.culling_rate,
-        "ideal_culling_rate": m.ideal_culling_rate,
-        "visible_patches_all_directions": m.visible_patches_all_directions,
-        "ideal_culling_rate_all_directions": m.ideal_culling_rate_all_directions,
-        "frustum_answer_patches": m.frustum_answer_patches,
-        "frustum_triangles_drawn": m.frustum_triangles_drawn,
-        "frustum_culling_rate": m.frustum_culling_rate,
-        "frustum_lost_patches": m.frustum_lost_patches,
-        // Infinite (identical pictures) becomes null.
-        "psnr_db": m.psnr_db,
-        "full_ms": 1e3 * m.full_seconds,
-        "culled_ms": 1e3 * m.culled_seconds,
-    })
-}
-
-fn merge(into: &mut Value, from: Value) {
-    if let (Value::Object(a), Value::Object(b)) = (into, from) {
-        a.extend(b);
-    }
-}
-
+/// The text report's table of one distance: mean, p95, p99 and max of each figure.
 fn print_summary(s: &EvalSummary, is_path: bool) -> Result<(), StdoutError> {
     let unit = if is_path { "frames" } else { "views" };
     outln!(
@@ -663,322 +581,4 @@ fn print_summary(s: &EvalSummary, is_path: bool) -> Result<(), StdoutError> {
         s.frame_cost.culled_ms_median,
         s.frame_cost.speedup
     )
-}
-
-/// Missed pixels and PSNR per frame, and where a visible patch is missing.
-fn path_plot(metrics: &[ViewMetrics]) -> String {
-    let frames = |f: &dyn Fn(&ViewMetrics) -> f64| -> Vec<(f64, f64)> {
-        metrics
-            .iter()
-            .enumerate()
-            .map(|(i, m)| (i as f64, f(m)))
-            .collect()
-    };
-    let popping = Chart {
-        title: "Popping along the path".into(),
-        x_label: "frame".into(),
-        x_log: false,
-        left_label: "missed pixels".into(),
-        right_label: "missed patches".into(),
-        series: vec![
-            Series {
-                name: "missed pixels".into(),
-                points: frames(&|m| m.missed_pixels as f64),
-                axis: Axis::Left,
-                colour: 1,
-            },
-            Series {
-                name: "missed visible patches".into(),
-                points: frames(&|m| f64::from(m.missed_patches)),
-                axis: Axis::Right,
-                colour: 0,
-            },
-        ],
-    };
-    let quality = Chart {
-        title: format!(
-            "PSNR, shaded full vs reconstructed (identical frames at {PSNR_PLOT_CAP_DB} dB)"
-        ),
-        x_label: "frame".into(),
-        x_log: false,
-        left_label: "PSNR (dB)".into(),
-        right_label: "culling rate (%)".into(),
-        series: vec![
-            Series {
-                name: "PSNR".into(),
-                points: frames(&|m| m.psnr_db.min(PSNR_PLOT_CAP_DB)),
-                axis: Axis::Left,
-                colour: 2,
-            },
-            Series {
-                name: "culling rate".into(),
-                points: frames(&|m| 100.0 * m.culling_rate),
-                axis: Axis::Right,
-                colour: 0,
-            },
-        ],
-    };
-    plot::svg(&[popping, quality])
-}
-
-fn run_sweep(args: &EvalArgs, distance_scale: f32) -> Result<()> {
-    usage(args.views == 0, || "--views 0: expected at least 1".into())?;
-    usage(args.sweep_patches.contains(&0), || {
-        "--sweep-patches: expected patch counts of at least 1".into()
-    })?;
-    if let Some(&l) = args.sweep_levels.iter().find(|&&l| l > MAX_LEVEL) {
-        return Err(UsageError(format!(
-            "--sweep-levels: level {l}, expected 0 to {MAX_LEVEL}"
-        ))
-        .into());
-    }
-    usage(
-        !(args.fov.is_finite() && args.fov > 0.0 && args.fov < 180.0),
-        || {
-            format!(
-                "--fov {}: expected degrees between 0 and 180, exclusive",
-                args.fov
-            )
-        },
-    )?;
-    let memory = memory_budget(args.memory);
-    let settings = SweepSettings {
-        patches: args.sweep_patches.clone(),
-        levels: args.sweep_levels.clone(),
-        bake: BakeSettings {
-            rows: RowSettings {
-                resolution: args.resolution.unwrap_or(DEFAULT_SWEEP_RESOLUTION),
-                fov_deg: args.fov,
-                // Plain: the stored views' own patches (`bake --view-supersample 0 --probe
-                // off`); default: what a default `patchvis bake` writes at every level.
-                research: Research {
-                    view_supersample: match args.sweep_mode {
-                        SweepModeArg::Plain => Some(0),
-                        SweepModeArg::Default => None,
-                    },
-                    probe: match args.sweep_mode {
-                        SweepModeArg::Plain => Probe::Off,
-                        SweepModeArg::Default => Probe::Default,
-                    },
-                    ..Research::default()
-                },
-                ..RowSettings::default()
-            },
-            tiling: args.tiling.into(),
-            memory,
-            ..BakeSettings::default()
-        },
-        views: args.views,
-        seed: args.seed,
-        distance_scale,
-    };
-    let mode_name = match args.sweep_mode {
-        SweepModeArg::Plain => "plain".to_string(),
-        SweepModeArg::Default => format!(
-            "as bake's default (--view-supersample {DEFAULT_VIEW_SUPERSAMPLE} --fold-min-pixels {DEFAULT_FOLD_MIN_PIXELS} --probe {DEFAULT_PROBE_PIXELS} --fold-corners {}, the probe off past {DEFAULT_PROBE_MAX_TRIANGLES} triangles)",
-            match PROBE_FOLD_CORNERS {
-                FoldCorners::All => "all",
-                FoldCorners::One => "one",
-                FoldCorners::Split => "split",
-                FoldCorners::Cover => "cover",
-            }
-        ),
-    };
-    let mesh = open_mesh(args, memory)?;
-    let bars = Bars::new(!args.quiet && !args.json);
-    let start = Instant::now();
-    let verbose = !args.quiet;
-    let points = patchvis::eval::sweep(&mesh, &settings, &bars, &mut |p| {
-        if verbose {
-            eprintln!(
-                "sweep: {} patches, level {}: culling {:.1}% (ideal {:.1}%), missed pixels {:.1} mean / {} p95 / {} max, identical {:.1}%, {} views missing a patch, {} bytes ({:.0} s)",
-                p.patches,
-                p.level,
-                100.0 * p.summary.culling_rate.mean,
-                100.0 * p.summary.ideal_culling_rate.mean,
-                p.summary.missed_pixels.mean,
-                p.summary.missed_pixels.p95,
-                p.summary.missed_pixels.max,
-                100.0 * p.summary.identical_views_fraction(),
-                p.summary.views_missing_a_patch,
-                p.file_bytes,
-                start.elapsed().as_secs_f64()
-            );
-        }
-    })
-    .with_context(|| format!("{}: sweep failed", args.mesh.display()))?;
-
-    let mut written = Vec::new();
-    if let Some(dir) = &args.png {
-        for (name, svg) in sweep_plots(&points) {
-            let path = dir.join(name);
-            write_atomic(&path, svg.as_bytes())
-                .with_context(|| format!("{}: cannot write", path.display()))?;
-            written.push(path);
-        }
-    }
-    if args.json {
-        let rows: Vec<Value> = points
-            .iter()
-            .map(|p| {
-                let mut row = summary_json(&p.summary);
-                merge(
-                    &mut row,
-                    json!({"patches": p.patches, "level": p.level, "sampling_views": p.sampling_views, "file_bytes": p.file_bytes}),
-                );
-                row
-            })
-            .collect();
-        let report = json!({
-            "mesh": args.mesh.display().to_string(),
-            "triangles": mesh.triangle_count(),
-            "resolution": settings.bake.rows.resolution,
-            "fov_deg": settings.bake.rows.fov_deg,
-            "views": settings.views,
-            "seed": settings.seed,
-            "distance_scale": settings.distance_scale,
-            "sweep_mode": mode_name,
-            "seconds": start.elapsed().as_secs_f64(),
-            "points": rows,
-            "pictures": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
-        });
-        outln!("{}", serde_json::to_string_pretty(&report)?)?;
-    } else {
-        outln!(
-            "{}: {} triangles; {} random views (seed {}) at {} px; bakes sampled {mode_name}",
-            args.mesh.display(),
-            mesh.triangle_count(),
-            settings.views,
-            settings.seed,
-            settings.bake.rows.resolution
-        )?;
-        outln!(
-            "| patches | level | views | file bytes | culling | ideal culling | identical views | views with a miss | missed px mean / p95 / max |"
-        )?;
-        outln!("|---|---|---|---|---|---|---|---|---|")?;
-        for p in &points {
-            let s = &p.summary;
-            outln!(
-                "| {} | {} | {} | {} | {:.1}% | {:.1}% | {:.1}% | {}/{} | {:.1} / {} / {} |",
-                p.patches,
-                p.level,
-                p.sampling_views,
-                p.file_bytes,
-                100.0 * s.culling_rate.mean,
-                100.0 * s.ideal_culling_rate.mean,
-                100.0 * s.identical_views_fraction(),
-                s.views - s.identical_views,
-                s.views,
-                s.missed_pixels.mean,
-                s.missed_pixels.p95,
-                s.missed_pixels.max
-            )?;
-        }
-        for path in &written {
-            outln!("wrote {}", path.display())?;
-        }
-    }
-    Ok(())
-}
-
-/// The seed paper's Figures 4–5 for this mesh: culling rate and missed pixels against the
-/// number of sampling views (one line per patch count) and against the patch count (one line
-/// per level), with the file size on the right axis.
-fn sweep_plots(points: &[SweepPoint]) -> Vec<(&'static str, String)> {
-    let mut patches: Vec<u32> = points.iter().map(|p| p.patches).collect();
-    patches.sort_unstable();
-    patches.dedup();
-    let mut levels: Vec<u32> = points.iter().map(|p| p.level).collect();
-    levels.sort_unstable();
-    levels.dedup();
-    type Metric = fn(&SweepPoint) -> f64;
-    let culling: Metric = |p| 100.0 * p.summary.culling_rate.mean;
-    let missed: Metric = |p| p.summary.missed_pixels.mean;
-    let size: Metric = |p| p.file_bytes as f64 / 1024.0;
-    let chart = |by_level: bool, what: &str, metric: Metric, label: &str| {
-        let groups: Vec<u32> = if by_level {
-            patches.clone()
-        } else {
-            levels.clone()
-        };
-        let mut series = Vec::new();
-        for (axis, f, suffix) in [(Axis::Left, metric, ""), (Axis::Right, size, " size")] {
-            for (c, &g) in groups.iter().enumerate() {
-                let pts = points
-                    .iter()
-                    .filter(|p| {
-                        if by_level {
-                            p.patches == g
-                        } else {
-                            p.level == g
-                        }
-                    })
-                    .map(|p| {
-                        let x = if by_level {
-                            f64::from(p.sampling_views)
-                        } else {
-                            f64::from(p.patches)
-                        };
-                        (x, f(p))
-                    })
-                    .collect();
-                let name = if by_level {
-                    format!("P={g}{suffix}")
-                } else {
-                    format!("level {g}{suffix}")
-                };
-                series.push(Series {
-                    name,
-                    points: pts,
-                    axis,
-                    colour: c,
-                });
-            }
-        }
-        Chart {
-            title: format!(
-                "{what} against {}",
-                if by_level {
-                    "sampling views"
-                } else {
-                    "patch count"
-                }
-            ),
-            x_label: if by_level {
-                "sampling views (sphere levels)".into()
-            } else {
-                "patches".into()
-            },
-            x_log: true,
-            left_label: label.into(),
-            right_label: "file size (KiB), dashed".into(),
-            series,
-        }
-    };
-    vec![
-        (
-            "sweep-levels.svg",
-            plot::svg(&[
-                chart(true, "Culling rate", culling, "culling rate (%)"),
-                chart(
-                    true,
-                    "Missed pixels",
-                    missed,
-                    "missed pixels per view (mean)",
-                ),
-            ]),
-        ),
-        (
-            "sweep-patches.svg",
-            plot::svg(&[
-                chart(false, "Culling rate", culling, "culling rate (%)"),
-                chart(
-                    false,
-                    "Missed pixels",
-                    missed,
-                    "missed pixels per view (mean)",
-                ),
-            ]),
-        ),
-    ]
 }

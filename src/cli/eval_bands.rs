@@ -1,14 +1,13 @@
 //! `patchvis eval --distance-scale K,K,..`: distance bands. Each distance evaluates the same
-//! cameras (same seed, same look jitter) moved to that distance, so that the bands compare
-//! row by row; this file parses the list and prints the table, one row per distance in the
-//! order given, with what each column compares.
+//! cameras (same seed, same look jitter) moved to that distance (`patchvis::eval::Band`), so
+//! that the bands compare row by row; this file parses the list and prints the table, one row
+//! per distance in the order given, with what each column compares.
 
 use super::UsageError;
 use super::eval_frame::GpuReport;
 use super::out::{StdoutError, outln};
-use patchvis::eval::{EvalSummary, ViewMetrics};
+use patchvis::eval::Band;
 use patchvis::runtime::Pvis;
-use patchvis::sampler::Camera;
 use std::path::PathBuf;
 
 /// The distances of `--distance-scale K[,K..]`, in the order given: each finite, positive
@@ -39,39 +38,25 @@ pub fn parse_distance_scales(text: &str) -> Result<Vec<f32>, UsageError> {
     Ok(scales)
 }
 
-/// One distance of the evaluation: its cameras and what they showed.
-pub struct Band {
-    /// Camera distance over the sampling distance.
-    pub scale: f32,
-    /// Camera distance from the centre, as the cameras were placed (binary32).
-    pub distance: f32,
-    /// The cameras, in view order.
-    pub cameras: Vec<Camera>,
-    /// What each camera showed.
-    pub metrics: Vec<ViewMetrics>,
-    /// Their aggregate.
-    pub summary: EvalSummary,
+/// One distance of the evaluation as the reports show it: the library's band, the GPU's
+/// frame cost and the pictures written.
+pub struct BandReport {
+    /// The cameras and what they showed.
+    pub band: Band,
     /// The GPU frame cost, where measured.
     pub gpu: Option<GpuReport>,
     /// PNGs written for this band.
     pub pictures: Vec<PathBuf>,
 }
 
-impl Band {
-    /// The camera distance in bounding radii.
-    pub fn radii(&self, pvis: &Pvis<'_>) -> f64 {
-        f64::from(self.distance) / f64::from(pvis.sampling().radius)
-    }
-}
-
 /// The distance bands' table: a row per distance, in the order given, and what its columns
 /// compare.
-pub fn print_bands(bands: &[Band], pvis: &Pvis<'_>) -> Result<(), StdoutError> {
+pub fn print_bands(bands: &[BandReport], pvis: &Pvis<'_>) -> Result<(), StdoutError> {
     outln!(
         "| distance | eye / R | answered | identical views | missed px mean / p99 / max | culling | ideal, all directions | culling + frustum | ideal in frustum |"
     )?;
     outln!("|---|---|---|---|---|---|---|---|---|")?;
-    for b in bands {
+    for BandReport { band: b, .. } in bands {
         let s = &b.summary;
         let flagged = s.views - s.answered_views;
         outln!(
@@ -104,7 +89,7 @@ pub fn print_bands(bands: &[Band], pvis: &Pvis<'_>) -> Result<(), StdoutError> {
     outln!(
         "culling: the answer, against the ideal in all directions (triangles of patches no direction from the eye shows). culling + frustum: the answer culled by the camera's frustum (query_in_frustum), against the ideal in the frustum (triangles of patches the camera's full render does not show)."
     )?;
-    for b in bands {
+    for BandReport { band: b, .. } in bands {
         if b.summary.views_losing_a_patch_to_the_frustum > 0 {
             outln!(
                 "distance x{}: views where the frustum dropped a patch the answer draws: {} (a bug: please report)",

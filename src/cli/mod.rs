@@ -2,13 +2,17 @@
 
 pub mod args;
 pub mod bake;
+mod bake_common;
 pub mod eval;
 pub mod eval_bands;
 pub mod eval_frame;
+mod eval_json;
+mod eval_sweep;
 pub mod generate;
 pub mod inspect;
 pub mod out;
 pub mod progress;
+mod query_bench;
 pub mod shard;
 pub mod verify;
 pub mod view;
@@ -24,3 +28,12 @@ impl std::fmt::Display for UsageError {
 }
 
 impl std::error::Error for UsageError {}
+
+/// A usage error with `message` when `condition` holds.
+fn usage(condition: bool, message: impl FnOnce() -> String) -> Result<(), UsageError> {
+    if condition {
+        Err(UsageError(message()))
+    } else {
+        Ok(())
+    }
+}

@@ -4,7 +4,7 @@
 
 use super::UsageError;
 use super::args::{BakeArgs, MergeArgs, TileArgs, memory_budget};
-use super::bake::{check_paths, report};
+use super::bake_common::{check_paths, report};
 use super::out::outln;
 use super::progress::Bars;
 use anyhow::{Result, anyhow};

@@ -16,7 +16,7 @@ use super::shade::{RgbImage, Shader, face_normal};
 use crate::bake::BakeError;
 use crate::format::{RecordKey, record_key, stored_record};
 use crate::memory::MemoryBudget;
-use crate::ooc::Mesh;
+use crate::ooc::{Mesh, MeshError, OpenOptions};
 use crate::progress::Progress;
 use crate::runtime::{PatchInfo, Pvis};
 use crate::sampler::{Camera, IdBuffer, NO_PATCH, Rasterizer};
@@ -25,6 +25,7 @@ use crate::visibility::SamplingParams;
 use rayon::prelude::*;
 use std::collections::{HashMap, VecDeque};
 use std::ops::Range;
+use std::path::Path;
 use std::time::Instant;
 
 /// What the full render shows at a pixel, given the reconstruction's fragment there: the
@@ -98,6 +99,13 @@ pub enum EvalError {
     /// A sweep setting is out of range.
     #[error("{0}")]
     Settings(String),
+    /// A camera of a path names no target and its eye is the model's centre, so it has no
+    /// direction to look in.
+    #[error("camera {camera}: the eye is at the model's centre, expected it elsewhere")]
+    EyeAtCentre {
+        /// The camera, 1-based.
+        camera: usize,
+    },
     /// A sweep's bake failed; its error as text, so that this error stays `Clone` and
     /// comparable.
     #[error("{0}")]
@@ -123,6 +131,18 @@ pub struct EvalOptions {
     pub memory: MemoryBudget,
     /// The tiling algorithm, when the mesh must be tiled again (the bake's `--tiling`).
     pub tiling: TilingMode,
+}
+
+/// Opens the mesh at `path` for an evaluation: within the input's share of `memory`, as the
+/// bake's `Recipe::open` does, without the bake's conversion cache.
+pub fn open_mesh(path: &Path, memory: MemoryBudget) -> Result<Mesh, MeshError> {
+    Mesh::open_with(
+        path,
+        &OpenOptions {
+            memory_budget: memory.split().input,
+            ..Default::default()
+        },
+    )
 }
 
 /// What one view shows: the full render against the render of the query's answer.

@@ -31,7 +31,7 @@ use serde_json::{Value, json};
 use super::Sequence;
 use crate::mapped::Array;
 use crate::ooc::Mesh;
-use crate::ooc::attributes::{AlphaMode, Attributes, NO_MATERIAL};
+use crate::ooc::attributes::{AlphaMode, Attributes, Material, NO_MATERIAL};
 
 /// Output buffer size.
 const WRITE_BUFFER_BYTES: usize = 64 * 1024;
@@ -55,115 +55,82 @@ pub(super) fn write(
     attributes: &Attributes,
     sequence: &Sequence,
 ) -> io::Result<()> {
-    let present = attributes.present();
-    let vertices = attributes.vertex_count();
-    let computed = if (0..vertices).all(|o| attributes.normal(o).is_some()) {
-        None
-    } else {
-        Some(vertex_normals(mesh)?)
+    let normals = Normals::new(mesh, attributes)?;
+    let (document, buffer_length) = document(glb, mesh, attributes, sequence);
+    let text = serde_json::to_string(&document).map_err(io::Error::other)?;
+    let mut out = BufWriter::with_capacity(WRITE_BUFFER_BYTES, out);
+    let bin = |out: &mut dyn Write| {
+        write_buffer(out, mesh, attributes, sequence, &normals, buffer_length)
     };
-    let normal = |o: u32| -> [f32; 3] {
+    if glb {
+        write_glb(&mut out, &text, buffer_length, bin)?;
+    } else {
+        write_gltf(&mut out, &text, bin)?;
+    }
+    out.flush()
+}
+
+/// The `NORMAL` of each output vertex: the input's, else the area-weighted normal of its
+/// source vertex (computed only when some vertex lacks one), scaled to unit length.
+struct Normals {
+    /// [`vertex_normals`] of the mesh, where the input lacks normals.
+    computed: Option<Array<[f32; 3]>>,
+}
+
+impl Normals {
+    /// Computes the vertex normals if any output vertex has none in `attributes`.
+    fn new(mesh: &Mesh, attributes: &Attributes) -> io::Result<Normals> {
+        let computed = if (0..attributes.vertex_count()).all(|o| attributes.normal(o).is_some()) {
+            None
+        } else {
+            Some(vertex_normals(mesh)?)
+        };
+        Ok(Normals { computed })
+    }
+
+    /// The unit normal of output vertex `o`.
+    fn of(&self, attributes: &Attributes, o: u32) -> [f32; 3] {
         let n = attributes.normal(o).unwrap_or_else(|| {
-            computed
+            self.computed
                 .as_ref()
                 .map_or(FALLBACK_NORMAL, |c| c[attributes.source(o) as usize])
         });
         unit(n)
-    };
-
-    // Bounds of the positions (POSITION needs them).
-    let mut min = [f32::INFINITY; 3];
-    let mut max = [f32::NEG_INFINITY; 3];
-    for o in 0..vertices {
-        let p = mesh.position(attributes.source(o));
-        for k in 0..3 {
-            min[k] = min[k].min(p[k]);
-            max[k] = max[k].max(p[k]);
-        }
     }
+}
 
-    // Buffer views, in buffer order.
-    let mut views: Vec<Value> = Vec::new();
-    let mut offset = 0u64;
-    let mut view = |length: u64, target: Option<u32>| -> usize {
-        let mut v = json!({ "buffer": 0, "byteOffset": offset, "byteLength": length });
+/// The buffer views, in buffer order: each starts on a 4-byte boundary.
+#[derive(Default)]
+struct BufferViews {
+    /// The views' JSON.
+    views: Vec<Value>,
+    /// The buffer's length so far: where the next view starts.
+    length: u64,
+}
+
+impl BufferViews {
+    /// Appends a view of `length` bytes, for `target` if it has one; returns its index.
+    fn push(&mut self, length: u64, target: Option<u32>) -> usize {
+        let mut v = json!({ "buffer": 0, "byteOffset": self.length, "byteLength": length });
         if let Some(target) = target {
             v["target"] = json!(target);
         }
-        views.push(v);
-        offset += length.next_multiple_of(4);
-        views.len() - 1
-    };
-    let (v, t) = (u64::from(vertices), u64::from(sequence.triangle_count()));
-    let mut accessors = vec![
-        json!({ "bufferView": view(12 * v, Some(ARRAY_BUFFER)), "componentType": FLOAT,
-                "count": v, "type": "VEC3", "min": min, "max": max }),
-        json!({ "bufferView": view(12 * v, Some(ARRAY_BUFFER)), "componentType": FLOAT,
-                "count": v, "type": "VEC3" }),
-    ];
-    let mut attribute_map = json!({ "POSITION": 0, "NORMAL": 1 });
-    if present.uvs {
-        attribute_map["TEXCOORD_0"] = json!(accessors.len());
-        accessors.push(json!({ "bufferView": view(8 * v, Some(ARRAY_BUFFER)),
-                               "componentType": FLOAT, "count": v, "type": "VEC2" }));
+        self.views.push(v);
+        self.length += length.next_multiple_of(4);
+        self.views.len() - 1
     }
-    if present.colours {
-        attribute_map["COLOR_0"] = json!(accessors.len());
-        accessors.push(json!({ "bufferView": view(4 * v, Some(ARRAY_BUFFER)),
-                               "componentType": UNSIGNED_BYTE, "normalized": true, "count": v,
-                               "type": "VEC4" }));
-    }
-    let index_view = view(12 * t, Some(ELEMENT_ARRAY_BUFFER));
-    let original_view = view(4 * t, None);
-    let materials = attributes.materials();
-    let mut images = Vec::new();
-    let mut textures = Vec::new();
-    let mut material_json = Vec::new();
-    for m in materials {
-        let mut pbr = json!({
-            "baseColorFactor": m.base_colour.map(|c| c.clamp(0.0, 1.0)),
-            "metallicFactor": m.metallic.clamp(0.0, 1.0),
-            "roughnessFactor": m.roughness.clamp(0.0, 1.0),
-        });
-        if let Some(texture) = &m.texture {
-            let image_view = view(texture.bytes.len() as u64, None);
-            images.push(json!({ "bufferView": image_view, "mimeType": texture.mime }));
-            textures.push(json!({ "sampler": 0, "source": images.len() - 1 }));
-            pbr["baseColorTexture"] = json!({ "index": textures.len() - 1 });
-        }
-        let mut material = json!({ "name": m.name, "pbrMetallicRoughness": pbr });
-        if m.double_sided {
-            material["doubleSided"] = json!(true);
-        }
-        match m.alpha {
-            AlphaMode::Opaque => {}
-            AlphaMode::Mask(cutoff) => {
-                material["alphaMode"] = json!("MASK");
-                material["alphaCutoff"] = json!(cutoff.max(0.0));
-            }
-            AlphaMode::Blend => material["alphaMode"] = json!("BLEND"),
-        }
-        material_json.push(material);
-    }
-    let buffer_length = offset;
+}
 
-    let mut primitives = Vec::new();
-    for run in sequence.runs() {
-        let mut primitive = json!({
-            "attributes": attribute_map,
-            "indices": accessors.len(),
-            "mode": 4,
-            "extras": { "patchvis": { "first_triangle": run.first, "triangle_count": run.count } },
-        });
-        if run.material != NO_MATERIAL {
-            primitive["material"] = json!(run.material);
-        }
-        accessors.push(json!({ "bufferView": index_view,
-                               "byteOffset": 12 * u64::from(run.first),
-                               "componentType": UNSIGNED_INT, "count": 3 * u64::from(run.count),
-                               "type": "SCALAR" }));
-        primitives.push(primitive);
-    }
+/// The glTF document of `mesh` in `sequence`'s order, and the length of its buffer.
+fn document(glb: bool, mesh: &Mesh, attributes: &Attributes, sequence: &Sequence) -> (Value, u64) {
+    let mut views = BufferViews::default();
+    let (mut accessors, attribute_map) = vertex_accessors(&mut views, mesh, attributes);
+    let t = u64::from(sequence.triangle_count());
+    let index_view = views.push(12 * t, Some(ELEMENT_ARRAY_BUFFER));
+    let original_view = views.push(4 * t, None);
+    let materials = materials_json(&mut views, attributes.materials());
+    let buffer_length = views.length;
+    let primitives = primitives(sequence, &attribute_map, index_view, &mut accessors);
     let firsts = sequence.patch_firsts();
     let mut buffer = json!({ "byteLength": buffer_length });
     if !glb {
@@ -185,111 +152,256 @@ pub(super) fn write(
             } },
         }],
         "accessors": accessors,
-        "bufferViews": views,
+        "bufferViews": views.views,
         "buffers": [buffer],
     });
-    if !material_json.is_empty() {
-        document["materials"] = json!(material_json);
+    if !materials.materials.is_empty() {
+        document["materials"] = json!(materials.materials);
     }
-    if !images.is_empty() {
-        document["images"] = json!(images);
-        document["textures"] = json!(textures);
+    if !materials.images.is_empty() {
+        document["images"] = json!(materials.images);
+        document["textures"] = json!(materials.textures);
         // Linear filtering with mipmaps, repeating: what OBJ textures assume.
         document["samplers"] =
             json!([{ "magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497 }]);
     }
-    let text = serde_json::to_string(&document).map_err(io::Error::other)?;
+    (document, buffer_length)
+}
 
-    let mut out = BufWriter::with_capacity(WRITE_BUFFER_BYTES, out);
-    let bin = |out: &mut dyn Write| -> io::Result<()> {
-        let mut written = 0u64;
-        let mut put = |out: &mut dyn Write, bytes: &[u8]| -> io::Result<()> {
-            written += bytes.len() as u64;
-            out.write_all(bytes)
-        };
-        for o in 0..vertices {
-            put(out, &floats(mesh.position(attributes.source(o))))?;
-        }
-        for o in 0..vertices {
-            put(out, &floats(normal(o)))?;
-        }
-        if present.uvs {
-            for o in 0..vertices {
-                put(out, &floats(attributes.uv(o).unwrap_or([0.0; 2])))?;
-            }
-        }
-        if present.colours {
-            for o in 0..vertices {
-                put(out, &attributes.colour(o).unwrap_or([255; 4]))?;
-            }
-        }
-        let mut failed = Ok(());
-        sequence.for_each(|tri| {
-            if failed.is_ok() {
-                let c = attributes.corners(mesh, tri);
-                let mut record = [0u8; 12];
-                for (field, i) in record.chunks_exact_mut(4).zip(c) {
-                    field.copy_from_slice(&i.to_le_bytes());
-                }
-                failed = put(out, &record);
-            }
-        });
-        failed?;
-        let mut failed = Ok(());
-        sequence.for_each(|tri| {
-            if failed.is_ok() {
-                failed = put(out, &tri.to_le_bytes());
-            }
-        });
-        failed?;
-        for m in materials {
-            if let Some(texture) = &m.texture {
-                put(out, &texture.bytes)?;
-                let pad = texture.bytes.len().next_multiple_of(4) - texture.bytes.len();
-                put(out, &[0u8; 3][..pad])?;
-            }
-        }
-        debug_assert_eq!(written, buffer_length);
-        Ok(())
-    };
-    if glb {
-        let json_length = text.len().next_multiple_of(4);
-        let total = 12 + 8 + json_length as u64 + 8 + buffer_length;
-        let total = u32::try_from(total).map_err(|_| {
-            io::Error::other(format!(
-                "the GLB would be {total} bytes, more than the 4 GiB a GLB can hold; write .gltf or .ply"
-            ))
-        })?;
-        out.write_all(b"glTF")?;
-        out.write_all(&2u32.to_le_bytes())?;
-        out.write_all(&total.to_le_bytes())?;
-        out.write_all(&(json_length as u32).to_le_bytes())?;
-        out.write_all(b"JSON")?;
-        out.write_all(text.as_bytes())?;
-        out.write_all(&b"   "[..json_length - text.len()])?;
-        out.write_all(&(buffer_length as u32).to_le_bytes())?;
-        out.write_all(b"BIN\0")?;
-        bin(&mut out)?;
-    } else {
-        let quoted = format!("\"{URI_PLACEHOLDER}\"");
-        let (head, tail) = text
-            .split_once(&quoted)
-            .expect("the buffer's URI placeholder is in the JSON");
-        out.write_all(head.as_bytes())?;
-        out.write_all(b"\"data:application/octet-stream;base64,")?;
-        {
-            let mut encoder = base64::write::EncoderWriter::new(
-                &mut out,
-                &base64::engine::general_purpose::STANDARD,
-            );
-            bin(&mut encoder)?;
-            encoder.finish()?;
-        }
-        out.write_all(b"\"")?;
-        out.write_all(tail.as_bytes())?;
-        out.write_all(b"\n")?;
+/// The vertex attributes' views and accessors, `POSITION` and `NORMAL`, then `TEXCOORD_0` and
+/// `COLOR_0` where the input has them; returns the accessors and the primitives' `attributes`.
+fn vertex_accessors(
+    views: &mut BufferViews,
+    mesh: &Mesh,
+    attributes: &Attributes,
+) -> (Vec<Value>, Value) {
+    let present = attributes.present();
+    let (min, max) = position_bounds(mesh, attributes);
+    let v = u64::from(attributes.vertex_count());
+    let mut accessors = vec![
+        json!({ "bufferView": views.push(12 * v, Some(ARRAY_BUFFER)), "componentType": FLOAT,
+                "count": v, "type": "VEC3", "min": min, "max": max }),
+        json!({ "bufferView": views.push(12 * v, Some(ARRAY_BUFFER)), "componentType": FLOAT,
+                "count": v, "type": "VEC3" }),
+    ];
+    let mut attribute_map = json!({ "POSITION": 0, "NORMAL": 1 });
+    if present.uvs {
+        attribute_map["TEXCOORD_0"] = json!(accessors.len());
+        accessors.push(json!({ "bufferView": views.push(8 * v, Some(ARRAY_BUFFER)),
+                               "componentType": FLOAT, "count": v, "type": "VEC2" }));
     }
-    out.flush()
+    if present.colours {
+        attribute_map["COLOR_0"] = json!(accessors.len());
+        accessors.push(json!({ "bufferView": views.push(4 * v, Some(ARRAY_BUFFER)),
+                               "componentType": UNSIGNED_BYTE, "normalized": true, "count": v,
+                               "type": "VEC4" }));
+    }
+    (accessors, attribute_map)
+}
+
+/// The bounds of the output vertices' positions (`POSITION` needs them).
+fn position_bounds(mesh: &Mesh, attributes: &Attributes) -> ([f32; 3], [f32; 3]) {
+    let mut min = [f32::INFINITY; 3];
+    let mut max = [f32::NEG_INFINITY; 3];
+    for o in 0..attributes.vertex_count() {
+        let p = mesh.position(attributes.source(o));
+        for k in 0..3 {
+            min[k] = min[k].min(p[k]);
+            max[k] = max[k].max(p[k]);
+        }
+    }
+    (min, max)
+}
+
+/// The document's `materials`, `images` and `textures`.
+struct MaterialsJson {
+    materials: Vec<Value>,
+    images: Vec<Value>,
+    textures: Vec<Value>,
+}
+
+/// The materials as glTF's metallic-roughness materials, each texture an image embedded in a
+/// view of the buffer (appended to `views`, in material order).
+fn materials_json(views: &mut BufferViews, materials: &[Material]) -> MaterialsJson {
+    let mut json = MaterialsJson {
+        materials: Vec::new(),
+        images: Vec::new(),
+        textures: Vec::new(),
+    };
+    for m in materials {
+        let mut pbr = json!({
+            "baseColorFactor": m.base_colour.map(|c| c.clamp(0.0, 1.0)),
+            "metallicFactor": m.metallic.clamp(0.0, 1.0),
+            "roughnessFactor": m.roughness.clamp(0.0, 1.0),
+        });
+        if let Some(texture) = &m.texture {
+            let image_view = views.push(texture.bytes.len() as u64, None);
+            json.images
+                .push(json!({ "bufferView": image_view, "mimeType": texture.mime }));
+            json.textures
+                .push(json!({ "sampler": 0, "source": json.images.len() - 1 }));
+            pbr["baseColorTexture"] = json!({ "index": json.textures.len() - 1 });
+        }
+        let mut material = json!({ "name": m.name, "pbrMetallicRoughness": pbr });
+        if m.double_sided {
+            material["doubleSided"] = json!(true);
+        }
+        match m.alpha {
+            AlphaMode::Opaque => {}
+            AlphaMode::Mask(cutoff) => {
+                material["alphaMode"] = json!("MASK");
+                material["alphaCutoff"] = json!(cutoff.max(0.0));
+            }
+            AlphaMode::Blend => material["alphaMode"] = json!("BLEND"),
+        }
+        json.materials.push(material);
+    }
+    json
+}
+
+/// One primitive per material run of `sequence`, each indexing its slice of the one index
+/// view through an accessor appended to `accessors`.
+fn primitives(
+    sequence: &Sequence,
+    attribute_map: &Value,
+    index_view: usize,
+    accessors: &mut Vec<Value>,
+) -> Vec<Value> {
+    let mut primitives = Vec::new();
+    for run in sequence.runs() {
+        let mut primitive = json!({
+            "attributes": attribute_map,
+            "indices": accessors.len(),
+            "mode": 4,
+            "extras": { "patchvis": { "first_triangle": run.first, "triangle_count": run.count } },
+        });
+        if run.material != NO_MATERIAL {
+            primitive["material"] = json!(run.material);
+        }
+        accessors.push(json!({ "bufferView": index_view,
+                               "byteOffset": 12 * u64::from(run.first),
+                               "componentType": UNSIGNED_INT, "count": 3 * u64::from(run.count),
+                               "type": "SCALAR" }));
+        primitives.push(primitive);
+    }
+    primitives
+}
+
+/// Writes the buffer, view by view in [`document`]'s order: the vertex attributes, the
+/// triangles' corners in output order, their original indices, then the texture images, each
+/// padded to 4 bytes. `buffer_length` is what the document says it holds.
+fn write_buffer(
+    out: &mut dyn Write,
+    mesh: &Mesh,
+    attributes: &Attributes,
+    sequence: &Sequence,
+    normals: &Normals,
+    buffer_length: u64,
+) -> io::Result<()> {
+    let present = attributes.present();
+    let vertices = attributes.vertex_count();
+    let mut written = 0u64;
+    let mut put = |out: &mut dyn Write, bytes: &[u8]| -> io::Result<()> {
+        written += bytes.len() as u64;
+        out.write_all(bytes)
+    };
+    for o in 0..vertices {
+        put(out, &floats(mesh.position(attributes.source(o))))?;
+    }
+    for o in 0..vertices {
+        put(out, &floats(normals.of(attributes, o)))?;
+    }
+    if present.uvs {
+        for o in 0..vertices {
+            put(out, &floats(attributes.uv(o).unwrap_or([0.0; 2])))?;
+        }
+    }
+    if present.colours {
+        for o in 0..vertices {
+            put(out, &attributes.colour(o).unwrap_or([255; 4]))?;
+        }
+    }
+    let mut failed = Ok(());
+    sequence.for_each(|tri| {
+        if failed.is_ok() {
+            let c = attributes.corners(mesh, tri);
+            let mut record = [0u8; 12];
+            for (field, i) in record.chunks_exact_mut(4).zip(c) {
+                field.copy_from_slice(&i.to_le_bytes());
+            }
+            failed = put(out, &record);
+        }
+    });
+    failed?;
+    let mut failed = Ok(());
+    sequence.for_each(|tri| {
+        if failed.is_ok() {
+            failed = put(out, &tri.to_le_bytes());
+        }
+    });
+    failed?;
+    for m in attributes.materials() {
+        if let Some(texture) = &m.texture {
+            put(out, &texture.bytes)?;
+            let pad = texture.bytes.len().next_multiple_of(4) - texture.bytes.len();
+            put(out, &[0u8; 3][..pad])?;
+        }
+    }
+    debug_assert_eq!(written, buffer_length);
+    Ok(())
+}
+
+/// The binary container: the 12-byte header, the JSON chunk (`text`, padded with spaces), then
+/// the binary chunk of `buffer_length` bytes that `bin` writes.
+fn write_glb(
+    out: &mut impl Write,
+    text: &str,
+    buffer_length: u64,
+    bin: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> io::Result<()> {
+    let json_length = text.len().next_multiple_of(4);
+    let total = 12 + 8 + json_length as u64 + 8 + buffer_length;
+    let total = u32::try_from(total).map_err(|_| {
+        io::Error::other(format!(
+            "the GLB would be {total} bytes, more than the 4 GiB a GLB can hold; write .gltf or .ply"
+        ))
+    })?;
+    out.write_all(b"glTF")?;
+    out.write_all(&2u32.to_le_bytes())?;
+    out.write_all(&total.to_le_bytes())?;
+    out.write_all(&(json_length as u32).to_le_bytes())?;
+    out.write_all(b"JSON")?;
+    out.write_all(text.as_bytes())?;
+    out.write_all(&b"   "[..json_length - text.len()])?;
+    out.write_all(&(buffer_length as u32).to_le_bytes())?;
+    out.write_all(b"BIN\0")?;
+    bin(out)
+}
+
+/// The JSON file, with the buffer that `bin` writes as a base64 `data:` URI in place of the
+/// placeholder URI in `text`.
+fn write_gltf(
+    out: &mut impl Write,
+    text: &str,
+    bin: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> io::Result<()> {
+    let quoted = format!("\"{URI_PLACEHOLDER}\"");
+    let (head, tail) = text
+        .split_once(&quoted)
+        .expect("the buffer's URI placeholder is in the JSON");
+    out.write_all(head.as_bytes())?;
+    out.write_all(b"\"data:application/octet-stream;base64,")?;
+    {
+        let mut encoder = base64::write::EncoderWriter::new(
+            &mut *out,
+            &base64::engine::general_purpose::STANDARD,
+        );
+        bin(&mut encoder)?;
+        encoder.finish()?;
+    }
+    out.write_all(b"\"")?;
+    out.write_all(tail.as_bytes())?;
+    out.write_all(b"\n")
 }
 
 /// Area-weighted vertex normals of `mesh` (unnormalised sums of its faces' cross products), in

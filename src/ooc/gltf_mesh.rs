@@ -683,7 +683,6 @@ fn emit(
     sink: &mut CacheWriter,
     totals: &mut Totals,
 ) -> Result<(), Fault> {
-    use MeshErrorKind::*;
     let mode = primitive.mode();
     if !matches!(
         mode,
@@ -692,6 +691,32 @@ fn emit(
         totals.skipped_primitives += 1;
         return Ok(());
     }
+    let positions = emit_positions(primitive, role, world, buffers, sink, totals)?;
+    let indices = indices(primitive, role, buffers)?;
+    emit_triangles(mode, role, world, &positions, indices.as_ref(), sink)
+}
+
+/// Where a primitive's vertices went in the cache.
+struct Emitted {
+    /// Its `POSITION` accessor, for errors.
+    accessor: usize,
+    /// Its vertex count.
+    count: usize,
+    /// The cache's index of its first vertex.
+    base: u64,
+}
+
+/// Writes a primitive's `POSITION` accessor under `world`: `VEC3` of `FLOAT`, finite after
+/// the transform, and the scene's vertices still numbered by `u32`.
+fn emit_positions(
+    primitive: &gltf::Primitive,
+    role: &str,
+    world: &DMat4,
+    buffers: &[BufferBytes],
+    sink: &mut CacheWriter,
+    totals: &mut Totals,
+) -> Result<Emitted, Fault> {
+    use MeshErrorKind::*;
     let Some(positions) = primitive.get(&Semantic::Positions) else {
         return Err(Fault::new(
             MissingProperty,
@@ -752,55 +777,96 @@ fn emit(
         totals.bounds.add(q);
         sink.vertex(q).map_err(Fault::cache)?;
     }
+    Ok(Emitted {
+        accessor: positions.index(),
+        count: points.count,
+        base,
+    })
+}
 
-    // The index sequence: the indices accessor, or 0..count.
-    let indices = match primitive.indices() {
-        Some(accessor) => {
-            let index_role = format!("{role}.indices");
-            if accessor.dimensions() != Dimensions::Scalar
-                || !matches!(
-                    accessor.data_type(),
-                    DataType::U8 | DataType::U16 | DataType::U32
-                )
-            {
-                return Err(Fault::new(
-                    UnsupportedFormat,
-                    None,
-                    format!(
-                        "{index_role}: accessor {} is {}, expected SCALAR of UNSIGNED_BYTE, \
-                         UNSIGNED_SHORT or UNSIGNED_INT",
-                        accessor.index(),
-                        type_name(&accessor)
-                    ),
-                ));
-            }
-            let data = strided(&accessor, buffers, &index_role)?;
-            Some((accessor.index(), index_role, data))
-        }
-        None => None,
+/// A primitive's indices accessor, with its role for errors.
+struct Indices<'b> {
+    accessor: usize,
+    role: String,
+    data: Strided<'b>,
+}
+
+/// The primitive's indices accessor, checked to be `SCALAR` of an unsigned integer type; none
+/// when the primitive has none (its vertices in order).
+fn indices<'b>(
+    primitive: &gltf::Primitive,
+    role: &str,
+    buffers: &'b [BufferBytes],
+) -> Result<Option<Indices<'b>>, Fault> {
+    let Some(accessor) = primitive.indices() else {
+        return Ok(None);
     };
-    let k = indices.as_ref().map_or(points.count, |(_, _, d)| d.count);
+    let index_role = format!("{role}.indices");
+    if accessor.dimensions() != Dimensions::Scalar
+        || !matches!(
+            accessor.data_type(),
+            DataType::U8 | DataType::U16 | DataType::U32
+        )
+    {
+        return Err(Fault::new(
+            MeshErrorKind::UnsupportedFormat,
+            None,
+            format!(
+                "{index_role}: accessor {} is {}, expected SCALAR of UNSIGNED_BYTE, \
+                 UNSIGNED_SHORT or UNSIGNED_INT",
+                accessor.index(),
+                type_name(&accessor)
+            ),
+        ));
+    }
+    let data = strided(&accessor, buffers, &index_role)?;
+    Ok(Some(Indices {
+        accessor: accessor.index(),
+        role: index_role,
+        data,
+    }))
+}
+
+/// Writes the triangles of a primitive in `mode` over its vertices `positions`, through
+/// `indices` (or in order without): each index checked against the vertex count, the count
+/// fitting the mode, the scene's triangles still numbered by `u32`, and the winding kept
+/// under a mirroring `world`.
+fn emit_triangles(
+    mode: Mode,
+    role: &str,
+    world: &DMat4,
+    positions: &Emitted,
+    indices: Option<&Indices>,
+    sink: &mut CacheWriter,
+) -> Result<(), Fault> {
+    use MeshErrorKind::*;
+    let base = positions.base;
+    let k = indices.map_or(positions.count, |i| i.data.count);
     let vertex = |j: usize| -> Result<u32, Fault> {
-        let Some((a, index_role, data)) = &indices else {
+        let Some(Indices {
+            accessor: a,
+            role: index_role,
+            data,
+        }) = indices
+        else {
             return Ok(base as u32 + j as u32);
         };
         let i = data.index(j);
-        if i as usize >= points.count {
+        if i as usize >= positions.count {
             return Err(Fault::new(
                 BadIndex,
                 None,
                 format!(
                     "{index_role}: accessor {a} element {j} is {i}, expected < {} (the count of \
                      POSITION accessor {})",
-                    points.count,
-                    positions.index()
+                    positions.count, positions.accessor
                 ),
             ));
         }
         Ok(base as u32 + i)
     };
     let triangles = match mode {
-        Mode::Triangles if k % 3 != 0 => {
+        Mode::Triangles if !k.is_multiple_of(3) => {
             return Err(Fault::new(
                 BadFace,
                 None,

@@ -1,5 +1,5 @@
-//! Writes an `f32` the way `Display` does, shortest round-trip digits without an exponent, in
-//! a few hundred bytes of code instead of `core`'s float formatting.
+//! The digits of an `f32` as `Display` prints them, in a few hundred bytes of code instead of
+//! `core`'s float formatting; [`super::Message::f32`] lays them out without an exponent.
 //!
 //! The reader's error messages name the offending float (`found inf at byte 172`), and the
 //! conformance vectors hold those messages, so every build must print a float exactly as
@@ -11,9 +11,7 @@
 //! interval when the significand is even), scaled by a power of ten, then one digit per step
 //! until one of the two candidates at that digit is inside the interval. Exact, in
 //! fixed-size integers of 256 bits (an `f32` needs at most 180): no allocation. Tested
-//! against `Display` on every exponent and on random bit patterns.
-
-use super::message::Message;
+//! against `Display` on every exponent and on random bit patterns (`message.rs`).
 
 /// Limbs of [`Big`]: 256 bits. The largest value is `r · 10 < 2^180` (the smallest
 /// subnormal, scaled by `2^151 · 10^45`).
@@ -99,7 +97,7 @@ impl Big {
 /// The shortest digits of a finite `v > 0`: `(d, j)` with `v` reading back from `d · 10^j`,
 /// `d` without trailing zeros.
 #[inline(never)]
-fn shortest(v: f32) -> (u64, i32) {
+pub(crate) fn shortest(v: f32) -> (u64, i32) {
     let bits = v.to_bits();
     let (biased, fraction) = ((bits >> 23) & 0xFF, bits & 0x7F_FFFF);
     let (m, e) = if biased == 0 {
@@ -182,93 +180,17 @@ fn shortest(v: f32) -> (u64, i32) {
     (d, j)
 }
 
-/// Writes `v` as `Display` does: `NaN`, `inf`, `-inf`, `0`, `-0`, or the shortest round-trip
-/// digits in positional notation.
-pub(crate) fn write(v: f32, out: &mut Message) {
-    if v.is_nan() {
-        out.text("NaN");
-        return;
-    }
-    if v.is_sign_negative() {
-        out.text("-");
-    }
-    let v = v.abs();
-    if v.is_infinite() {
-        out.text("inf");
-        return;
-    }
-    if v == 0.0 {
-        out.text("0");
-        return;
-    }
-    let (d, j) = shortest(v);
-    let mut buf = [0u8; 20];
-    let start = super::message::decimal(d, &mut buf);
-    let digits = &buf[start..];
-    let len = digits.len() as i32;
-    if j >= 0 {
-        out.bytes(digits).zeros(j);
-    } else if len + j > 0 {
-        let point = (len + j) as usize;
-        out.bytes(&digits[..point])
-            .text(".")
-            .bytes(&digits[point..]);
-    } else {
-        out.text("0.").zeros(-j - len).bytes(digits);
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    extern crate std;
-    use std::format;
-
-    fn same(v: f32) {
-        let mut m = Message::new();
-        write(v, &mut m);
-        assert_eq!(m.as_str(), format!("{v}"), "bits {:#010x}", v.to_bits());
-    }
 
     #[test]
-    fn special_values_and_every_binade_print_as_display_does() {
-        for v in [
-            0.0,
-            -0.0,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            f32::NAN,
-            1.0,
-            1.5,
-            -0.5,
-            0.1,
-            3.0e38,
-            f32::MAX,
-            f32::MIN_POSITIVE,
-            1e-45,
-            f32::from_bits(1),
-            f32::from_bits(0x007F_FFFF),
-            100.0,
-            123_456_790.0,
-        ] {
-            same(v);
-        }
-        // Each exponent: the power of two, its neighbours and a few significands.
-        for biased in 0..255u32 {
-            for fraction in [0, 1, 2, 0x40_0000, 0x7F_FFFE, 0x7F_FFFF, 0x12_3456] {
-                same(f32::from_bits(biased << 23 | fraction));
-            }
-        }
-    }
-
-    #[test]
-    fn random_bit_patterns_print_as_display_does() {
-        let mut state = 0x9E37_79B9_7F4A_7C15u64;
-        for _ in 0..200_000 {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            same(f32::from_bits((state >> 16) as u32));
-        }
+    fn digits_and_exponents_of_a_few_values() {
+        assert_eq!(shortest(1.0), (1, 0));
+        assert_eq!(shortest(1.5), (15, -1));
+        assert_eq!(shortest(0.1), (1, -1));
+        assert_eq!(shortest(100.0), (1, 2));
+        assert_eq!(shortest(f32::MAX), (34_028_235, 31));
+        assert_eq!(shortest(f32::from_bits(1)), (1, -45));
     }
 }

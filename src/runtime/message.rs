@@ -105,11 +105,38 @@ impl Message {
         }
     }
 
-    /// Appends `v` as `Display` writes it (see [`float_text`]).
+    /// Appends `v` as `Display` writes it: `NaN`, `inf`, `-inf`, `0`, `-0`, or the shortest
+    /// round-trip digits ([`float_text::shortest`]) in positional notation.
     #[inline(never)]
     pub(crate) fn f32(&mut self, v: f32) -> &mut Self {
-        float_text::write(v, self);
-        self
+        if v.is_nan() {
+            return self.text("NaN");
+        }
+        if v.is_sign_negative() {
+            self.text("-");
+        }
+        let v = v.abs();
+        if v.is_infinite() {
+            return self.text("inf");
+        }
+        if v == 0.0 {
+            return self.text("0");
+        }
+        let (d, j) = float_text::shortest(v);
+        let mut buf = [0u8; 20];
+        let start = decimal(d, &mut buf);
+        let digits = &buf[start..];
+        let len = digits.len() as i32;
+        if j >= 0 {
+            self.bytes(digits).zeros(j)
+        } else if len + j > 0 {
+            let point = (len + j) as usize;
+            self.bytes(&digits[..point])
+                .text(".")
+                .bytes(&digits[point..])
+        } else {
+            self.text("0.").zeros(-j - len).bytes(digits)
+        }
     }
 }
 
@@ -120,7 +147,7 @@ impl core::fmt::Debug for Message {
 }
 
 /// Writes `v`'s decimal digits at the end of `buf`; returns where they start.
-pub(crate) fn decimal(mut v: u64, buf: &mut [u8; 20]) -> usize {
+fn decimal(mut v: u64, buf: &mut [u8; 20]) -> usize {
     let mut at = buf.len();
     loop {
         at -= 1;
@@ -178,5 +205,53 @@ mod tests {
         }
         assert_eq!(m.as_bytes().len(), Message::CAPACITY);
         assert!(m.as_str().starts_with("abcabc"));
+    }
+
+    fn same(v: f32) {
+        let mut m = Message::new();
+        m.f32(v);
+        assert_eq!(m.as_str(), format!("{v}"), "bits {:#010x}", v.to_bits());
+    }
+
+    #[test]
+    fn special_values_and_every_binade_print_as_display_does() {
+        for v in [
+            0.0,
+            -0.0,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            1.0,
+            1.5,
+            -0.5,
+            0.1,
+            3.0e38,
+            f32::MAX,
+            f32::MIN_POSITIVE,
+            1e-45,
+            f32::from_bits(1),
+            f32::from_bits(0x007F_FFFF),
+            100.0,
+            123_456_790.0,
+        ] {
+            same(v);
+        }
+        // Each exponent: the power of two, its neighbours and a few significands.
+        for biased in 0..255u32 {
+            for fraction in [0, 1, 2, 0x40_0000, 0x7F_FFFE, 0x7F_FFFF, 0x12_3456] {
+                same(f32::from_bits(biased << 23 | fraction));
+            }
+        }
+    }
+
+    #[test]
+    fn random_bit_patterns_print_as_display_does() {
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        for _ in 0..200_000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            same(f32::from_bits((state >> 16) as u32));
+        }
     }
 }

@@ -11,7 +11,7 @@
 //! shifts for the key, then one node read per tree level (≤ [`MAX_TREE_DEPTH`]).
 
 use super::consts::{CONTEXTS, PROB_BITS};
-use super::ptch::PatchTable;
+use super::ptch::{Axis, PatchTable};
 
 /// Binary features in an encoding-2 key (§ Context tree, Features).
 pub const FEATURES: u32 = 23;
@@ -129,30 +129,6 @@ pub fn table_context(key: u32) -> usize {
 #[cfg_attr(not(feature = "bake"), allow(dead_code))] // the writer's, and the tests'
 pub fn facing(q: [f32; 3], v: [f64; 3]) -> u32 {
     u32::from((f64::from(q[0]) * v[0] + f64::from(q[1]) * v[1]) + f64::from(q[2]) * v[2] > 0.0)
-}
-
-/// A patch's cone axis as the `front` feature reads it (§ Features): the `f32` axis of a
-/// full-layout record, or the integer axis of a compact one.
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum Axis {
-    /// Versions 1–3.
-    Float([f32; 3]),
-    /// Version 4: `|x| + |y| + |z| = 2^(axis_bits − 1) − 1 < 2^15`.
-    Int([i32; 3]),
-}
-
-impl Axis {
-    /// [`facing`] of this axis from lattice point `v` (`|v.x| + |v.y| + |v.z| ≤ 2^7`). An
-    /// integer axis needs no rounding at all: every product and sum is an integer below
-    /// `2^22`, exact in binary64 as in `i32`. A float axis takes the binary64 steps in
-    /// integers (`exact.rs`), so targets without binary64 hardware need no soft-float code.
-    #[inline(always)]
-    pub fn front(self, v: [i32; 3]) -> u32 {
-        match self {
-            Axis::Int(a) => u32::from(a[0] * v[0] + a[1] * v[1] + a[2] * v[2] > 0),
-            Axis::Float(a) => u32::from(super::exact::dot_positive(a, v)),
-        }
-    }
 }
 
 /// Node `i` of a tree (little-endian `u16`s), or a leaf of probability ½ past the end.

@@ -12,8 +12,8 @@
 //! one pass over the records; a record is a few shifts and masks.
 
 use super::consts::*;
+use super::exact::dot_positive;
 use super::fields::{Section, at, finite3, float, read, reserved};
-use super::model::Axis;
 use super::stream::Stream;
 use super::{Error, PatchInfo, Rule};
 
@@ -189,6 +189,31 @@ pub(crate) fn read_record(q: &Quantisation, records: &[u8], p: u32) -> Record {
         radius: f[4],
         axis: [f[5], f[6]],
         cos: f[7],
+    }
+}
+
+/// A patch's cone axis as the `front` feature reads it (§ Features): the `f32` axis of a
+/// full-layout record, or the integer axis of a compact one.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Axis {
+    /// Versions 1–3.
+    Float([f32; 3]),
+    /// Version 4: `|x| + |y| + |z| = 2^(axis_bits − 1) − 1 < 2^15`.
+    Int([i32; 3]),
+}
+
+impl Axis {
+    /// The model's [`facing`](super::model::facing) of this axis from lattice point `v`
+    /// (`|v.x| + |v.y| + |v.z| ≤ 2^7`). An integer axis needs no rounding at all: every
+    /// product and sum is an integer below `2^22`, exact in binary64 as in `i32`. A float axis
+    /// takes the binary64 steps in integers (`exact.rs`), so targets without binary64 hardware
+    /// need no soft-float code.
+    #[inline(always)]
+    pub fn front(self, v: [i32; 3]) -> u32 {
+        match self {
+            Axis::Int(a) => u32::from(a[0] * v[0] + a[1] * v[1] + a[2] * v[2] > 0),
+            Axis::Float(a) => u32::from(dot_positive(a, v)),
+        }
     }
 }
 

@@ -15,8 +15,8 @@
 
 use super::coder::RangeDecoder;
 use super::consts::{CHECKPOINT_INTERVAL, CONTEXTS, MAX_LANES, MAX_VARINT_LEN};
-use super::model::{Axis, TreeCache, ViewModel, ViewState};
-use super::ptch::PatchTable;
+use super::model::{TreeCache, ViewModel, ViewState};
+use super::ptch::{Axis, PatchTable};
 use crate::sphere::{LatticePoint, lattice_point, level_of, parents};
 
 /// The VISB payload of a validated file.

@@ -161,158 +161,224 @@ fn find(parent: &mut [u32], mut x: u32) -> u32 {
     x
 }
 
+/// Each directed edge of the mesh, its vertices welded by position: the `(min, max)` vertex
+/// key, the triangle, and +1 when it runs min → max. Sorted by key, then triangle.
+fn directed_edges(mesh: &Mesh) -> Vec<(u64, u32, i32)> {
+    let n = mesh.triangle_count() as usize;
+    let weld = weld_by_position(mesh);
+    let mut edges: Vec<(u64, u32, i32)> = Vec::with_capacity(3 * n);
+    for t in 0..n as u32 {
+        let c = mesh.triangle(t).map(|v| weld[v as usize]);
+        for (a, b) in [(c[0], c[1]), (c[1], c[2]), (c[2], c[0])] {
+            if a != b {
+                let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
+                edges.push((key, t, if a < b { 1 } else { -1 }));
+            }
+        }
+    }
+    drop(weld);
+    edges.par_sort_unstable_by_key(|e| (e.0, e.1));
+    edges
+}
+
+/// Joins the triangles of each of the sorted `edges` in a union-find over the `n` triangles
+/// (whose parents are returned) and keeps the boundary edges, in place and in key order:
+/// `(a << 32 | b, first triangle, multiplicity)`, running a → b.
+fn join_edges(mut edges: Vec<(u64, u32, i32)>, n: usize) -> (Vec<(u64, u32, i32)>, Vec<u32>) {
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    let mut kept = 0;
+    let mut run = 0;
+    while run < edges.len() {
+        let (key, first, _) = edges[run];
+        let root = find(&mut parent, first);
+        let mut balance = 0;
+        let mut end = run;
+        while end < edges.len() && edges[end].0 == key {
+            balance += edges[end].2;
+            let r = find(&mut parent, edges[end].1);
+            if r != root {
+                parent[r as usize] = root;
+            }
+            end += 1;
+        }
+        if balance != 0 {
+            let (lo, hi) = (key >> 32, key & u64::from(u32::MAX));
+            let (a, b) = if balance > 0 { (lo, hi) } else { (hi, lo) };
+            edges[kept] = ((a << 32) | b, first, balance.abs());
+            kept += 1;
+        }
+        run = end;
+    }
+    edges.truncate(kept);
+    edges.shrink_to_fit();
+    (edges, parent)
+}
+/// Numbers the components of the union-find `parent` in order of their first triangle
+/// (deterministic): per triangle its component, and per component its first triangle.
+fn number_components(mut parent: Vec<u32>) -> (Vec<u32>, Vec<u32>) {
+    let n = parent.len();
+    let mut component = vec![u32::MAX; n];
+    let mut first_triangle = Vec::new();
+    let mut id_of_root = vec![u32::MAX; n];
+    for t in 0..n as u32 {
+        let r = find(&mut parent, t) as usize;
+        if id_of_root[r] == u32::MAX {
+            id_of_root[r] = first_triangle.len() as u32;
+            first_triangle.push(t);
+        }
+        component[t as usize] = id_of_root[r];
+    }
+    drop(parent);
+    drop(id_of_root);
+    first_triangle.shrink_to_fit();
+    (component, first_triangle)
+}
+
+/// The point component `c`'s volume is taken about, for precision: the first vertex of its
+/// first triangle.
+fn reference(mesh: &Mesh, first_triangle: &[u32], c: usize) -> [f64; 3] {
+    widen(mesh.position(mesh.triangle(first_triangle[c])[0]))
+}
+
+/// Six times the volume of each component's triangles about its [`reference`]; each cap adds
+/// its own ([`cap_components`]).
+fn component_volumes(mesh: &Mesh, component: &[u32], first_triangle: &[u32]) -> Vec<f64> {
+    let mut volume = vec![0f64; first_triangle.len()];
+    for t in 0..mesh.triangle_count() {
+        let c = component[t as usize] as usize;
+        let o = reference(mesh, first_triangle, c);
+        let [a, b, d] = mesh.triangle(t).map(|v| sub(widen(mesh.position(v)), o));
+        volume[c] += dot(a, cross(b, d));
+    }
+    volume
+}
+
+/// Every component's boundary loops and caps, and its sign.
+struct Capped {
+    /// Per component, the first of its loops in `loops` (one more entry at the end).
+    loop_start: Vec<u32>,
+    /// Per component: +1 or −1 as its capped volume is positive or negative, 0 for a sheet.
+    sign: Vec<i8>,
+    loops: Vec<Loop>,
+    caps: Vec<Cap>,
+}
+
+/// Traces each component's `boundary` into loops and caps them, and signs each component by
+/// its capped `volume`. A component whose capped volume is nil next to its size is a sheet (a
+/// card, a lone triangle): its cap lies on it, so either side may show wherever the sheet
+/// does. Sign 0 says so, and it keeps no loops, so a mesh of cards needs no room for their
+/// caps.
+fn cap_components(
+    mesh: &Mesh,
+    mut boundary: Vec<(u64, u32, i32)>,
+    component: &[u32],
+    first_triangle: &[u32],
+    mut volume: Vec<f64>,
+) -> Capped {
+    let n = component.len();
+    let components = first_triangle.len();
+    let position = |v: u32| widen(mesh.position(v));
+    boundary.sort_unstable_by_key(|&(key, t, _)| (component[t as usize], key));
+    let mut loop_start = Vec::with_capacity(components + 1);
+    let mut sign = Vec::with_capacity(components);
+    let mut loops = Vec::new();
+    let mut caps: Vec<Cap> = Vec::new();
+    let mut work = CAP_WORK_FIXED + CAP_WORK_PER_TRIANGLE * n as u64;
+    let mut next = 0;
+    for (c, volume) in volume.iter_mut().enumerate() {
+        let (first_loop, first_cap) = (loops.len(), caps.len());
+        loop_start.push(first_loop as u32);
+        let end =
+            next + boundary[next..].partition_point(|e| component[e.1 as usize] as usize == c);
+        trace_loops(
+            &boundary[next..end],
+            &position,
+            &mut work,
+            &mut loops,
+            &mut caps,
+        );
+        next = end;
+        let o = reference(mesh, first_triangle, c);
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for cap in &caps[first_cap..] {
+            // det(p − o, q − o, r − o) through the normal (q − p) × (r − p).
+            *volume += dot(sub(widen(cap.corners[0]), o), cap.normal());
+            for p in cap.corners.map(widen) {
+                lo = std::array::from_fn(|k| lo[k].min(p[k]));
+                hi = std::array::from_fn(|k| hi[k].max(p[k]));
+            }
+        }
+        let size = sub(hi, lo);
+        if loops.len() > first_loop && volume.abs() <= FLAT_VOLUME * dot(size, size).powf(1.5) {
+            loops.truncate(first_loop);
+            caps.truncate(first_cap);
+            sign.push(0);
+        } else {
+            sign.push(if *volume >= 0.0 { 1 } else { -1 });
+        }
+    }
+    loop_start.push(loops.len() as u32);
+    Capped {
+        loop_start,
+        sign,
+        loops,
+        caps,
+    }
+}
+
+/// Renumbers the components so that the open ones (those with loops) come first, then the
+/// closed ones and the sheets, each group in its former order: rewrites `component` and
+/// returns the renumbered components' signs and the open components' first loops (one more
+/// entry at the end). Their loops are already in that order.
+fn open_first(loop_start: Vec<u32>, sign: Vec<i8>, component: &mut [u32]) -> (Vec<i8>, Vec<u32>) {
+    let components = sign.len();
+    let open_count = loop_start.windows(2).filter(|w| w[1] > w[0]).count();
+    let mut rank = Vec::with_capacity(components);
+    let (mut next_open, mut next_other) = (0u32, open_count as u32);
+    for w in loop_start.windows(2) {
+        let next = if w[1] > w[0] {
+            &mut next_open
+        } else {
+            &mut next_other
+        };
+        rank.push(*next);
+        *next += 1;
+    }
+    let mut component_sign = vec![0i8; components];
+    for (c, &r) in rank.iter().enumerate() {
+        component_sign[r as usize] = sign[c];
+    }
+    drop(sign);
+    for c in component.iter_mut() {
+        *c = rank[*c as usize];
+    }
+    drop(rank);
+    let mut open_start: Vec<u32> = loop_start
+        .windows(2)
+        .filter(|w| w[1] > w[0])
+        .map(|w| w[0])
+        .collect();
+    open_start.push(loop_start[components]);
+    (component_sign, open_start)
+}
+
 impl Solids {
     /// Finds the components, their caps and orientations.
     pub(crate) fn new(mesh: &Mesh) -> Solids {
         let n = mesh.triangle_count() as usize;
-        let weld = weld_by_position(mesh);
-        // Each directed edge as (min, max) key, triangle, and +1 when it runs min → max.
-        let mut edges: Vec<(u64, u32, i32)> = Vec::with_capacity(3 * n);
-        for t in 0..n as u32 {
-            let c = mesh.triangle(t).map(|v| weld[v as usize]);
-            for (a, b) in [(c[0], c[1]), (c[1], c[2]), (c[2], c[0])] {
-                if a != b {
-                    let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
-                    edges.push((key, t, if a < b { 1 } else { -1 }));
-                }
-            }
-        }
-        drop(weld);
-        edges.par_sort_unstable_by_key(|e| (e.0, e.1));
-        let mut parent: Vec<u32> = (0..n as u32).collect();
-        // Join the triangles of each edge, and keep the boundary edges in place at the front
-        // of `edges`: (a << 32 | b, first triangle, multiplicity), running a → b.
-        let mut kept = 0;
-        let mut run = 0;
-        while run < edges.len() {
-            let (key, first, _) = edges[run];
-            let root = find(&mut parent, first);
-            let mut balance = 0;
-            let mut end = run;
-            while end < edges.len() && edges[end].0 == key {
-                balance += edges[end].2;
-                let r = find(&mut parent, edges[end].1);
-                if r != root {
-                    parent[r as usize] = root;
-                }
-                end += 1;
-            }
-            if balance != 0 {
-                let (lo, hi) = (key >> 32, key & u64::from(u32::MAX));
-                let (a, b) = if balance > 0 { (lo, hi) } else { (hi, lo) };
-                edges[kept] = ((a << 32) | b, first, balance.abs());
-                kept += 1;
-            }
-            run = end;
-        }
-        edges.truncate(kept);
-        edges.shrink_to_fit();
-        let mut boundary = edges;
-        // Number the components in order of their first triangle (deterministic).
-        let mut component = vec![u32::MAX; n];
-        let mut first_triangle = Vec::new();
-        let mut id_of_root = vec![u32::MAX; n];
-        for t in 0..n as u32 {
-            let r = find(&mut parent, t) as usize;
-            if id_of_root[r] == u32::MAX {
-                id_of_root[r] = first_triangle.len() as u32;
-                first_triangle.push(t);
-            }
-            component[t as usize] = id_of_root[r];
-        }
-        drop(parent);
-        drop(id_of_root);
-        first_triangle.shrink_to_fit();
-        let components = first_triangle.len();
-        let position = |v: u32| mesh.position(v).map(f64::from);
-        // Volume of each component's triangles (about its first vertex, for precision); each
-        // cap adds its own below.
-        let reference = |c: usize| position(mesh.triangle(first_triangle[c])[0]);
-        let mut volume = vec![0f64; components];
-        for t in 0..n as u32 {
-            let c = component[t as usize] as usize;
-            let o = reference(c);
-            let [a, b, d] = mesh.triangle(t).map(|v| sub(position(v), o));
-            volume[c] += dot(a, cross(b, d));
-        }
-        // Trace each component's boundary into loops and cap them. A component whose capped
-        // volume is nil next to its size is a sheet (a card, a lone triangle): its cap lies
-        // on it, so either side may show wherever the sheet does. Sign 0 says so, and it
-        // keeps no loops, so a mesh of cards needs no room for their caps.
-        boundary.sort_unstable_by_key(|&(key, t, _)| (component[t as usize], key));
-        let mut loop_start = Vec::with_capacity(components + 1);
-        let mut sign = Vec::with_capacity(components);
-        let mut loops = Vec::new();
-        let mut caps: Vec<Cap> = Vec::new();
-        let mut work = CAP_WORK_FIXED + CAP_WORK_PER_TRIANGLE * n as u64;
-        let mut next = 0;
-        for (c, volume) in volume.iter_mut().enumerate() {
-            let (first_loop, first_cap) = (loops.len(), caps.len());
-            loop_start.push(first_loop as u32);
-            let end =
-                next + boundary[next..].partition_point(|e| component[e.1 as usize] as usize == c);
-            trace_loops(
-                &boundary[next..end],
-                &position,
-                &mut work,
-                &mut loops,
-                &mut caps,
-            );
-            next = end;
-            let o = reference(c);
-            let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-            for cap in &caps[first_cap..] {
-                // det(p − o, q − o, r − o) through the normal (q − p) × (r − p).
-                *volume += dot(sub(widen(cap.corners[0]), o), cap.normal());
-                for p in cap.corners.map(widen) {
-                    lo = std::array::from_fn(|k| lo[k].min(p[k]));
-                    hi = std::array::from_fn(|k| hi[k].max(p[k]));
-                }
-            }
-            let size = sub(hi, lo);
-            if loops.len() > first_loop && volume.abs() <= FLAT_VOLUME * dot(size, size).powf(1.5) {
-                loops.truncate(first_loop);
-                caps.truncate(first_cap);
-                sign.push(0);
-            } else {
-                sign.push(if *volume >= 0.0 { 1 } else { -1 });
-            }
-        }
-        loop_start.push(loops.len() as u32);
-        drop(boundary);
-        drop(volume);
+        let (boundary, parent) = join_edges(directed_edges(mesh), n);
+        let (mut component, first_triangle) = number_components(parent);
+        let volume = component_volumes(mesh, &component, &first_triangle);
+        let Capped {
+            loop_start,
+            sign,
+            mut loops,
+            mut caps,
+        } = cap_components(mesh, boundary, &component, &first_triangle, volume);
         drop(first_triangle);
         loops.shrink_to_fit();
         caps.shrink_to_fit();
-        // Open components first: their loops are already in that order.
-        let open_count = loop_start.windows(2).filter(|w| w[1] > w[0]).count();
-        let mut rank = Vec::with_capacity(components);
-        let (mut next_open, mut next_other) = (0u32, open_count as u32);
-        for w in loop_start.windows(2) {
-            let next = if w[1] > w[0] {
-                &mut next_open
-            } else {
-                &mut next_other
-            };
-            rank.push(*next);
-            *next += 1;
-        }
-        let mut component_sign = vec![0i8; components];
-        for (c, &r) in rank.iter().enumerate() {
-            component_sign[r as usize] = sign[c];
-        }
-        drop(sign);
-        for c in &mut component {
-            *c = rank[*c as usize];
-        }
-        drop(rank);
-        let mut open_start: Vec<u32> = loop_start
-            .windows(2)
-            .filter(|w| w[1] > w[0])
-            .map(|w| w[0])
-            .collect();
-        open_start.push(loops.len() as u32);
-        drop(loop_start);
+        let (component_sign, open_start) = open_first(loop_start, sign, &mut component);
         let orientation = component
             .iter()
             .map(|&c| component_sign[c as usize])

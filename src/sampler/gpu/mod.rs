@@ -222,7 +222,8 @@ impl GpuSampler {
     }
 
     /// Fills the rows of `matrix`, one per camera of `cameras`, batch by batch (the module
-    /// documentation's technique).
+    /// documentation's technique): while the GPU draws and reduces a batch, the CPU reads the
+    /// rows of the one before.
     #[allow(clippy::too_many_arguments)]
     fn sample_rows(
         &self,
@@ -252,8 +253,68 @@ impl GpuSampler {
             &limits,
             host_bytes,
         )?;
-
         let layers = Layers::new(device, params.resolution, batch);
+        let buffers = self.batch_buffers(&layers, params, options, patches, words32, batch);
+
+        let views = matrix.views();
+        let mut pending: Option<Pending> = None;
+        for (k, first) in (0..views).step_by(batch as usize).enumerate() {
+            let count = batch.min(views - first);
+            let batch_cameras = &cameras[first as usize..(first + count) as usize];
+            // Ordered after the previous submission and before the next one, so the batch in
+            // flight keeps its matrices.
+            queue.write_buffer(
+                &buffers.matrices,
+                0,
+                &matrix_bytes(batch_cameras, params.center),
+            );
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("sampling batch"),
+            });
+            encoder.clear_buffer(&buffers.bits, 0, None);
+            self.render_batch(&mut encoder, &layers, &buffers, &chunks, count);
+            self.reduce_batch(&mut encoder, &buffers, params.resolution, count, counting);
+            let target = &buffers.read_back[k % 2];
+            encoder.copy_buffer_to_buffer(
+                &buffers.bits,
+                0,
+                target,
+                0,
+                buffers.row_bytes * u64::from(count),
+            );
+            let submission = queue.submit([encoder.finish()]);
+            if let Some(done) = pending.take() {
+                self.read_rows(&done, words64, matrix)?;
+                progress.inc(u64::from(done.count));
+            }
+            pending = Some(Pending {
+                buffer: target.clone(),
+                submission,
+                first,
+                count,
+            });
+        }
+        if let Some(done) = pending.take() {
+            self.read_rows(&done, words64, matrix)?;
+            progress.inc(u64::from(done.count));
+        }
+        Ok(())
+    }
+
+    /// The buffers and bind groups of a batch of `batch` views over `patches` patches
+    /// (`words32` 32-bit words a row): the rows, the pixel counts of `min_pixels`, the reduce
+    /// parameters (written here), the view matrices and two read-back buffers.
+    fn batch_buffers(
+        &self,
+        layers: &Layers,
+        params: &SamplingParams,
+        options: &SamplingOptions,
+        patches: u32,
+        words32: u64,
+        batch: u32,
+    ) -> BatchBuffers {
+        let device = &self.device;
+        let counting = options.min_pixels > 1;
         let row_bytes = words32 * 4;
         let bits = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("rows"),
@@ -281,10 +342,11 @@ impl GpuSampler {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let words32_u32 =
+        let words32 =
             u32::try_from(words32).expect("fewer than 2^32 patches make fewer than 2^28 words");
-        let param_words = [params.resolution, patches, words32_u32, options.min_pixels];
-        queue.write_buffer(&reduce_params, 0, &u32s_to_bytes(&param_words));
+        let param_words = [params.resolution, patches, words32, options.min_pixels];
+        self.queue
+            .write_buffer(&reduce_params, 0, &u32s_to_bytes(&param_words));
         let matrices = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("view matrices"),
             size: MATRIX_BYTES * u64::from(MAX_BATCH_VIEWS),
@@ -329,102 +391,97 @@ impl GpuSampler {
                 mapped_at_creation: false,
             })
         });
+        BatchBuffers {
+            bits,
+            _counts: counts,
+            _reduce_params: reduce_params,
+            matrices,
+            render_group,
+            reduce_group,
+            read_back,
+            row_bytes,
+            words32,
+        }
+    }
 
-        let views = matrix.views();
-        let pixel_groups = params.resolution.div_ceil(PIXEL_GROUP);
-        let mut pending: Option<Pending> = None;
-        for (k, first) in (0..views).step_by(batch as usize).enumerate() {
-            let count = batch.min(views - first);
-            let mut matrix_bytes = Vec::with_capacity((MATRIX_BYTES * u64::from(count)) as usize);
-            for camera in &cameras[first as usize..(first + count) as usize] {
-                matrix_bytes.extend(
-                    view_matrix(camera, params.center)
-                        .map(f32::to_le_bytes)
-                        .concat(),
-                );
-            }
-            // Ordered after the previous submission and before the next one, so the batch in
-            // flight keeps its matrices.
-            queue.write_buffer(&matrices, 0, &matrix_bytes);
-            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("sampling batch"),
-            });
-            encoder.clear_buffer(&bits, 0, None);
-            for layer in 0..count {
-                let (ids, depth) = &layers.per_view[layer as usize];
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("ID buffer"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: ids,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color {
-                                r: f64::from(NO_PATCH),
-                                g: 0.0,
-                                b: 0.0,
-                                a: 0.0,
-                            }),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: depth,
-                        // Reversed Z: 0 is infinitely far.
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(0.0),
-                            store: wgpu::StoreOp::Discard,
+    /// Records the ID buffer of each of the batch's first `count` views: the mesh drawn into
+    /// the view's layer with the view's matrix.
+    fn render_batch(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        layers: &Layers,
+        buffers: &BatchBuffers,
+        chunks: &[upload::MeshChunk],
+        count: u32,
+    ) {
+        for layer in 0..count {
+            let (ids, depth) = &layers.per_view[layer as usize];
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("ID buffer"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: ids,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: f64::from(NO_PATCH),
+                            g: 0.0,
+                            b: 0.0,
+                            a: 0.0,
                         }),
-                        stencil_ops: None,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: depth,
+                    // Reversed Z: 0 is infinitely far.
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(0.0),
+                        store: wgpu::StoreOp::Discard,
                     }),
-                    timestamp_writes: None,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                });
-                pass.set_pipeline(&self.render);
-                pass.set_bind_group(0, &render_group, &[]);
-                for chunk in &chunks {
-                    pass.set_vertex_buffer(0, chunk.vertices.slice(..));
-                    pass.set_index_buffer(chunk.indices.slice(..), wgpu::IndexFormat::Uint32);
-                    // The instance index selects the view's matrix.
-                    pass.draw_indexed(0..chunk.index_count, 0, layer..layer + 1);
-                }
-            }
-            {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("reduce"),
-                    timestamp_writes: None,
-                });
-                pass.set_bind_group(0, &reduce_group, &[]);
-                if counting {
-                    pass.set_pipeline(&self.count);
-                    pass.dispatch_workgroups(pixel_groups, pixel_groups, count);
-                    pass.set_pipeline(&self.threshold);
-                    pass.dispatch_workgroups(words32_u32.div_ceil(WORD_GROUP), count, 1);
-                } else {
-                    pass.set_pipeline(&self.mark);
-                    pass.dispatch_workgroups(pixel_groups, pixel_groups, count);
-                }
-            }
-            let target = &read_back[k % 2];
-            encoder.copy_buffer_to_buffer(&bits, 0, target, 0, row_bytes * u64::from(count));
-            let submission = queue.submit([encoder.finish()]);
-            if let Some(done) = pending.take() {
-                self.read_rows(&done, words64, matrix)?;
-                progress.inc(u64::from(done.count));
-            }
-            pending = Some(Pending {
-                buffer: target.clone(),
-                submission,
-                first,
-                count,
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
             });
+            pass.set_pipeline(&self.render);
+            pass.set_bind_group(0, &buffers.render_group, &[]);
+            for chunk in chunks {
+                pass.set_vertex_buffer(0, chunk.vertices.slice(..));
+                pass.set_index_buffer(chunk.indices.slice(..), wgpu::IndexFormat::Uint32);
+                // The instance index selects the view's matrix.
+                pass.draw_indexed(0..chunk.index_count, 0, layer..layer + 1);
+            }
         }
-        if let Some(done) = pending.take() {
-            self.read_rows(&done, words64, matrix)?;
-            progress.inc(u64::from(done.count));
+    }
+
+    /// Records the reduction of the batch's first `count` ID buffers to rows of patch bits:
+    /// one pass marking every pixel's patch, or with `counting` (`min_pixels`) one counting
+    /// them and one thresholding the counts.
+    fn reduce_batch(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        buffers: &BatchBuffers,
+        resolution: u32,
+        count: u32,
+        counting: bool,
+    ) {
+        let pixel_groups = resolution.div_ceil(PIXEL_GROUP);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("reduce"),
+            timestamp_writes: None,
+        });
+        pass.set_bind_group(0, &buffers.reduce_group, &[]);
+        if counting {
+            pass.set_pipeline(&self.count);
+            pass.dispatch_workgroups(pixel_groups, pixel_groups, count);
+            pass.set_pipeline(&self.threshold);
+            pass.dispatch_workgroups(buffers.words32.div_ceil(WORD_GROUP), count, 1);
+        } else {
+            pass.set_pipeline(&self.mark);
+            pass.dispatch_workgroups(pixel_groups, pixel_groups, count);
         }
-        Ok(())
     }
 
     /// Waits for the batch `done`, then copies its rows from the read-back buffer.
@@ -467,6 +524,36 @@ impl GpuSampler {
         done.buffer.unmap();
         Ok(())
     }
+}
+
+/// What every batch of a sampling run draws and reduces with ([`GpuSampler::batch_buffers`]).
+struct BatchBuffers {
+    /// The batch's rows of patch bits, 32-bit words.
+    bits: wgpu::Buffer,
+    /// Bound in `reduce_group`: the pixel counts of `min_pixels`.
+    _counts: wgpu::Buffer,
+    /// Bound in `reduce_group`: resolution, patches, words a row and `min_pixels`.
+    _reduce_params: wgpu::Buffer,
+    /// The batch's view matrices, [`MATRIX_BYTES`] each.
+    matrices: wgpu::Buffer,
+    render_group: wgpu::BindGroup,
+    reduce_group: wgpu::BindGroup,
+    /// Batch `k` is read back through buffer `k % 2`.
+    read_back: [wgpu::Buffer; 2],
+    /// Bytes of one view's row.
+    row_bytes: u64,
+    /// 32-bit words of one view's row.
+    words32: u32,
+}
+
+/// The clip matrices of `cameras` ([`view_matrix`], positions relative to `center`) as the
+/// shader's uniform array holds them.
+fn matrix_bytes(cameras: &[Camera], center: [f32; 3]) -> Vec<u8> {
+    let mut bytes = Vec::with_capacity(MATRIX_BYTES as usize * cameras.len());
+    for camera in cameras {
+        bytes.extend(view_matrix(camera, center).map(f32::to_le_bytes).concat());
+    }
+    bytes
 }
 
 /// A submitted batch whose rows are still to be read.
