@@ -330,52 +330,79 @@ impl RowSettings {
     /// The settings' bytes: what part files carry and the merge compares. Every field, in
     /// declaration order; an option `None` is 0 and a value `v` is `v + 1`.
     pub fn encode(&self) -> Vec<u8> {
-        let r = &self.research;
+        // Destructured whole: a field added to the settings does not compile here until it
+        // has its entry.
+        let RowSettings {
+            preset,
+            level,
+            resolution,
+            fov_deg,
+            shells,
+            shell_min,
+            shell_level,
+            shell_resolution,
+            far_views,
+            ref always_visible,
+            patch_order,
+            encoding,
+            research: ref r,
+        } = *self;
+        let Research {
+            min_pixels,
+            dilate,
+            probe,
+            conservative_raster,
+            view_supersample,
+            fold_min_pixels,
+            fold_corners,
+            finer_views,
+            sampled_rows,
+        } = *r;
         let mut b = Vec::new();
-        b.put_u8(match self.preset {
+        b.put_u8(match preset {
             Preset::Default => 0,
             Preset::Conservative => 1,
         });
-        put_option(&mut b, self.level);
-        b.put_u32(self.resolution);
-        b.put_f32(self.fov_deg);
-        b.put_u32(self.shells);
-        b.put_u64(self.shell_min.to_bits());
-        put_option(&mut b, self.shell_level);
-        put_option(&mut b, self.shell_resolution);
-        b.put_u8(u8::from(self.far_views));
-        b.put_u32(self.always_visible.len() as u32);
-        for &p in &self.always_visible {
+        put_option(&mut b, level);
+        b.put_u32(resolution);
+        b.put_f32(fov_deg);
+        b.put_u32(shells);
+        b.put_u64(shell_min.to_bits());
+        put_option(&mut b, shell_level);
+        put_option(&mut b, shell_resolution);
+        b.put_u8(u8::from(far_views));
+        b.put_u32(always_visible.len() as u32);
+        for &p in always_visible {
             b.put_u32(p);
         }
-        b.put_u8(match self.patch_order {
+        b.put_u8(match patch_order {
             PatchOrder::Covisibility => 0,
             PatchOrder::Spatial => 1,
         });
-        b.put_u8(match self.encoding {
+        b.put_u8(match encoding {
             VisibilityEncoding::Raw => 0,
             VisibilityEncoding::Table => 1,
             VisibilityEncoding::Tree => 2,
         });
-        b.put_u32(r.min_pixels);
-        b.put_u8(u8::from(r.dilate));
-        b.put_u64(match r.probe {
+        b.put_u32(min_pixels);
+        b.put_u8(u8::from(dilate));
+        b.put_u64(match probe {
             Probe::Default => 0,
             Probe::Off => 1,
             Probe::Pixels(pixels) => u64::from(pixels) + 2,
         });
-        b.put_u8(u8::from(r.conservative_raster));
-        put_option(&mut b, r.view_supersample);
-        put_option(&mut b, r.fold_min_pixels);
-        put_option(&mut b, r.fold_corners.map(fold_code));
+        b.put_u8(u8::from(conservative_raster));
+        put_option(&mut b, view_supersample);
+        put_option(&mut b, fold_min_pixels);
+        put_option(&mut b, fold_corners.map(fold_code));
         put_option(
             &mut b,
-            r.finer_views.map(|f| match f {
+            finer_views.map(|f| match f {
                 FinerViews::Midpoints => 0,
                 FinerViews::Centroids => 1,
             }),
         );
-        b.put_u8(u8::from(r.sampled_rows));
+        b.put_u8(u8::from(sampled_rows));
         b
     }
 

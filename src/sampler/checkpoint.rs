@@ -64,30 +64,44 @@ pub(crate) fn input_hash(
         h.word(u64::from(c.to_bits()));
     }
     h.word(u64::from(params.radius.to_bits()));
-    h.word(u64::from(options.min_pixels));
-    h.word(u64::from(options.dilate) | u64::from(options.conservative_raster) << 1);
-    h.word(options.always_visible.len() as u64);
-    for &p in &options.always_visible {
+    // Every option, destructured whole: a field added to `SamplingOptions` does not compile
+    // here until it is hashed or said not to change the rows.
+    let SamplingOptions {
+        min_pixels,
+        dilate,
+        ref always_visible,
+        conservative_raster,
+        checkpoint: _,
+        resume: _,
+        memory: _,
+        ref views,
+        probe,
+        shell,
+        band,
+        far_view,
+        folds_into,
+        finer,
+    } = *options;
+    h.word(u64::from(min_pixels));
+    h.word(u64::from(dilate) | u64::from(conservative_raster) << 1);
+    h.word(always_visible.len() as u64);
+    for &p in always_visible {
         h.word(u64::from(p));
     }
-    h.word(options.probe.map_or(0, |r| u64::from(r) + 1));
+    h.word(probe.map_or(0, |r| u64::from(r) + 1));
     // A tag per option, so that a shell and a band of the same bits hash apart.
-    h.word(
-        options
-            .shell
-            .map_or(0, |r| u64::from(r.to_bits()) | 1 << 32),
-    );
-    h.word(options.band.map_or(0, |[near, far]| {
+    h.word(shell.map_or(0, |r| u64::from(r.to_bits()) | 1 << 32));
+    h.word(band.map_or(0, |[near, far]| {
         u64::from(near.to_bits()) | u64::from(far.to_bits()) << 32
     }));
-    h.word(u64::from(options.band.is_some()));
-    h.word(u64::from(options.far_view));
-    h.word(options.folds_into.map_or(0, |l| u64::from(l) + 1));
-    h.word(match options.finer {
+    h.word(u64::from(band.is_some()));
+    h.word(u64::from(far_view));
+    h.word(folds_into.map_or(0, |l| u64::from(l) + 1));
+    h.word(match finer {
         crate::sampler::FinerViews::Midpoints => 0,
         crate::sampler::FinerViews::Centroids => 1,
     });
-    if let Some(views) = &options.views {
+    if let Some(views) = views {
         h.word(views.len() as u64 | 1 << 63);
         for &v in views {
             h.word(u64::from(v));
