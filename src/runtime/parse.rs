@@ -10,7 +10,7 @@
 
 use super::consts::*;
 use super::crc32c::crc32c;
-use super::fields::{Section, at, finite3, float, read, reserved};
+use super::fields::{POSITIVE, Section, at, finite3, float, read, reserved};
 use super::model::{FEATURES, LEAF, MAX_TREE_DEPTH, MAX_TREE_NODES};
 use super::ptch::{self, PatchTable};
 use super::shells::Shells;
@@ -202,9 +202,14 @@ fn parse_camr(data: &[u8], section: Section) -> Result<Sampling, Error> {
         });
     }
     let center = finite3(&mut s, have, Rule::CamrCenter)?;
-    let radius = float(&mut s, have, Rule::CamrRadius, |r| r > 0.0)?;
-    let distance = float(&mut s, have, Rule::CamrDistance, |d| d >= radius)?;
-    let fov_deg = float(&mut s, have, Rule::CamrFov, |f| f > 0.0 && f < 180.0)?;
+    let radius = float(&mut s, have, Rule::CamrRadius, POSITIVE)?;
+    let distance = float(&mut s, have, Rule::CamrDistance, [radius, f32::MAX])?;
+    let fov_deg = float(
+        &mut s,
+        have,
+        Rule::CamrFov,
+        [0f32.next_up(), 180f32.next_down()],
+    )?;
     let resolution_offset = s.offset() as u64;
     let resolution = read::<u32>(&mut s, have)?;
     if resolution == 0 {
@@ -272,9 +277,12 @@ fn parse_shel<'a>(
     let mut outer = sampling.distance;
     let mut payloads = 0u64;
     for _ in 0..count {
-        let distance = float(&mut s, have, Rule::ShellDistance, |d| {
-            d < outer && d >= sampling.radius
-        })?;
+        let distance = float(
+            &mut s,
+            have,
+            Rule::ShellDistance,
+            [sampling.radius, outer.next_down()],
+        )?;
         outer = distance;
         let level = read::<u32>(&mut s, have)?;
         if level > MAX_LEVEL {
