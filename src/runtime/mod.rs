@@ -18,7 +18,8 @@
 //!
 //! Without feature `shells` this is a far-only reader (spec § SHEL, far-only readers): it skips
 //! SHEL's contents and answers every eye from the sampling sphere, `inside_sphere` nearer than
-//! it (the WebAssembly module and the Cortex-M4F firmware, for their size targets).
+//! it, for devices too small for the shells' 2.9 KB of code. The WebAssembly module and the
+//! Cortex-M4F firmware keep the shells.
 //!
 //! **Invariant:** nothing here allocates or panics on any input; the only panics are `assert!`s
 //! on caller contracts (an out-of-range patch index, a too-small scratch buffer).
