@@ -19,7 +19,7 @@
 #![cfg_attr(not(any(feature = "std", test)), no_std)]
 #![warn(missing_docs)]
 
-#[cfg(feature = "c-abi")]
+#[cfg(feature = "capi")]
 pub mod capi;
 pub mod runtime;
 pub mod sphere;

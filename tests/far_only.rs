@@ -4,7 +4,8 @@
 //! says (a file without); every invalid file is refused with the expected message, except those
 //! whose only fault lies inside SHEL's contents, which such a reader skips and so accepts.
 //!
-//! Runs only in a far-only build, as the WebAssembly module and the firmware are built:
+//! Runs only in a far-only build, the reader for devices too small for the shells (the
+//! WebAssembly module and the Cortex-M4F firmware are full readers):
 //!
 //! ```text
 //! cargo test --no-default-features --test far_only

@@ -14,10 +14,10 @@
 // scratch, the answer), handed out like a stack and given back by `close` (a region closed out of order is
 // reused once the regions above it are closed too). Everything is synchronous after `load`.
 //
-// The module is a far-only reader (spec § Far-only readers; the library without its `shells`
-// feature, to stay within issue 23's 12,000 bytes gzipped): it opens every version-5 file but
-// skips the sampling shells, so every eye is answered from the sampling sphere's views, `band`
-// is 0 or 1 and `insideSphere` is true for every eye nearer than the sampling cameras.
+// The module is a full reader (the library with its `shells` feature): an eye nearer than the
+// sampling sphere is answered from the file's sampling shells (spec § SHEL, § Query), with the
+// eye's `band` and the one or two `shells` that answered; `insideSphere` is true only nearer
+// than the innermost shell's cameras (the sampling sphere's, for a file without shells).
 //
 // A refused file's message is the reader's own: the module returns its parts (the kind of
 // error and the values; patchvis_error_parts) and `errorMessage` below fills the reader's
@@ -163,11 +163,13 @@ export class PvisFile {
    * the visible patch ids ascending, `ranges` the triangle ranges to draw as `[first, count]`
    * pairs with adjacent ranges merged, `shells` the one or two sampling shells whose rows were
    * joined (`[outer, inner]`; 0 is the sampling sphere), `views` and `innerViews` their three
-   * views each, `band` how many shells the eye is inside, and `insideSphere` true when the
-   * eye is nearer than the innermost shell's cameras (draw everything then; this far-only
-   * module reads no shells, so that is the sampling sphere's cameras). Answered
-   * by the streaming reader: while the camera stays in one leaf face of the sampling sphere a
-   * query decodes nothing; a move to another leaf decodes only the rows it needs.
+   * views each, `band` how many shells the eye is inside (0 at or beyond the sampling
+   * sphere, K + 1 inside the innermost of the file's K shells), and `insideSphere` true when
+   * the eye is nearer than the innermost shell's cameras (a caller may draw everything then).
+   * Answered by the streaming reader: while the camera stays in one leaf face of each
+   * answering shell a query decodes nothing; a move to another leaf decodes only the rows it
+   * needs, and a camera moving across one shell boundary and back keeps the paths of the
+   * three shells involved.
    */
   query(x, y, z) {
     if (!this.region.open) throw new PatchvisError("query on a closed file", -1);

@@ -16,10 +16,9 @@ if [ -n "${PATCHVIS:-}" ]; then
 else
   patchvis() { cargo run --quiet --release --bin patchvis -- "$@"; }
 fi
-# No sampling shells: the page's reader is far-only (README, "Far-only readers"), so they would
-# only add bytes; a file with shells still loads and answers there.
-patchvis bake assets/bunny.ply -o web/demo/bunny.pvis --mesh-out web/demo/bunny.glb --quiet \
-  --shells 0
+# The default bake, sampling shells included: the page's reader answers from them, so the
+# viewer culls near the model too.
+patchvis bake assets/bunny.ply -o web/demo/bunny.pvis --mesh-out web/demo/bunny.glb --quiet
 bash wasm/build.sh
 cp wasm/patchvis.wasm wasm/patchvis.mjs web/demo/
 if [ ! -d web/node_modules/three ]; then

@@ -41,7 +41,7 @@ const state = {
   root: null, // the glTF scene
   parts: [], // { mesh, colourMesh, first, count }: one per glTF primitive
   triangles: 0,
-  answer: null, // { patches, ranges, inside }
+  answer: null, // { patches, ranges, inside, band, shells }
   drawn: 0, // triangles drawn
   lastEye: null,
   options: { culling: true, colours: false },
@@ -150,13 +150,21 @@ function update(force = false) {
     const t0 = performance.now();
     const answer = state.file.query(eye.x, eye.y, eye.z);
     const ms = performance.now() - t0;
-    state.answer = { patches: Array.from(answer.patches), ranges: answer.ranges, inside: answer.insideSphere };
+    state.answer = {
+      patches: Array.from(answer.patches),
+      ranges: answer.ranges,
+      inside: answer.insideSphere,
+      band: answer.band,
+      shells: answer.shells,
+    };
     state.lastEye = eye.clone();
     // Browsers coarsen the clock (to 0.1 ms without cross-origin isolation).
     $("time").textContent = ms > 0 ? `${ms.toFixed(3)} ms` : "< 0.1 ms";
   }
-  const { ranges, inside, patches } = state.answer;
-  // Inside the sampling sphere the answer does not hold: everything is drawn.
+  const { ranges, inside, patches, band, shells } = state.answer;
+  // Nearer the model than the sampling sphere the answer comes from the sampling shells around
+  // the camera; only nearer than the innermost shell's cameras is it approximate, and
+  // everything is drawn there.
   const all = !state.options.culling || inside;
   const draw = all ? [[0, state.triangles]] : ranges;
   let drawn = 0;
@@ -182,7 +190,11 @@ function update(force = false) {
   $("patches").textContent = `${all ? patchCount : patches.length} / ${patchCount}`;
   $("triangles").textContent = `${drawn} / ${state.triangles} (${((100 * drawn) / state.triangles).toFixed(1)} %)`;
   const region = $("region");
-  region.textContent = inside ? "inside the sampling sphere: all drawn" : "outside the sphere: answer valid";
+  region.textContent = inside
+    ? `inside the innermost shell (band ${band}): all drawn`
+    : band === 0
+      ? "outside the sampling sphere: answer valid"
+      : `between shells ${shells[0]} and ${shells[1]} (band ${band}): answer valid`;
   region.className = inside ? "invalid" : "valid";
 }
 
@@ -264,7 +276,10 @@ window.patchvis = {
     update(true);
     renderer.render(scene, camera);
   },
-  /** The last answer: visible patch ids, merged ranges, whether inside the sphere. */
+  /**
+   * The last answer: visible patch ids, merged ranges, whether inside the innermost shell, the
+   * band and the answering shells, and the triangles drawn of all.
+   */
   answer() {
     return { ...state.answer, drawn: state.drawn, triangles: state.triangles };
   },

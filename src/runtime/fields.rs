@@ -41,16 +41,18 @@ pub(crate) fn reserved(s: &mut Stream<'_>, have: usize, what: Rule) -> Result<()
     }
 }
 
-/// Reads an `f32` and checks it with `ok`.
+/// Reads an `f32` that must lie in `[low, high]` (which excludes NaN, and the infinities where
+/// `low` and `high` are finite). One function for every float rule, rather than one copy per
+/// rule.
 pub(crate) fn float(
     s: &mut Stream<'_>,
     have: usize,
     what: Rule,
-    ok: impl Fn(f32) -> bool,
+    [low, high]: [f32; 2],
 ) -> Result<f32, Error> {
     let offset = s.offset() as u64;
     let value = read::<f32>(s, have)?;
-    if value.is_finite() && ok(value) {
+    if low <= value && value <= high {
         Ok(value)
     } else {
         Err(Error::InvalidFloat {
@@ -61,11 +63,17 @@ pub(crate) fn float(
     }
 }
 
+/// Every finite `f32`, as the bounds of [`float`].
+pub(crate) const FINITE: [f32; 2] = [f32::MIN, f32::MAX];
+
+/// Every finite `f32` above zero (subnormals included), as the bounds of [`float`].
+pub(crate) const POSITIVE: [f32; 2] = [0f32.next_up(), f32::MAX];
+
 /// Reads three finite `f32`s.
 pub(crate) fn finite3(s: &mut Stream<'_>, have: usize, what: Rule) -> Result<[f32; 3], Error> {
     let mut out = [0.0; 3];
     for v in &mut out {
-        *v = float(s, have, what, |_| true)?;
+        *v = float(s, have, what, FINITE)?;
     }
     Ok(out)
 }

@@ -18,7 +18,8 @@
 //!
 //! Without feature `shells` this is a far-only reader (spec § SHEL, far-only readers): it skips
 //! SHEL's contents and answers every eye from the sampling sphere, `inside_sphere` nearer than
-//! it (the WebAssembly module and the Cortex-M4F firmware, for their size targets).
+//! it, for devices too small for the shells' 2.9 KB of code. The WebAssembly module and the
+//! Cortex-M4F firmware keep the shells.
 //!
 //! **Invariant:** nothing here allocates or panics on any input; the only panics are `assert!`s
 //! on caller contracts (an out-of-range patch index, a too-small scratch buffer).
@@ -242,7 +243,7 @@ impl<'a> Pvis<'a> {
         let level = self.shell_level(s);
         let (distance, bytes) = match s {
             0 => (self.sampling.distance, self.visibility_bytes),
-            _ => (self.shells.distance(s), self.shells.payload_range(s).1),
+            _ => (self.shells.distance(s), self.shells.payload_length(s)),
         };
         Shell {
             distance,
@@ -263,27 +264,17 @@ impl<'a> Pvis<'a> {
     }
 
     /// The rows of shell `s` (which must be `≤ shell_count()`): VISB's, or a shell's payload
-    /// opened again by the parser that checked it (walking its record lengths once).
+    /// opened again as parse read it ([`Visb::at`]), without walking its records.
     fn visb_of(&self, s: u32) -> Visb<'a> {
         if s == 0 || !cfg!(feature = "shells") {
             return self.visb;
         }
-        let sampling = parse::shell_sampling(self.sampling, self.shells.level(s));
         let payload = self.shells.payload(s);
-        parse::parse_visb(
-            self.bytes,
-            payload,
-            consts::TAG_SHEL,
-            consts::SHELLS_VERSION,
-            sampling,
-            self.patch_count,
-            self.patches,
-        )
-        // Parse checked the payload; the fallback (no rows) keeps this total.
-        .unwrap_or(Visb::Raw {
-            rows: &[],
-            row_bytes: 0,
-        })
+        let body = self
+            .bytes
+            .get(fields::at(payload.offset)..fields::at(payload.offset + payload.length))
+            .unwrap_or(&[]);
+        Visb::at(body, self.shell_level(s), self.patch_count, self.patches)
     }
 }
 

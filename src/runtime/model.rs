@@ -25,6 +25,18 @@ pub const MAX_TREE_DEPTH: u32 = 32;
 /// Set in a tree node that is a leaf (§ Context tree, Nodes).
 pub const LEAF: u16 = 0x8000;
 
+/// The features the internal nodes of a tree test, as bits (feature `f` is bit `f`): other
+/// key bits cannot change a walk, so lookups mask them off.
+pub(crate) fn tree_features(nodes: &[u8]) -> u32 {
+    nodes
+        .chunks_exact(2)
+        .map(|pair| u16::from_le_bytes([pair[0], pair[1]]))
+        .filter(|node| node & LEAF == 0)
+        .fold(0, |used, node| {
+            used | 1u32.checked_shl(u32::from(node >> 10)).unwrap_or(0)
+        })
+}
+
 /// Feature bit positions in a key (§ Context tree, Features). The layout lets a decoder build
 /// a key from three packed fields: the parents' 5-bit windows ([`window`]) and the view's
 /// [`ViewState::bits`]; the positions that only those fields set are named here for the

@@ -10,7 +10,7 @@
 
 use super::consts::*;
 use super::crc32c::crc32c;
-use super::fields::{Section, at, finite3, float, read, reserved};
+use super::fields::{POSITIVE, Section, at, finite3, float, read, reserved};
 use super::model::{FEATURES, LEAF, MAX_TREE_DEPTH, MAX_TREE_NODES};
 use super::ptch::{self, PatchTable};
 use super::shells::Shells;
@@ -202,9 +202,14 @@ fn parse_camr(data: &[u8], section: Section) -> Result<Sampling, Error> {
         });
     }
     let center = finite3(&mut s, have, Rule::CamrCenter)?;
-    let radius = float(&mut s, have, Rule::CamrRadius, |r| r > 0.0)?;
-    let distance = float(&mut s, have, Rule::CamrDistance, |d| d >= radius)?;
-    let fov_deg = float(&mut s, have, Rule::CamrFov, |f| f > 0.0 && f < 180.0)?;
+    let radius = float(&mut s, have, Rule::CamrRadius, POSITIVE)?;
+    let distance = float(&mut s, have, Rule::CamrDistance, [radius, f32::MAX])?;
+    let fov_deg = float(
+        &mut s,
+        have,
+        Rule::CamrFov,
+        [0f32.next_up(), 180f32.next_down()],
+    )?;
     let resolution_offset = s.offset() as u64;
     let resolution = read::<u32>(&mut s, have)?;
     if resolution == 0 {
@@ -252,7 +257,7 @@ fn parse_shel<'a>(
     let have = data.len();
     let mut s = Stream::new_at(data, at(section.offset));
     let count = read::<u32>(&mut s, have)?;
-    if !(1..=MAX_SHELLS).contains(&count) {
+    if count == 0 || count > MAX_SHELLS {
         return Err(Error::Invalid {
             what: Rule::ShellCount,
             offset: section.offset,
@@ -269,14 +274,27 @@ fn parse_shel<'a>(
             expected: records_end,
         });
     }
+    // The section lies inside the file and holds every record: the records are read as
+    // queries read them, and only their rules can fail.
+    let body = data
+        .get(at(section.offset)..at(section.offset + section.length))
+        .unwrap_or(&[]);
+    let mut shells = Shells::new(body, section.offset, count);
     let mut outer = sampling.distance;
     let mut payloads = 0u64;
-    for _ in 0..count {
-        let distance = float(&mut s, have, Rule::ShellDistance, |d| {
-            d < outer && d >= sampling.radius
-        })?;
+    for k in 1..count + 1 {
+        let record = section.offset + SHEL_HEADER_LEN + SHELL_RECORD_LEN * u64::from(k - 1);
+        let distance = shells.distance(k);
+        // Both bounds are finite, so a distance between them is.
+        if !(distance >= sampling.radius && distance < outer) {
+            return Err(Error::InvalidFloat {
+                what: Rule::ShellDistance,
+                offset: record,
+                bits: distance.to_bits(),
+            });
+        }
         outer = distance;
-        let level = read::<u32>(&mut s, have)?;
+        let level = shells.level(k);
         if level > MAX_LEVEL {
             return Err(Error::LimitExceeded {
                 what: Rule::ShellLevel,
@@ -284,7 +302,7 @@ fn parse_shel<'a>(
                 limit: MAX_LEVEL as u64,
             });
         }
-        payloads = payloads.saturating_add(read::<u64>(&mut s, have)?);
+        payloads = payloads.saturating_add(shells.payload_length(k));
     }
     if section.length - records_end != payloads {
         return Err(Error::SectionLength {
@@ -293,9 +311,7 @@ fn parse_shel<'a>(
             expected: records_end.saturating_add(payloads),
         });
     }
-    let body = &data[at(section.offset)..at(section.offset + section.length)];
-    let mut shells = Shells::new(body, section.offset, count);
-    for k in 1..=count {
+    for k in 1..count + 1 {
         let level = shells.level(k);
         let shell = shell_sampling(sampling, level);
         let visb = parse_visb(
@@ -321,7 +337,7 @@ fn parse_shel<'a>(
 
 /// The sampling parameters a shell's payload is checked against: the file's, with the shell's
 /// level and its views.
-pub(super) fn shell_sampling(sampling: Sampling, level: u32) -> Sampling {
+fn shell_sampling(sampling: Sampling, level: u32) -> Sampling {
     Sampling {
         level,
         views: crate::sphere::view_count(level.min(MAX_LEVEL)),
@@ -348,17 +364,21 @@ pub(super) fn parse_visb<'a>(
     let encoding = read::<u32>(&mut s, have)?;
     reserved(&mut s, have, Rule::VisbReserved)?;
     match encoding {
-        ENCODING_RAW => parse_raw(data, section, tag, sampling.views, patch_count),
+        ENCODING_RAW => parse_raw(data, section, tag, sampling.views, patch_count)?,
         ENCODING_HIERARCHICAL if version >= 2 => {
-            let (model, model_end) = parse_table(data, section, tag, sampling)?;
-            parse_records(data, section, tag, model, model_end, sampling, patch_count)
+            let model_end = parse_table(data, section, tag, sampling)?;
+            parse_records(data, section, tag, model_end, sampling, patch_count)?;
         }
         ENCODING_TREE if version >= 3 => {
-            let (model, model_end) = parse_tree(data, section, tag, patches)?;
-            parse_records(data, section, tag, model, model_end, sampling, patch_count)
+            let model_end = parse_tree(data, section, tag)?;
+            parse_records(data, section, tag, model_end, sampling, patch_count)?;
         }
-        found => Err(Error::UnsupportedEncoding { tag, found }),
+        found => return Err(Error::UnsupportedEncoding { tag, found }),
     }
+    // Where the model, checkpoints and records lie, read as a shell's rows are read when they
+    // are opened again for a query.
+    let body = &data[at(section.offset)..at(section.offset + section.length)];
+    Ok(Visb::at(body, sampling.level, patch_count, patches))
 }
 
 /// § VISB, encoding 0: length and padding bits.
@@ -368,7 +388,7 @@ fn parse_raw(
     tag: [u8; 4],
     views: u32,
     patch_count: u32,
-) -> Result<Visb<'_>, Error> {
+) -> Result<(), Error> {
     let have = data.len();
     let row_len = row_bytes(patch_count);
     // Cannot overflow: views ≤ 2^18, row_len ≤ 2^17.
@@ -399,19 +419,16 @@ fn parse_raw(
             }
         }
     }
-    Ok(Visb::Raw {
-        rows: &data[at(rows_offset)..at(section.offset + section.length)],
-        row_bytes: at(row_len),
-    })
+    Ok(())
 }
 
-/// § VISB, encoding 1: the probability table. Returns the model and where it ends.
+/// § VISB, encoding 1: the probability table. Returns where it ends.
 fn parse_table(
     data: &[u8],
     section: Section,
     tag: [u8; 4],
     sampling: Sampling,
-) -> Result<(Model<'_>, u64), Error> {
+) -> Result<u64, Error> {
     let end = section.offset + section.length;
     let probs_start = section.offset + VISB_HEADER_LEN;
     // Cannot overflow: level ≤ 7.
@@ -434,17 +451,12 @@ fn parse_table(
             });
         }
     }
-    Ok((Model::Table(probs), probs_end))
+    Ok(probs_end)
 }
 
 /// § VISB, encoding 2: the context tree — node count, every node's fields, children after
-/// their parent, depth. Returns the model and where it ends.
-fn parse_tree<'a>(
-    data: &'a [u8],
-    section: Section,
-    tag: [u8; 4],
-    patches: PatchTable<'a>,
-) -> Result<(Model<'a>, u64), Error> {
+/// their parent, depth. Returns where it ends.
+fn parse_tree(data: &[u8], section: Section, tag: [u8; 4]) -> Result<u64, Error> {
     let end = section.offset + section.length;
     let count_at = section.offset + VISB_HEADER_LEN;
     if count_at + 4 > end {
@@ -475,7 +487,6 @@ fn parse_tree<'a>(
     // Depth (internal nodes above) of every node reached so far; children follow parents, so
     // one forward pass sees every parent before its children.
     let mut depth = [0u8; MAX_TREE_NODES as usize];
-    let mut used = 0u32;
     for (i, pair) in nodes.chunks_exact(2).enumerate() {
         let node = u16::from_le_bytes([pair[0], pair[1]]);
         let offset = nodes_start + 2 * i as u64;
@@ -498,7 +509,6 @@ fn parse_tree<'a>(
                 value: node as u64,
             });
         }
-        used |= 1 << feature;
         let child = usize::from(node & 0x3FF);
         if child <= i || child + 1 >= count as usize {
             return Err(Error::Invalid {
@@ -518,28 +528,20 @@ fn parse_tree<'a>(
         depth[child] = depth[child].max(d);
         depth[child + 1] = depth[child + 1].max(d);
     }
-    Ok((
-        Model::Tree {
-            nodes,
-            patches,
-            used,
-        },
-        nodes_end,
-    ))
+    Ok(nodes_end)
 }
 
 /// § VISB, encodings 1 and 2: checkpoints, and every view record's length prefix and code
 /// bounds, after the model that ends at `model_end`. The codes themselves need no check:
 /// every byte string decodes (§ Range coder), so after this no decode can fail.
-fn parse_records<'a>(
-    data: &'a [u8],
+fn parse_records(
+    data: &[u8],
     section: Section,
     tag: [u8; 4],
-    model: Model<'a>,
     model_end: u64,
     sampling: Sampling,
     patch_count: u32,
-) -> Result<Visb<'a>, Error> {
+) -> Result<(), Error> {
     let have = data.len() as u64;
     let end = section.offset + section.length;
     let probs_end = model_end;
@@ -552,7 +554,6 @@ fn parse_records<'a>(
             expected: checkpoints_end - section.offset,
         });
     }
-    let checkpoints = &data[at(probs_end)..at(checkpoints_end)];
     let records = &data[at(checkpoints_end)..at(end)];
     let max_len = max_code_len(patch_count);
     let mut pos = 0usize;
@@ -611,9 +612,5 @@ fn parse_records<'a>(
             expected: section.length - (records.len() - pos) as u64,
         });
     }
-    Ok(Visb::Hierarchical {
-        model,
-        checkpoints,
-        records,
-    })
+    Ok(())
 }

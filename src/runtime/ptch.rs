@@ -13,7 +13,7 @@
 
 use super::consts::*;
 use super::exact::dot_positive;
-use super::fields::{Section, at, finite3, float, read, reserved};
+use super::fields::{POSITIVE, Section, at, finite3, float, read, reserved};
 use super::stream::Stream;
 use super::{Error, PatchInfo, Rule};
 
@@ -418,11 +418,9 @@ fn parse_full<'a>(
         }
         next_first += count as u64;
         finite3(&mut s, have, Rule::PatchCenter)?;
-        float(&mut s, have, Rule::PatchRadius, |r| r >= 0.0)?;
+        float(&mut s, have, Rule::PatchRadius, [0.0, f32::MAX])?;
         finite3(&mut s, have, Rule::PatchConeAxis)?;
-        float(&mut s, have, Rule::PatchConeCos, |c| {
-            (-1.0..=1.0).contains(&c)
-        })?;
+        float(&mut s, have, Rule::PatchConeCos, [-1.0, 1.0])?;
     }
     if next_first != triangle_count {
         return Err(Error::TriangleCountMismatch {
@@ -453,7 +451,7 @@ fn parse_compact<'a>(
         });
     }
     let origin = finite3(&mut s, have, Rule::Origin)?;
-    let step = float(&mut s, have, Rule::Step, |v| v > 0.0)?;
+    let step = float(&mut s, have, Rule::Step, POSITIVE)?;
     let widths_at = s.offset() as u64;
     let widths = read::<[u8; 4]>(&mut s, have)?;
     let cos_at = s.offset() as u64;

@@ -6,16 +6,16 @@
 //! (`|d|² < D_s²`, exact as in § Query step 3); band `b` answers with the OR of the leaf rows
 //! of shells `b − 1` and `b` (one shell at either end). A shell's payload is a VISB body; a
 //! `Pvis` keeps only where SHEL is, so it stays a few words however many shells it has, and a
-//! shell's rows are opened again by the VISB parser that checked them (`Pvis::visb_of`; the
-//! embedded readers carry one VISB reader, not two). Cost: `band` is at most `K + 1` exact
-//! comparisons, almost all settled in binary32; opening a payload walks its record lengths
-//! once (a few µs at level 4, under 1% of a stateless query's lock-step decode), which the
-//! stateless query pays per shell and the streaming and expanded modes once per shell they
-//! move to.
+//! shell's rows are opened again when they are needed (`Pvis::visb_of`) by `Visb::at`, the one
+//! reading of a checked VISB body, which parse uses too, for VISB and for each payload it checks
+//! (the embedded readers carry one VISB reader, not two). Cost: `band` is at most `K + 1` exact
+//! comparisons, almost all settled in binary32; opening a payload reads its fixed fields and,
+//! for a tree, its nodes (at most 1,024), not its records, which the stateless query pays per
+//! shell and the streaming and expanded modes once per shell they move to.
 //!
 //! Without feature `shells` the reader is a far-only reader (spec § SHEL, far-only readers):
 //! parse skips SHEL's contents and `K` reads as the constant 0, so the compiler drops the shell
-//! paths of every query mode (3.4 KB of flash on a Cortex-M4F, 1.0 KB gzipped of WebAssembly).
+//! paths of every query mode (2.9 KB of flash on a Cortex-M4F, 1.0 KB gzipped of WebAssembly).
 
 use super::consts::*;
 use super::exact::norm_below;
@@ -92,27 +92,20 @@ impl<'a> Shells<'a> {
     }
 
     /// The stored payload length of shell `k` (`1..=K`).
-    fn length(&self, k: u32) -> u64 {
+    pub(crate) fn payload_length(&self, k: u32) -> u64 {
         u64::from(self.field(k, 8)) | u64::from(self.field(k, 12)) << 32
     }
 
-    /// Where shell `k`'s payload lies, from the start of the section: `(offset, length)`.
-    /// Payloads follow the records in shell order, contiguous.
-    pub(crate) fn payload_range(&self, k: u32) -> (u64, u64) {
-        let mut offset = SHEL_HEADER_LEN + SHELL_RECORD_LEN * u64::from(self.count);
-        for j in 1..k {
-            offset = offset.saturating_add(self.length(j));
-        }
-        (offset, self.length(k))
-    }
-
-    /// Where shell `k`'s payload lies in the file: a VISB body, as parse checked it.
+    /// Where shell `k`'s payload lies in the file: a VISB body, as parse checked it. Payloads
+    /// follow the records in shell order, contiguous.
     pub(crate) fn payload(&self, k: u32) -> Section {
-        let (offset, length) = self.payload_range(k);
-        Section {
-            offset: self.offset.saturating_add(offset),
-            length,
+        let mut offset = self.offset + SHEL_HEADER_LEN + SHELL_RECORD_LEN * u64::from(self.count);
+        let mut length = 0;
+        for j in 1..k + 1 {
+            offset = offset.saturating_add(length);
+            length = self.payload_length(j);
         }
+        Section { offset, length }
     }
 }
 

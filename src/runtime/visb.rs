@@ -12,12 +12,19 @@
 //! [`crate::runtime::Pvis::view_row`] and the stateless query free of scratch beyond the output
 //! row. Cost: decoding one bit is one range-coder step plus a key and a (memoised) tree walk;
 //! lock step decodes the `3 + 3·level` views of the closure.
+//!
+//! Where a checked body's model, checkpoints and records lie follows from its fixed fields
+//! ([`Visb::at`]): parse reads VISB and every shell's payload so once it has checked them, and
+//! a query opens a shell's rows again the same way.
 
 use super::coder::RangeDecoder;
-use super::consts::{CHECKPOINT_INTERVAL, CONTEXTS, MAX_LANES, MAX_VARINT_LEN};
-use super::model::{TreeCache, ViewModel, ViewState};
+use super::consts::{
+    CHECKPOINT_INTERVAL, CONTEXTS, ENCODING_HIERARCHICAL, ENCODING_RAW, MAX_LANES, MAX_VARINT_LEN,
+    VISB_HEADER_LEN, row_bytes,
+};
+use super::model::{TreeCache, ViewModel, ViewState, tree_features};
 use super::ptch::{Axis, PatchTable};
-use crate::sphere::{LatticePoint, lattice_point, level_of, parents};
+use crate::sphere::{LatticePoint, lattice_point, level_of, parents, view_count};
 
 /// The VISB payload of a validated file.
 #[derive(Clone, Copy, Debug)]
@@ -135,6 +142,58 @@ pub(crate) const HALF: [u8; 2 * CONTEXTS] = {
 };
 
 impl<'a> Visb<'a> {
+    /// The rows of a VISB `body` (from its `encoding` field to its end) that parse validated,
+    /// for the views of `level` and rows of `patch_count` bits whose patch table is `patches`.
+    /// Where each part lies follows from the fields before it (§ VISB), so this reads no
+    /// record.
+    pub(crate) fn at(
+        body: &'a [u8],
+        level: u32,
+        patch_count: u32,
+        patches: PatchTable<'a>,
+    ) -> Visb<'a> {
+        // Each part is cut off the front of the rest; parse checked that every cut fits.
+        let cut = |rest: &'a [u8], n: usize| rest.split_at_checked(n).unwrap_or_default();
+        let (fixed, rest) = cut(body, VISB_HEADER_LEN as usize);
+        // `encoding` is 0, 1 or 2 (little-endian): its first byte says which.
+        let (model, rest) = match fixed.first().map_or(0, |&e| u32::from(e)) {
+            ENCODING_RAW => {
+                return Visb::Raw {
+                    rows: rest,
+                    row_bytes: row_bytes(patch_count) as usize,
+                };
+            }
+            ENCODING_HIERARCHICAL => {
+                let (probs, rest) = cut(rest, (level as usize + 1) * CONTEXTS * 2);
+                (Model::Table(probs), rest)
+            }
+            _ => {
+                // `node_count` is at most 1,024: its two low bytes hold it.
+                let (count, rest) = cut(rest, 4);
+                let count = count.first_chunk().map_or(0, |&b| u16::from_le_bytes(b));
+                let (nodes, rest) = cut(rest, 2 * usize::from(count));
+                let used = tree_features(nodes);
+                (
+                    Model::Tree {
+                        nodes,
+                        patches,
+                        used,
+                    },
+                    rest,
+                )
+            }
+        };
+        let (checkpoints, records) = cut(
+            rest,
+            4 * view_count(level).div_ceil(CHECKPOINT_INTERVAL) as usize,
+        );
+        Visb::Hierarchical {
+            model,
+            checkpoints,
+            records,
+        }
+    }
+
     /// The code bytes of `view` (encoding 1); empty for encoding 0 or an impossible lookup.
     pub(crate) fn code(&self, view: u32) -> &'a [u8] {
         let Visb::Hierarchical {

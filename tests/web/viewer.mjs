@@ -1,9 +1,11 @@
 // Drives the viewer (web/index.html) in headless Chromium and checks its answers against
-// `patchvis query`: serves web/ on an ephemeral local port, loads the bunny demo, moves the
-// camera to 24 positions (6 of them inside the sampling sphere), and for each compares the
-// page's visible patches, ranges and inside-sphere flag with the command's, and the triangles
-// the page draws with the ranges' sum. Fails on any console error, page error or failed
-// request. Writes a screenshot. Used by tests/web/run.sh.
+// `patchvis query`: serves web/ on an ephemeral local port, loads the bunny demo (a default
+// bake, with sampling shells), moves the camera to 24 positions spread over every band (inside
+// the innermost shell, between each two shells, at the sampling distance D, and beyond it up to
+// 1000 D), and for each compares the page's visible patches, ranges, inside flag, band and
+// answering shells with the command's, and the triangles the page draws with the ranges' sum
+// (everything only inside the innermost shell). Fails on any console error, page error or
+// failed request, or if a band has no eye. Writes a screenshot. Used by tests/web/run.sh.
 //
 //   node tests/web/viewer.mjs PATCHVIS_BINARY SCREENSHOT.png
 import { createServer } from "node:http";
@@ -25,17 +27,24 @@ function run(args) {
   return JSON.parse(out.stdout);
 }
 
-// The eyes: Fibonacci directions around the sampling sphere's centre, 18 outside it (at 1.1,
-// 1.5 and 2.5 times the camera distance) and 6 inside (0.6 and 0.9 times: nearer than the
-// sampling cameras, where the reader says so and the page draws everything).
-const { camera } = run(["info", PVIS, "--json"]);
-const scales = [1.1, 1.5, 2.5, 1.1, 1.5, 2.5, 0.9, 0.6];
+// The eyes: Fibonacci directions around the sampling sphere's centre, at 8 distances, 3 eyes
+// each: 1000, 10 and 1.5 times the sampling distance D_0 and D_0 itself (band 0, or 1 where
+// the rounded eye falls inside), the geometric mean of each two neighbouring shells' distances
+// (bands 1..K), and 0.9 and 0.5 times the innermost shell's (band K + 1, drawn whole).
+const info = run(["info", PVIS, "--json"]);
+const { camera } = info;
+const distances = [camera.distance, ...info.shells.map((s) => s.distance)];
+const between = distances.slice(1).map((d, k) => Math.sqrt(d * distances[k]));
+const innermost = distances[distances.length - 1];
+const radii = [1000, 10, 1.5, 1].map((x) => x * camera.distance);
+radii.push(...between, 0.9 * innermost, 0.5 * innermost);
 const eyes = [];
-for (let i = 0; i < 24; i++) {
-  const y = 1 - (2 * (i + 0.5)) / 24;
+const n = 3 * radii.length;
+for (let i = 0; i < n; i++) {
+  const y = 1 - (2 * (i + 0.5)) / n;
   const r = Math.sqrt(1 - y * y);
   const phi = i * Math.PI * (3 - Math.sqrt(5));
-  const d = camera.distance * scales[i % scales.length];
+  const d = radii[i % radii.length];
   eyes.push([0, 1, 2].map((k) => camera.center[k] + d * [r * Math.cos(phi), y, r * Math.sin(phi)][k]));
 }
 
@@ -73,7 +82,7 @@ try {
   const webgl2 = await page.evaluate(() => !!document.createElement("canvas").getContext("webgl2"));
   if (!webgl2) problems.push("no WebGL2 context");
 
-  let inside = 0;
+  const bands = new Map(); // band -> eyes
   for (const [i, eye] of eyes.entries()) {
     const page_ = await page.evaluate(
       ([eye, target]) => {
@@ -86,17 +95,25 @@ try {
     const same =
       JSON.stringify(page_.patches) === JSON.stringify(cli.patches) &&
       JSON.stringify(page_.ranges) === JSON.stringify(cli.ranges) &&
-      page_.inside === cli.inside_sphere;
+      page_.inside === cli.inside_sphere &&
+      page_.band === cli.band &&
+      JSON.stringify(page_.shells) === JSON.stringify(cli.shells);
     if (!same) {
       problems.push(`eye ${i} (${eye}): page ${JSON.stringify(page_)} but patchvis query ${JSON.stringify(cli)}`);
       continue;
     }
     const expected = cli.inside_sphere ? page_.triangles : cli.ranges.reduce((s, [, n]) => s + n, 0);
     if (page_.drawn !== expected) problems.push(`eye ${i}: the page draws ${page_.drawn} triangles, expected ${expected}`);
-    inside += cli.inside_sphere;
-    console.log(`eye ${i}: ${cli.patches.length} patches, ${page_.drawn} triangles${cli.inside_sphere ? ", inside the sphere" : ""}`);
+    bands.set(cli.band, (bands.get(cli.band) ?? 0) + 1);
+    const where = cli.inside_sphere ? ", inside the innermost shell" : "";
+    console.log(`eye ${i}: band ${cli.band}, ${cli.patches.length} patches, ${page_.drawn} triangles${where}`);
   }
-  if (inside !== 6) problems.push(`${inside} eyes inside the sampling sphere, expected 6`);
+  for (let band = 0; band < distances.length + 1; band++) {
+    if (!bands.has(band)) problems.push(`no eye in band ${band} (${distances.length - 1} shells)`);
+  }
+  console.log(
+    `bands: ${[...bands].sort(([a], [b]) => a - b).map(([b, k]) => `${k} eyes in band ${b}`).join(", ")}`,
+  );
 
   // The user's own pair, dropped on the page: the globe (tests/data/obj, two materials, one
   // textured) baked by run.sh into web/demo/.
@@ -115,7 +132,11 @@ try {
     const scaled = eye.map((x, k) => globe.center[k] + ((x - camera.center[k]) * globe.distance) / camera.distance);
     const page_ = await page.evaluate(([e, t]) => (window.patchvis.setCamera(e, t), window.patchvis.answer()), [scaled, globe.center]);
     const cli = run(["query", GLOBE, "--from", scaled.join(","), "--json"]);
-    if (JSON.stringify(page_.patches) !== JSON.stringify(cli.patches) || page_.inside !== cli.inside_sphere) {
+    const same =
+      JSON.stringify(page_.patches) === JSON.stringify(cli.patches) &&
+      page_.inside === cli.inside_sphere &&
+      page_.band === cli.band;
+    if (!same) {
       problems.push(`dropped globe, eye ${i}: page ${JSON.stringify(page_)} but patchvis query ${JSON.stringify(cli)}`);
     }
   }
