@@ -644,15 +644,7 @@ pub(crate) fn convert(
     };
     for instance in instances(document)? {
         for primitive in instance.mesh.primitives() {
-            let role = instance.role(&primitive);
-            emit(
-                &primitive,
-                &role,
-                &instance.world,
-                &buffers,
-                sink,
-                &mut totals,
-            )?;
+            emit(&instance, &primitive, &buffers, sink, &mut totals)?;
         }
     }
 
@@ -674,15 +666,16 @@ pub(crate) fn convert(
     Ok(totals.bounds.finish())
 }
 
-/// Writes one primitive instance: its positions under `world`, then its triangles.
+/// Writes `primitive` of `instance`: its positions under the instance's world matrix, then
+/// its triangles.
 fn emit(
+    instance: &Instance,
     primitive: &gltf::Primitive,
-    role: &str,
-    world: &DMat4,
     buffers: &[BufferBytes],
     sink: &mut CacheWriter,
     totals: &mut Totals,
 ) -> Result<(), Fault> {
+    let (role, world) = (&instance.role(primitive), &instance.world);
     let mode = primitive.mode();
     if !matches!(
         mode,
