@@ -136,17 +136,12 @@ fn gpu_near_views_match_the_cpu() {
 }
 
 #[test]
-fn gpu_far_views_match_the_cpu() {
-    // Two cameras per view: the sampling one and the far one, 256 sampling distances out.
-    compare(
-        "far views",
-        1,
-        128,
-        &SamplingOptions {
-            far_view: true,
-            ..SamplingOptions::default()
-        },
-    );
+fn gpu_far_shells_match_the_cpu() {
+    // One camera a view, framing the bounding sphere from 256 sampling distances out.
+    compare_with("far shell", 1, 128, &|params| SamplingOptions {
+        shell: Some(params.distance() * 256.0),
+        ..SamplingOptions::default()
+    });
 }
 
 #[test]

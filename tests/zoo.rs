@@ -198,11 +198,11 @@ fn the_split_fold_culls_at_least_the_all_corner_fold_and_misses_no_more_than_the
     );
 }
 
-/// `--far-views`: the rows also hold what cameras beyond the sampling distance see, so at
-/// twice that distance no view misses more than the plain bake's, and the plain bake's
-/// misses there (rim it never saw) are gone.
+/// The far band: cameras beyond the sampling distance are answered from shells out there
+/// too, so at twice that distance no view misses more than a bake without it, and that
+/// bake's misses there (rim it never saw) are gone.
 #[test]
-fn far_views_keep_the_rim_that_cameras_beyond_the_sampling_distance_see() {
+fn the_far_band_keeps_the_rim_that_cameras_beyond_the_sampling_distance_see() {
     let dir = TempDir::new().unwrap();
     let mesh = format!("{ASSETS}/ant.ply");
     let at_twice = |name: &str, flags: &[&str]| {
@@ -228,8 +228,8 @@ fn far_views_keep_the_rim_that_cameras_beyond_the_sampling_distance_see() {
             "--json",
         ]))
     };
-    let plain = at_twice("plain.pvis", &[]);
-    let far = at_twice("far.pvis", &["--far-views"]);
+    let plain = at_twice("plain.pvis", &["--far-shells", "none"]);
+    let far = at_twice("far.pvis", &[]);
     let (plain, far) = (missed_per_view(&plain), missed_per_view(&far));
     for (i, (f, p)) in far.iter().zip(&plain).enumerate() {
         assert!(f <= p, "view {i}: {f} > {p}");

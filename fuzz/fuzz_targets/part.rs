@@ -51,7 +51,7 @@ fuzz_target!(|data: &[u8]| {
         resolution: 64,
         // No sampling shells: the passes below are the sampling sphere's.
         shells: 0,
-        far_views: threshold >> 6 & 1 == 1,
+        far_shells: Vec::new(),
         research: Research {
             dilate: threshold & 1 == 1,
             probe: if threshold >> 5 & 1 == 1 {

@@ -261,7 +261,8 @@ fn encode_passes(
 ) -> Result<Merged, MergeError> {
     let (path, first) = (&first.path, &first.part);
     let patch_count = first.patches.len() as u32;
-    // Back into one sphere's rows per sphere: the sampling sphere's passes, then each shell's.
+    // Back into one sphere's rows per sphere: the sampling sphere's passes, then each shell's,
+    // then each far shell's (`Plan::pass_levels`).
     let params = first.params;
     let mut matrices = matrices.into_iter();
     let mut stored = |sampling: SphereSampling| {
@@ -280,10 +281,15 @@ fn encode_passes(
         .stored(sampling.level)
     };
     let visibility = stored(plan.main);
-    let shells: Vec<VisibilityMatrix> = (0..plan.rows.shells).map(|_| stored(plan.shell)).collect();
+    let inner: Vec<VisibilityMatrix> = (0..plan.rows.shells).map(|_| stored(plan.shell)).collect();
+    let far: Vec<VisibilityMatrix> = (0..plan.rows.far_shells.len())
+        .map(|_| stored(plan.far))
+        .collect();
+    // In the file's order: the far band outermost first, then the shells inside.
+    let shells: Vec<VisibilityMatrix> = far.into_iter().rev().chain(inner).collect();
     // The parts carry the file's camera: the shells are where the single bake puts them.
     let distances = plan
-        .shell_distances(&params)
+        .file_shell_distances(&params)
         .map_err(|e| MergeError::part(path, format!("{e}; bake this shard again")))?;
     let order = encode::file_patch_order(plan.rows.patch_order, &first.patches, &visibility);
     let (patches, visibility, shells) = match order {

@@ -16,7 +16,7 @@
 //! | settings block length, then the block ([`RowSettings::encode`]) | `u32` + n |
 //! | the file's camera: level, resolution, fov, centre, radius | `u32` × 2, `f32` × 5 |
 //! | patches, then their records in the tiling's numbering (`wire.rs`) | `u32` + 48 each |
-//! | passes ([`Plan::pass_levels`] of the settings: the sampling sphere's 1, or 2 with a fold threshold or the split fold, then as many for each sampling shell), each: level, views, the view ids (ascending), then each view's row (`⌈patches / 64⌉` `u64` words) | … |
+//! | passes ([`Plan::pass_levels`] of the settings: the sampling sphere's 1, or 2 with a fold threshold or the split fold, then as many for each sampling shell and each far shell), each: level, views, the view ids (ascending), then each view's row (`⌈patches / 64⌉` `u64` words) | … |
 //! | CRC-32C of every byte before it | `u32` |
 //!
 //! The settings block is the bake's [`RowSettings`] as its shard planned them for the mesh
@@ -43,7 +43,7 @@ use xxhash_rust::xxh64::xxh64;
 const MAGIC: &[u8; 8] = b"PVISPART";
 /// The layout's version; bumped with the sampler checkpoint's whenever the rows change for
 /// the same settings, and whenever the layout or the settings' codec does.
-const VERSION: u32 = 8;
+const VERSION: u32 = 9;
 const CRC_BYTES: usize = 4;
 /// What a refused part's message tells the user to do.
 const BAKE_AGAIN: &str = "bake this shard again";

@@ -98,6 +98,9 @@ pub enum SphereKind {
     Sampling,
     /// Sampling shell `s` (1 is the outermost), nearer the model (`shells.rs`).
     Shell(u32),
+    /// Shell `j` of the far band (1 is the innermost), beyond the sampling sphere
+    /// (`shells.rs`).
+    Far(u32),
 }
 
 /// One sphere of views of a bake on a mesh, as [`Plan::spheres`] lists them.
@@ -110,13 +113,12 @@ pub struct Sphere {
     pub params: SamplingParams,
     /// How it is sampled.
     pub sampling: SphereSampling,
-    /// A shell's camera distance (`SamplingOptions::shell`); `None`: the sampling distance.
+    /// A shell's camera distance, nearer or farther (`SamplingOptions::shell`); `None`: the
+    /// sampling distance.
     pub shell: Option<f32>,
     /// The camera distances the probe's cells span (`SamplingOptions::band`); `None`: each
     /// view's own distance.
     pub probe_band: Option<[f32; 2]>,
-    /// Whether each view is also rendered from far out (`SamplingOptions::far_view`).
-    pub far_views: bool,
     /// Its passes' checkpoints.
     pub checkpoints: PassCheckpoints,
 }
@@ -146,6 +148,8 @@ pub struct Plan {
     pub main: SphereSampling,
     /// Each sampling shell.
     pub shell: SphereSampling,
+    /// Each shell of the far band.
+    pub far: SphereSampling,
     /// Whether the probe is the default bake's, which [`Plan::for_mesh`] turns off where it
     /// cannot run, and whose cells lie at each view's own distance.
     pub default_probe: bool,
@@ -256,6 +260,12 @@ impl Plan {
                 supersample: supersample(extra_levels.min(MAX_LEVEL - shell_level)),
                 probe,
             },
+            // The far band's shells are sampled as the near shells are.
+            far: SphereSampling {
+                level: shell_level,
+                supersample: supersample(extra_levels.min(MAX_LEVEL - shell_level)),
+                probe,
+            },
             // Split needs the probe's rows: asking for it makes the probe a must.
             default_probe: r.probe == Probe::Default
                 && !conservative
@@ -319,12 +329,16 @@ impl Plan {
     }
 
     /// The sphere level of each sampling pass, in order: the sampling sphere's passes, then
-    /// each shell's ([`Supersample::pass_levels`]).
+    /// each shell's, then each far shell's ([`Supersample::pass_levels`]).
     pub fn pass_levels(&self) -> Vec<u32> {
         let shell = self.shell.supersample.pass_levels(self.shell.level);
+        let far = self.far.supersample.pass_levels(self.far.level);
         let mut levels = self.main.supersample.pass_levels(self.main.level);
         for _ in 0..self.rows.shells {
             levels.extend_from_slice(&shell);
+        }
+        for _ in 0..self.rows.far_shells.len() {
+            levels.extend_from_slice(&far);
         }
         levels
     }
@@ -361,29 +375,55 @@ impl Plan {
             .sum()
     }
 
-    /// The camera distances of the shells around the sampling sphere `params`, outermost
+    /// The camera distances of the shells inside the sampling sphere `params`, outermost
     /// first (`shells.rs`); a usage error naming the flags if they cannot be used.
     pub fn shell_distances(&self, params: &SamplingParams) -> Result<Vec<f32>, SettingsError> {
         shells::shell_distances(params, self.rows.shells, self.rows.shell_min)
             .map_err(SettingsError)
     }
 
+    /// The camera distances of the far band's shells around the sampling sphere `params`,
+    /// innermost first (`shells.rs`).
+    pub fn far_distances(&self, params: &SamplingParams) -> Result<Vec<f32>, SettingsError> {
+        shells::far_distances(params, &self.rows.far_shells).map_err(SettingsError)
+    }
+
+    /// Every SHEL record's camera distance, in the file's order (decreasing): the far band's
+    /// outermost first, then the shells inside the sampling sphere.
+    pub fn file_shell_distances(&self, params: &SamplingParams) -> Result<Vec<f32>, SettingsError> {
+        let mut all = self.far_distances(params)?;
+        all.reverse();
+        all.extend(self.shell_distances(params)?);
+        Ok(all)
+    }
+
     /// The spheres of views to sample around the sampling sphere `params` (at the stored
-    /// level), in sampling order, with their checkpoints beside `checkpoint` (none without).
+    /// level), in sampling order (the sampling sphere, the shells inside it outermost first,
+    /// the far band innermost first), with their checkpoints beside `checkpoint` (none
+    /// without).
     pub fn spheres(
         &self,
         params: &SamplingParams,
         checkpoint: Option<&Path>,
     ) -> Result<Vec<Sphere>, SettingsError> {
         let distances = self.shell_distances(params)?;
-        let bands = shells::bands(params.distance(), &distances);
+        let far = self.far_distances(params)?;
+        let bands = shells::bands(params.distance(), &distances)
+            .into_iter()
+            .chain(shells::far_bands(params.distance(), &far));
         let checkpoints = self.checkpoints(checkpoint);
-        let kinds = std::iter::once((SphereKind::Sampling, None)).chain(
-            distances
-                .iter()
-                .enumerate()
-                .map(|(s, &d)| (SphereKind::Shell(s as u32 + 1), Some(d))),
-        );
+        let kinds = std::iter::once((SphereKind::Sampling, None))
+            .chain(
+                distances
+                    .iter()
+                    .enumerate()
+                    .map(|(s, &d)| (SphereKind::Shell(s as u32 + 1), Some(d))),
+            )
+            .chain(
+                far.iter()
+                    .enumerate()
+                    .map(|(j, &d)| (SphereKind::Far(j as u32 + 1), Some(d))),
+            );
         Ok(kinds
             .zip(bands)
             .zip(checkpoints)
@@ -391,10 +431,11 @@ impl Plan {
                 let sampling = match kind {
                     SphereKind::Sampling => self.main,
                     SphereKind::Shell(_) => self.shell,
+                    SphereKind::Far(_) => self.far,
                 };
                 let resolution = match kind {
-                    SphereKind::Sampling => params.resolution,
                     SphereKind::Shell(_) => self.rows.shell_resolution.unwrap_or(params.resolution),
+                    SphereKind::Sampling | SphereKind::Far(_) => params.resolution,
                 };
                 Sphere {
                     kind,
@@ -410,7 +451,6 @@ impl Plan {
                     // and a cell spanning the band cost the bunny 3.5 points of culling at the
                     // sampling distance.
                     probe_band: if self.default_probe { None } else { band },
-                    far_views: self.rows.far_views && kind == SphereKind::Sampling,
                     checkpoints,
                 }
             })
@@ -430,7 +470,7 @@ impl Plan {
         } else {
             self.main.probe
         };
-        let sphere = |prefix: &str, supersample: Supersample, far: bool| {
+        let sphere = |prefix: &str, supersample: Supersample| {
             let with = |suffix: String| {
                 base.map(|base| {
                     let mut path = base.as_os_str().to_owned();
@@ -439,9 +479,8 @@ impl Plan {
                 })
             };
             let plain = format!(
-                "{prefix}{}{}",
+                "{prefix}{}",
                 named_probe.map(|r| format!(".p{r}")).unwrap_or_default(),
-                if far { ".far" } else { "" }
             );
             let mut suffix = plain.clone();
             if supersample.extra_levels > 0 {
@@ -463,10 +502,14 @@ impl Plan {
                 fine: with(suffix + ".ckpt"),
             }
         };
-        std::iter::once(sphere("", self.main.supersample, self.rows.far_views))
+        std::iter::once(sphere("", self.main.supersample))
             .chain(
                 (1..=self.rows.shells)
-                    .map(|s| sphere(&format!(".shell{s}"), self.shell.supersample, false)),
+                    .map(|s| sphere(&format!(".shell{s}"), self.shell.supersample)),
+            )
+            .chain(
+                (1..=self.rows.far_shells.len())
+                    .map(|j| sphere(&format!(".far{j}"), self.far.supersample)),
             )
             .collect()
     }

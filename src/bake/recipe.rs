@@ -43,7 +43,8 @@ pub struct Baked {
     /// Views rendered for the sampling sphere, every pass counted (the shells' are in
     /// `shells`).
     pub sampled_views: u32,
-    /// The sampling shells, outermost first (empty without shells).
+    /// The sampling shells in the file's order: the far band's, then those inside the
+    /// sampling sphere, each outermost first (empty without shells).
     pub shells: Vec<BakedShell>,
     /// The `.pvis` file.
     pub bytes: Vec<u8>,
@@ -56,6 +57,8 @@ pub struct Baked {
 pub struct BakedShell {
     /// The views' distance from the centre, as the file stores it.
     pub distance: f32,
+    /// The sphere level of its views.
+    pub level: u32,
     /// The stored rows, in the file's patch numbering.
     pub visibility: VisibilityMatrix,
     /// Views rendered for the shell, every pass counted.
@@ -329,13 +332,12 @@ impl Recipe {
         let tiling = stages.run("tiling", || spin(progress, "tiling", || self.tile(work)))?;
         let rows = stages.run("sampling", || self.sample(work, &tiling, backend, progress))?;
         let visibility = rows.stored(self.level());
-        let shell_level = self.plan.shell.level;
         let shell_matrices: Vec<VisibilityMatrix> =
-            rows.shells().map(|s| s.stored(shell_level)).collect();
+            rows.shells().map(|s| s.stored(s.level())).collect();
         let (mut params, sampled_views) = (rows.params(self.level()), rows.sampled_views());
-        let shell_sampling: Vec<(u32, f64)> = rows
+        let shell_sampling: Vec<(u32, u32, f64)> = rows
             .shells()
-            .map(|s| (s.sampled_views(), s.seconds))
+            .map(|s| (s.level(), s.sampled_views(), s.seconds))
             .collect();
         drop(rows);
         let (mut tiling, visibility, shell_matrices, renumbered) =
@@ -355,13 +357,14 @@ impl Recipe {
         // same rule on the file's camera.
         let shells: Vec<BakedShell> = self
             .plan
-            .shell_distances(&params)?
+            .file_shell_distances(&params)?
             .into_iter()
             .zip(shell_matrices)
             .zip(shell_sampling)
             .map(
-                |((distance, visibility), (sampled_views, seconds))| BakedShell {
+                |((distance, visibility), (level, sampled_views, seconds))| BakedShell {
                     distance,
+                    level,
                     visibility,
                     sampled_views,
                     seconds,
@@ -415,10 +418,11 @@ impl Recipe {
         }
         self.check_mesh(mesh)?;
         let frame = Frame::choose(mesh, self.plan.rows.fov_deg)?;
-        if frame.is_none() && self.plan.rows.shells > 0 {
+        if frame.is_none() {
             // Before the tiling: shells binary32 cannot tell apart are a usage error. (In a
             // working frame of its own, the mesh's shells are checked where they are sampled.)
-            self.plan.shell_distances(&self.sampling_params(mesh))?;
+            self.plan
+                .file_shell_distances(&self.sampling_params(mesh))?;
         }
         Ok(frame)
     }

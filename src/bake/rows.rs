@@ -164,11 +164,17 @@ impl SampledRows {
         &self.spheres
     }
 
-    /// The shells, outermost first.
+    /// The shells in the file's order (spec § SHEL, decreasing distance): the far band's,
+    /// outermost first, then those inside the sampling sphere, outermost first.
     pub fn shells(&self) -> impl Iterator<Item = &SampledSphere> {
-        self.spheres
-            .iter()
-            .filter(|s| matches!(s.kind, SphereKind::Shell(_)))
+        let of = |far: bool| {
+            self.spheres.iter().filter(move |s| match s.kind {
+                SphereKind::Sampling => false,
+                SphereKind::Shell(_) => !far,
+                SphereKind::Far(_) => far,
+            })
+        };
+        of(true).rev().chain(of(false))
     }
 
     /// The matrix a bake at `level` (at most [`SampledRows::level`]) stores: the level's own

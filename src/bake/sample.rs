@@ -117,10 +117,9 @@ impl Run<'_> {
             probe: sphere.sampling.probe,
             shell: match sphere.kind {
                 SphereKind::Sampling => None,
-                SphereKind::Shell(_) => sphere.shell,
+                SphereKind::Shell(_) | SphereKind::Far(_) => sphere.shell,
             },
             band: sphere.probe_band,
-            far_view: sphere.far_views,
             folds_into: None,
             finer: crate::sampler::FinerViews::Midpoints,
         }

@@ -8,7 +8,9 @@
 //! [`BakeSettings`] adds what changes how a bake runs but not what it writes: the patch
 //! count asked for, the tiling algorithm, the memory budget and the checkpoints.
 
-use super::shells::{DEFAULT_SHELL_MIN, DEFAULT_SHELLS, MAX_SHELLS};
+use super::shells::{
+    DEFAULT_FAR_SHELLS, DEFAULT_SHELL_MIN, DEFAULT_SHELLS, MAX_FAR_SHELL, MAX_SHELLS,
+};
 use super::wire::{Fields, Put};
 use super::{MemoryBudget, Plan, Recipe};
 use crate::format::VisibilityEncoding;
@@ -137,10 +139,9 @@ pub struct RowSettings {
     /// ID-buffer side of the shells' views (`--shell-resolution`), at most `resolution`;
     /// `None`: `resolution`.
     pub shell_resolution: Option<u32>,
-    /// Each view of the sampling sphere is also rendered from far out, so that its rows hold
-    /// what cameras farther than the sampling distance see (`--far-views`,
-    /// `sampler::SamplingOptions::far_view`).
-    pub far_views: bool,
+    /// The far band's shells beyond the sampling sphere (`--far-shells`, `shells.rs`), as
+    /// multiples of the sampling distance, increasing; empty: none.
+    pub far_shells: Vec<f64>,
     /// Patches never culled, in the tiling's spatial numbering (`--always-visible`).
     pub always_visible: Vec<PatchId>,
     /// Patch numbering (`--patch-order`).
@@ -191,7 +192,7 @@ impl Default for RowSettings {
             shell_min: DEFAULT_SHELL_MIN,
             shell_level: None,
             shell_resolution: None,
-            far_views: false,
+            far_shells: DEFAULT_FAR_SHELLS.to_vec(),
             always_visible: Vec::new(),
             patch_order: PatchOrder::default(),
             encoding: VisibilityEncoding::Tree,
@@ -310,6 +311,29 @@ impl RowSettings {
                 self.shell_min, self.fov_deg
             ));
         }
+        let far = &self.far_shells;
+        if far
+            .iter()
+            .any(|f| !(f.is_finite() && *f > 1.0 && *f <= MAX_FAR_SHELL))
+            || far.windows(2).any(|w| w[0] >= w[1])
+        {
+            return fail(format!(
+                "--far-shells {}: expected multiples of the sampling distance above 1 and at \
+                 most {MAX_FAR_SHELL}, increasing (or none)",
+                far.iter()
+                    .map(|f| f.to_string())
+                    .collect::<Vec<_>>()
+                    .join(",")
+            ));
+        }
+        if self.shells as usize + far.len() > MAX_SHELLS as usize {
+            return fail(format!(
+                "--shells {} with {} --far-shells: expected at most {MAX_SHELLS} together (the \
+                 format's limit)",
+                self.shells,
+                far.len()
+            ));
+        }
         if let Some(level) = self.shell_level.filter(|&l| l > MAX_LEVEL) {
             return fail(format!(
                 "--shell-level {level}: expected a sphere level from 0 to {MAX_LEVEL}"
@@ -341,7 +365,7 @@ impl RowSettings {
             shell_min,
             shell_level,
             shell_resolution,
-            far_views,
+            ref far_shells,
             ref always_visible,
             patch_order,
             encoding,
@@ -370,7 +394,10 @@ impl RowSettings {
         b.put_u64(shell_min.to_bits());
         put_option(&mut b, shell_level);
         put_option(&mut b, shell_resolution);
-        b.put_u8(u8::from(far_views));
+        b.put_u32(far_shells.len() as u32);
+        for &f in far_shells {
+            b.put_u64(f.to_bits());
+        }
         b.put_u32(always_visible.len() as u32);
         for &p in always_visible {
             b.put_u32(p);
@@ -423,7 +450,17 @@ impl RowSettings {
             shell_min: f64::from_bits(f.u64()?),
             shell_level: option(&mut f)?,
             shell_resolution: option(&mut f)?,
-            far_views: flag(f.u8()?)?,
+            far_shells: {
+                let n = f.u32()?;
+                // Each takes 8 bytes: a count past what is left is refused before any
+                // allocation.
+                if u64::from(n) * 8 > (bytes.len() - f.offset()) as u64 {
+                    return None;
+                }
+                (0..n)
+                    .map(|_| f.u64().map(f64::from_bits))
+                    .collect::<Option<Vec<_>>>()?
+            },
             always_visible: {
                 let n = f.u32()?;
                 // Each id takes 4 bytes: a count past what is left is refused before any
@@ -537,7 +574,7 @@ pub(crate) mod tests {
             ("shell_min", |s| s.shell_min = 1.3),
             ("shell_level", |s| s.shell_level = Some(2)),
             ("shell_resolution", |s| s.shell_resolution = Some(24)),
-            ("far_views", |s| s.far_views = true),
+            ("far_shells", |s| s.far_shells = vec![3.0]),
             ("always_visible", |s| s.always_visible = vec![0, 5]),
             ("patch_order", |s| s.patch_order = PatchOrder::Spatial),
             ("encoding", |s| s.encoding = VisibilityEncoding::Table),

@@ -77,6 +77,37 @@ pub fn shell_distances(
     Ok(distances)
 }
 
+/// `--far-shells` unless given: the far band's shells at 2, 4 and 256 sampling distances.
+/// The outermost stands for every eye beyond it: from 256·D the rim is within 0.1° of the
+/// rim seen from infinitely far (`asin(1 / (256 · 2.61))` at the default field of view).
+pub const DEFAULT_FAR_SHELLS: [f64; 3] = [2.0, 4.0, 256.0];
+
+/// Largest `--far-shells` multiple: beyond it the narrow frustum of a far view (its field of
+/// view `2·asin(R / distance)`) starts to lose depth precision in binary32.
+pub const MAX_FAR_SHELL: f64 = 1024.0;
+
+/// The far band's camera distances, innermost first: `D · f` for each multiple `f` of
+/// `factors` (increasing), rounded to binary32 once. The error (one line, naming the flag)
+/// says why they cannot be used: not strictly increasing from `D` in binary32 or not finite.
+pub fn far_distances(params: &SamplingParams, factors: &[f64]) -> Result<Vec<f32>, String> {
+    let d = params.distance();
+    let mut previous = d;
+    factors
+        .iter()
+        .map(|&f| {
+            let distance = (f64::from(d) * f) as f32;
+            if !(distance.is_finite() && distance > previous) {
+                return Err(format!(
+                    "--far-shells {f}: the shell would be at {distance} from the centre, not \
+                     beyond {previous} in binary32; use multiples further apart"
+                ));
+            }
+            previous = distance;
+            Ok(distance)
+        })
+        .collect()
+}
+
 /// The camera distances `[nearest, farthest]` each pass answers for (module documentation):
 /// the sampling sphere's first, then each shell's; all `None` without shells.
 pub fn bands(outer: f32, shells: &[f32]) -> Vec<Option<[f32; 2]>> {
@@ -90,6 +121,18 @@ pub fn bands(outer: f32, shells: &[f32]) -> Vec<Option<[f32; 2]>> {
     let last = all.len() - 1;
     (0..=last)
         .map(|s| Some([all[(s + 1).min(last)], all[s.saturating_sub(1)]]))
+        .collect()
+}
+
+/// The camera distances `[nearest, farthest]` each far shell's pass answers for, innermost
+/// first (module documentation): from the next sphere in (the sampling sphere for the first)
+/// to the next one out (its own distance for the outermost, which answers every eye beyond).
+pub fn far_bands(outer: f32, far: &[f32]) -> Vec<Option<[f32; 2]>> {
+    (0..far.len())
+        .map(|j| {
+            let inner = if j == 0 { outer } else { far[j - 1] };
+            Some([inner, far[(j + 1).min(far.len() - 1)]])
+        })
         .collect()
 }
 

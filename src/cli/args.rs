@@ -101,8 +101,8 @@ pub struct BakeArgs {
     /// 1 pixel of coming out from behind an occluder's edge there, is in the answer for every
     /// direction of the sphere faces around that view, at the sampling distance (and, with
     /// shells, nearer). What it does not: a part that comes out by more than 1 pixel between
-    /// sampled views, and, without --far-views, rim that only cameras farther than the
-    /// sampling distance see.
+    /// sampled views, and, with --far-shells none, rim that only cameras farther than
+    /// the sampling distance see.
     /// Measured residual (300 random views at the sampling distance, at --resolution and
     /// twice it): ≥ 99 % of views pixel-identical on every model of the zoo, culling within
     /// 10 points of the ideal (7.6–9.8 below); BENCHMARKS.md, "Quality on the model zoo".
@@ -128,15 +128,6 @@ pub struct BakeArgs {
     /// nearest depth there (one winner per pixel). Measured no better than point sampling.
     #[arg(long)]
     pub conservative_raster: bool,
-    /// Also render every view of the sampling sphere from far out (256× the sampling
-    /// distance), so that the answers hold for cameras farther than the sampling distance:
-    /// they see rim that a camera at the sampling distance sees past. Without it, a camera
-    /// at 2× the sampling distance may miss rim patches (the bunny: 25.5 % of views
-    /// identical, 52 % with --conservative); with it, 100 % at 1.5, 2 and 4×. Costs culling
-    /// at the sampling distance (the bunny: 34 % instead of 45 %) and twice the sampling
-    /// sphere's sampling time (the bunny's bake without shells: 2.15×).
-    #[arg(long)]
-    pub far_views: bool,
     /// Store each view's row as sampled (and folded). By default a bake also sets, in each
     /// view's row, every patch that all the sphere faces around the view already answer
     /// through their corners: no query's answer changes and the file is smaller (the default
@@ -196,6 +187,14 @@ pub struct BakeArgs {
     /// the model larger, so each patch covers more pixels. [default: --resolution]
     #[arg(long, value_name = "PX")]
     pub shell_resolution: Option<u32>,
+    /// The far band, for cameras farther than the sampling distance D: shells of views at
+    /// these multiples of D (increasing, above 1), each view framing the bounding sphere from
+    /// its eye; a camera between two spheres of views is answered from both, and one beyond
+    /// the outermost from it alone. `none`: no far band (cameras beyond D get the sampling
+    /// sphere's rows, which miss rim they see past).
+    #[arg(long, value_name = "LIST|none", value_parser = parse_far_shells,
+          default_value = "2,4,256")]
+    pub far_shells: FarShells,
     /// Continue an interrupted bake from its checkpoint (OUT.pvis.ckpt, written after every
     /// sphere level); a checkpoint of other inputs or settings is refused.
     #[arg(long)]
@@ -707,4 +706,24 @@ mod tests {
         assert!(parse_size("16777216TiB").unwrap_err().contains("too large"));
         assert_eq!(parse_size("16777215TiB"), Ok(16_777_215 << 40));
     }
+}
+
+/// `--far-shells`' multiples of the sampling distance (empty for `none`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FarShells(pub Vec<f64>);
+
+/// Parses `--far-shells`: `none`, or comma-separated numbers (their range is the library's to
+/// check).
+fn parse_far_shells(s: &str) -> Result<FarShells, String> {
+    if s == "none" {
+        return Ok(FarShells(Vec::new()));
+    }
+    s.split(',')
+        .map(|f| {
+            f.trim()
+                .parse::<f64>()
+                .map_err(|_| format!("expected `none` or multiples of the sampling distance such as 2,4,256; `{f}` is not a number"))
+        })
+        .collect::<Result<_, _>>()
+        .map(FarShells)
 }

@@ -37,7 +37,7 @@ pub(super) fn settings(args: &BakeArgs) -> Result<BakeSettings, UsageError> {
         shell_min: args.shell_min,
         shell_level: args.shell_level,
         shell_resolution: args.shell_resolution,
-        far_views: args.far_views,
+        far_shells: args.far_shells.0.clone(),
         always_visible: match &args.always_visible {
             Some(spec) => parse_patch_ids(spec)?,
             None => Vec::new(),
@@ -199,7 +199,7 @@ impl Summary<'_> {
             "conservative": rows.preset == Preset::Conservative,
             "probe": plan.main.probe,
             "conservative_raster": rows.research.conservative_raster,
-            "far_views": rows.far_views,
+            "far_shells": rows.far_shells,
             "sampled_rows": rows.research.sampled_rows,
             "view_supersample": plan.main.supersample.extra_levels,
             "fold_min_pixels": plan.main.supersample.fold_min_pixels,
@@ -233,7 +233,7 @@ impl Summary<'_> {
                 json!({
                     "distance": shell.distance,
                     "radii": f64::from(shell.distance) / f64::from(b.params.radius),
-                    "level": b.plan.shell.level,
+                    "level": shell.level,
                     "views": shell.visibility.views(),
                     "sampled_views": shell.sampled_views,
                     "seconds": shell.seconds,

@@ -48,16 +48,18 @@ pub struct BakeContents<'a> {
     pub patches: &'a [Patch],
     /// Which patches each view sees: `view_count(level)` rows of `patches.len()` bits.
     pub visibility: &'a VisibilityMatrix,
-    /// The sampling shells (spec § SHEL), outermost first; empty for a file without them.
+    /// The sampling shells (spec § SHEL) by decreasing distance: those of the far band
+    /// (beyond the sampling distance) first, then those nearer the model; empty for a file
+    /// without them.
     pub shells: &'a [ShellRows<'a>],
 }
 
-/// The rows of one sampling shell: near views on a sphere of radius `distance` around the
+/// The rows of one sampling shell: views on a sphere of radius `distance` around the
 /// sampling centre, each recording every patch visible from its eye in any direction.
 #[derive(Clone, Copy, Debug)]
 pub struct ShellRows<'a> {
-    /// Camera distance from the centre: below the sampling distance and the next shell out's,
-    /// at least the bounding radius.
+    /// Camera distance from the centre: below the previous shell's, not the sampling
+    /// distance, and at least the bounding radius.
     pub distance: f32,
     /// Which patches each view of the shell sees: `view_count(level)` rows of
     /// `patches.len()` bits, `level` being the matrix's own.
@@ -119,9 +121,9 @@ pub fn encode_with(contents: &BakeContents, encoding: VisibilityEncoding) -> Vec
 /// encoding 2 with it, 4 with the compact table. Patches whose coordinates are too large for
 /// the compact table's grid (near `f32::MAX`) get the full table instead.
 ///
-/// Contents with shells give version 5, whose SHEL section stores each shell's rows with
-/// `encoding` (a VISB body per shell, with its own table or tree), and which has the compact
-/// table whatever `layout` asks. Where the compact table cannot hold the patches, the shells
+/// Contents with shells give version 5 (6 with a shell beyond the sampling distance: the far
+/// band), whose SHEL section stores each shell's rows with `encoding` (a VISB body per shell,
+/// with its own table or tree), and which has the compact table whatever `layout` asks. Where the compact table cannot hold the patches, the shells
 /// are left out: the file then answers every eye inside the sampling sphere with
 /// `inside_sphere` (draw everything), which is never wrong.
 ///
@@ -195,7 +197,9 @@ pub fn encode_as(
     out.extend_from_slice(&MAGIC);
     // The oldest version that has the encoding and the table, so older readers take what
     // they can read.
+    let far_band = shells.iter().any(|s| s.distance > params.distance());
     let version = match (layout, encoding) {
+        _ if far_band => FAR_BAND_VERSION,
         _ if bodies.len() == SECTIONS.len() => SHELLS_VERSION,
         (PatchTableLayout::Compact, _) => COMPACT_PTCH_VERSION,
         (PatchTableLayout::Full, VisibilityEncoding::Tree) => 3,

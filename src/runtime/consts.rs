@@ -8,8 +8,8 @@
 pub const MAGIC: [u8; 8] = *b"PVIS\r\n\x1a\n";
 
 /// The newest format version this reader understands (§ Versioning). The writer writes it
-/// for a file with sampling shells and the oldest version that holds its contents otherwise.
-pub const VERSION: u32 = 5;
+/// for a file with a far band and the oldest version that holds its contents otherwise.
+pub const VERSION: u32 = 6;
 
 /// The oldest version this reader still reads (§ Versioning): version 1 is version 2 restricted
 /// to VISB encoding 0.
@@ -45,6 +45,10 @@ pub const TAG_SHEL: [u8; 4] = *b"SHEL";
 /// The first version whose SHEL section a reader must read (§ SHEL, § Versioning); in older
 /// files a SHEL-tagged section is an unknown section, ignored.
 pub const SHELLS_VERSION: u32 = 5;
+
+/// The first version whose SHEL records may lie beyond the sampling distance (§ SHEL, the far
+/// band); before it every record is nearer the model than the sampling sphere.
+pub const FAR_BAND_VERSION: u32 = 6;
 
 /// Most shells a SHEL section may hold (§ Resource limits): a query ORs the rows of at most two
 /// of them, and the streaming state keeps a path per shell it moves among.

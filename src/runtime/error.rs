@@ -274,7 +274,7 @@ pub enum Rule {
     /// `SHEL reserved field must be 0`
     ShelReserved,
     /// `SHEL distance must be finite, below the previous shell's (CAMR distance for the
-    /// first) and >= CAMR radius`
+    /// first before version 6), not CAMR distance and >= CAMR radius`
     ShellDistance,
     /// `SHEL shell level`
     ShellLevel,
@@ -339,7 +339,7 @@ pub const RULE_TEXTS: [&str; 50] = [
     "SHEL shell_count must be in 1..=8",
     "SHEL reserved field must be 0",
     "SHEL distance must be finite, below the previous shell's \
-     (CAMR distance for the first) and >= CAMR radius",
+     (CAMR distance for the first before version 6), not CAMR distance and >= CAMR radius",
     "SHEL shell level",
 ];
 

@@ -224,13 +224,21 @@ impl<'a> Pvis<'a> {
         self.shells.count()
     }
 
+    /// `J`: the shell number of the sampling sphere. The file's shells `0..=shell_count()` are
+    /// numbered by decreasing distance; the `J` shells before the sampling sphere lie beyond
+    /// the sampling distance (the far band, version 6), those after it nearer the model. 0 for
+    /// a file without a far band and in a far-only reader.
+    pub fn sampling_shell(&self) -> u32 {
+        self.shells.sampling()
+    }
+
     /// Length of the SHEL section in bytes (0 without one).
     pub fn shells_bytes(&self) -> u64 {
         self.shells.section_bytes()
     }
 
-    /// Shell `s`: 0 is the sampling sphere, `1..=shell_count()` the SHEL records, outermost
-    /// first.
+    /// Shell `s` (`0..=shell_count()`, outermost first): [`Pvis::sampling_shell`] is the
+    /// sampling sphere, the others the SHEL records.
     ///
     /// # Panics
     /// If `s > self.shell_count()`.
@@ -241,9 +249,11 @@ impl<'a> Pvis<'a> {
             self.shells.count()
         );
         let level = self.shell_level(s);
-        let (distance, bytes) = match s {
-            0 => (self.sampling.distance, self.visibility_bytes),
-            _ => (self.shells.distance(s), self.shells.payload_length(s)),
+        let (distance, bytes) = if s == self.shells.sampling() {
+            (self.sampling.distance, self.visibility_bytes)
+        } else {
+            let k = self.shells.record(s);
+            (self.shells.distance(k), self.shells.payload_length(k))
         };
         Shell {
             distance,
@@ -256,20 +266,22 @@ impl<'a> Pvis<'a> {
 
     /// Sphere level of shell `s` (which must be `≤ shell_count()`).
     fn shell_level(&self, s: u32) -> u32 {
-        // A far-only reader has shell 0 only.
-        if s == 0 || !cfg!(feature = "shells") {
+        // A far-only reader has shell 0 only, the sampling sphere.
+        if s == self.shells.sampling() || !cfg!(feature = "shells") {
             return self.sampling.level;
         }
-        self.shells.level(s).min(consts::MAX_LEVEL)
+        self.shells
+            .level(self.shells.record(s))
+            .min(consts::MAX_LEVEL)
     }
 
     /// The rows of shell `s` (which must be `≤ shell_count()`): VISB's, or a shell's payload
     /// opened again as parse read it ([`Visb::at`]), without walking its records.
     fn visb_of(&self, s: u32) -> Visb<'a> {
-        if s == 0 || !cfg!(feature = "shells") {
+        if s == self.shells.sampling() || !cfg!(feature = "shells") {
             return self.visb;
         }
-        let payload = self.shells.payload(s);
+        let payload = self.shells.payload(self.shells.record(s));
         let body = self
             .bytes
             .get(fields::at(payload.offset)..fields::at(payload.offset + payload.length))
@@ -303,10 +315,11 @@ impl<'a> Pvis<'a> {
     /// # Panics
     /// If `view >= self.sampling().views` or `out.len() < self.row_words()`.
     pub fn view_row(&self, view: u32, out: &mut [u64]) {
-        self.shell_view_row(0, view, out);
+        self.shell_view_row(self.sampling_shell(), view, out);
     }
 
-    /// [`Pvis::view_row`] for a view of shell `s` (0 is the sampling sphere).
+    /// [`Pvis::view_row`] for a view of shell `s` ([`Pvis::sampling_shell`] is the sampling
+    /// sphere).
     ///
     /// # Panics
     /// If `s > self.shell_count()`, `view >= self.shell(s).views` or

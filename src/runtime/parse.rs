@@ -240,9 +240,9 @@ fn parse_camr(data: &[u8], section: Section) -> Result<Sampling, Error> {
     })
 }
 
-/// § SHEL: the shell count, every shell record (distances strictly decreasing from CAMR's down
-/// to no less than the radius, levels, lengths that tile the rest of the section) and each
-/// payload as a VISB body of its level's views.
+/// § SHEL: the shell count, every shell record (distances strictly decreasing down to no less
+/// than the radius, none at CAMR's distance, and below it before version 6; levels; lengths
+/// that tile the rest of the section) and each payload as a VISB body of its level's views.
 fn parse_shel<'a>(
     data: &'a [u8],
     section: Section,
@@ -280,18 +280,31 @@ fn parse_shel<'a>(
         .get(at(section.offset)..at(section.offset + section.length))
         .unwrap_or(&[]);
     let mut shells = Shells::new(body, section.offset, count);
-    let mut outer = sampling.distance;
+    // Version 6 lets the first records lie beyond the sampling distance (the far band).
+    let mut outer = if version >= FAR_BAND_VERSION {
+        f32::MAX
+    } else {
+        sampling.distance
+    };
     let mut payloads = 0u64;
     for k in 1..count + 1 {
         let record = section.offset + SHEL_HEADER_LEN + SHELL_RECORD_LEN * u64::from(k - 1);
         let distance = shells.distance(k);
-        // Both bounds are finite, so a distance between them is.
-        if !(distance >= sampling.radius && distance < outer) {
+        // Strictly decreasing, finite, never the sampling sphere's own distance, and inside
+        // it no nearer than the radius. The bounds are finite, so a distance between is.
+        if !(distance >= sampling.radius
+            && distance <= outer
+            && (k == 1 || distance < outer)
+            && distance != sampling.distance)
+        {
             return Err(Error::InvalidFloat {
                 what: Rule::ShellDistance,
                 offset: record,
                 bits: distance.to_bits(),
             });
+        }
+        if distance > sampling.distance {
+            shells.sampling_at = k;
         }
         outer = distance;
         let level = shells.level(k);

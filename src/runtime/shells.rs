@@ -1,10 +1,13 @@
-//! The sampling shells of a version-5 file (spec § SHEL) and the band rule of § Query: which
-//! shells' rows answer an eye nearer than the sampling sphere.
+//! The sampling shells of a version-5 or -6 file (spec § SHEL) and the band rule of § Query:
+//! which shells' rows answer an eye nearer or farther than the sampling sphere.
 //!
-//! Shell 0 is the sampling sphere itself (CAMR, VISB); shells `1..=K` are SHEL's records,
-//! nearer and nearer the model. An eye's *band* is the number of shells it is strictly inside
-//! (`|d|² < D_s²`, exact as in § Query step 3); band `b` answers with the OR of the leaf rows
-//! of shells `b − 1` and `b` (one shell at either end). A shell's payload is a VISB body; a
+//! The file's shells, numbered `0..=K` by decreasing distance, are SHEL's `K` records with the
+//! sampling sphere itself (CAMR, VISB) among them: the `J` records beyond the sampling
+//! distance (version 6, the far band) are shells `0..J`, the sampling sphere is shell `J`,
+//! and the records nearer the model are shells `J + 1..=K` (without outer records `J = 0`, as
+//! in version 5). An eye's *band* is the number of shells it is strictly inside (`|d|² <
+//! D_s²`, exact as in § Query step 3); band `b` answers with the OR of the leaf rows of
+//! shells `b − 1` and `b` (one shell at either end). A shell's payload is a VISB body; a
 //! `Pvis` keeps only where SHEL is, so it stays a few words however many shells it has, and a
 //! shell's rows are opened again when they are needed (`Pvis::visb_of`) by `Visb::at`, the one
 //! reading of a checked VISB body, which parse uses too, for VISB and for each payload it checks
@@ -28,7 +31,10 @@ pub(crate) struct Shells<'a> {
     body: &'a [u8],
     offset: u64,
     count: u32,
-    /// The finest level of the shells `1..=K` (0 without shells).
+    /// `J`: the records beyond the sampling distance, which come first (shell `J` is the
+    /// sampling sphere).
+    pub(crate) sampling_at: u32,
+    /// The finest level of the SHEL records (0 without shells).
     pub(crate) max_level: u32,
     /// Whether a shell's payload uses VISB encoding 2 (a tree, whose lookups the streaming
     /// state memoises).
@@ -41,6 +47,7 @@ impl<'a> Shells<'a> {
         body: &[],
         offset: 0,
         count: 0,
+        sampling_at: 0,
         max_level: 0,
         tree: false,
     };
@@ -52,8 +59,34 @@ impl<'a> Shells<'a> {
             body,
             offset,
             count,
+            sampling_at: 0,
             max_level: 0,
             tree: false,
+        }
+    }
+
+    /// `J`: the shell number of the sampling sphere (the records beyond it, version 6's far
+    /// band). 0 in a far-only reader.
+    pub(crate) fn sampling(&self) -> u32 {
+        if cfg!(feature = "shells") {
+            self.sampling_at
+        } else {
+            0
+        }
+    }
+
+    /// The record (`1..=K`) of shell `s` (`0..=K`, not the sampling sphere's `J`).
+    pub(crate) fn record(&self, s: u32) -> u32 {
+        if s < self.sampling() { s + 1 } else { s }
+    }
+
+    /// Camera distance of shell `s` (`0..=K`): its record's, or `outer` (CAMR's) for the
+    /// sampling sphere.
+    pub(crate) fn shell_distance(&self, s: u32, outer: f32) -> f32 {
+        if s == self.sampling() {
+            outer
+        } else {
+            self.distance(self.record(s))
         }
     }
 
@@ -81,23 +114,23 @@ impl<'a> Shells<'a> {
             .map_or(0, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
     }
 
-    /// Camera distance of shell `k` (`1..=K`).
+    /// Camera distance of record `k` (`1..=K`).
     pub(crate) fn distance(&self, k: u32) -> f32 {
         f32::from_bits(self.field(k, 0))
     }
 
-    /// Sphere level of shell `k` (`1..=K`).
+    /// Sphere level of record `k` (`1..=K`).
     pub(crate) fn level(&self, k: u32) -> u32 {
         self.field(k, 4)
     }
 
-    /// The stored payload length of shell `k` (`1..=K`).
+    /// The stored payload length of record `k` (`1..=K`).
     pub(crate) fn payload_length(&self, k: u32) -> u64 {
         u64::from(self.field(k, 8)) | u64::from(self.field(k, 12)) << 32
     }
 
-    /// Where shell `k`'s payload lies in the file: a VISB body, as parse checked it. Payloads
-    /// follow the records in shell order, contiguous.
+    /// Where record `k`'s payload lies in the file: a VISB body, as parse checked it. Payloads
+    /// follow the records in record order, contiguous.
     pub(crate) fn payload(&self, k: u32) -> Section {
         let mut offset = self.offset + SHEL_HEADER_LEN + SHELL_RECORD_LEN * u64::from(self.count);
         let mut length = 0;
@@ -109,15 +142,12 @@ impl<'a> Shells<'a> {
     }
 }
 
-/// The band of an eye at offset `d` from the centre (§ Query): how many of the distances
-/// `outer` (shell 0's, CAMR's) and shells `1..=K` it is strictly inside. Distances decrease,
-/// so the count stops at the first shell the eye is not inside.
+/// The band of an eye at offset `d` from the centre (§ Query): how many of the shells
+/// `0..=K` it is strictly inside, `outer` being CAMR's distance (the sampling sphere's).
+/// Distances decrease, so the count stops at the first shell the eye is not inside.
 pub(crate) fn band(d: [f32; 3], outer: f32, shells: &Shells<'_>) -> u32 {
-    if !norm_below(d, outer) {
-        return 0;
-    }
-    let mut b = 1;
-    while b <= shells.count() && norm_below(d, shells.distance(b)) {
+    let mut b = 0;
+    while b <= shells.count() && norm_below(d, shells.shell_distance(b, outer)) {
         b += 1;
     }
     b

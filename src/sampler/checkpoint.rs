@@ -27,10 +27,11 @@ const MAGIC: &[u8; 8] = b"PVISCKPT";
 /// smaller patch id instead of the smaller input triangle, 4 since the file ends in a
 /// CRC-32C, 5 since it hashes the probe pass, 6 since it hashes a near pass's shell and the
 /// band its probe spans, 7 since a pass may hold its seen rows too (`sample_tiled_split`)
-/// and render far views (`SamplingOptions::far_view`), 8 since a finer view's probe may leave
+/// and (until 10) render far views, 8 since a finer view's probe may leave
 /// out what its parents hold (`SamplingOptions::folds_into`), 9 since a pass's finer views
-/// may be face centroids (`SamplingOptions::finer`).
-const VERSION: u32 = 9;
+/// may be face centroids (`SamplingOptions::finer`), 10 since the far views went (the far band
+/// is shells beyond the sampling sphere).
+const VERSION: u32 = 10;
 const HEADER_BYTES: usize = 8 + 4 + 4 + 8 + 4 + 4;
 const CRC_BYTES: usize = 4;
 /// What a refused checkpoint's message tells the user to do.
@@ -78,7 +79,6 @@ pub(crate) fn input_hash(
         probe,
         shell,
         band,
-        far_view,
         folds_into,
         finer,
     } = *options;
@@ -95,7 +95,6 @@ pub(crate) fn input_hash(
         u64::from(near.to_bits()) | u64::from(far.to_bits()) << 32
     }));
     h.word(u64::from(band.is_some()));
-    h.word(u64::from(far_view));
     h.word(folds_into.map_or(0, |l| u64::from(l) + 1));
     h.word(match finer {
         crate::sampler::FinerViews::Midpoints => 0,

@@ -50,8 +50,7 @@ pub use supersample::{
     fold_targets, fold_views, split_fold, split_fold_views, supersample_rows,
 };
 pub use tiled::{
-    FAR_VIEW_FACTOR, SamplingError, SamplingOptions, rendered_view_count, sample_tiled,
-    sample_tiled_split,
+    SamplingError, SamplingOptions, rendered_view_count, sample_tiled, sample_tiled_split,
 };
 
 mod bounding;

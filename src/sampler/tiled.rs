@@ -106,11 +106,12 @@ pub struct SamplingOptions {
     /// this many pixels, skipping the triangles no camera near the view can see the visible
     /// side of (`solid.rs`); a patch with a fragment in front is added. `None`: no probe.
     pub probe: Option<u32>,
-    /// A near pass: the views' eyes lie on a sphere of this radius around `params.center`
-    /// (below the sampling distance, at least the bounding radius) instead of at the sampling
-    /// distance, and each view records every patch visible from its eye in any direction,
-    /// rendering as many frustums as cover the bounding sphere from there (spec § SHEL; the
-    /// cameras: [`super::near_cameras`]). `None`: the sampling sphere's views.
+    /// A shell's pass: the views' eyes lie on a sphere of this radius around `params.center`
+    /// (at least the bounding radius: nearer than the sampling distance for the shells, beyond
+    /// it for the far band) instead of at the sampling distance, and each view records every
+    /// patch visible from its eye in any direction, rendering as many frustums as cover the
+    /// bounding sphere from there (spec § SHEL; the cameras: [`super::near_cameras`], one
+    /// framing the bounding sphere beyond `√2` radii). `None`: the sampling sphere's views.
     ///
     /// Panics in [`sample_tiled`] (caller contract) below `params.radius` or when not finite.
     pub shell: Option<f32>,
@@ -118,13 +119,6 @@ pub struct SamplingOptions {
     /// rows of this pass answer, with the views of the neighbouring shells (spec § Query):
     /// the probe's cells span them. `None`: the pass's own camera distance.
     pub band: Option<[f32; 2]>,
-    /// Also render each view of the sampling sphere from far out, [`FAR_VIEW_FACTOR`] times
-    /// the sampling distance along the same direction, framing the bounding sphere, and OR
-    /// the two rows: the rows then also hold the rim that cameras farther than the sampling
-    /// distance see and a camera at it sees past (`bake --far-views`). The probe, if any,
-    /// probes the far camera too, in a cell of the same angular size. Not for near passes
-    /// ([`SamplingOptions::shell`]), which ignore it.
-    pub far_view: bool,
     /// The stored level this pass's rows are folded into, when the fold keeps from a finer
     /// view only the patches its fold targets do not hold yet ([`super::FoldCorners::Split`]
     /// and [`super::FoldCorners::Cover`], one level finer). The probe of each view one level
@@ -137,23 +131,6 @@ pub struct SamplingOptions {
     /// are the centroids of that level's leaf faces, each seeded by its face's corners
     /// (`finer.rs`). Not for near passes ([`SamplingOptions::shell`]): caller contract.
     pub finer: FinerViews,
-}
-
-/// How far out [`SamplingOptions::far_view`] renders, in sampling distances: far enough that
-/// the rim it sees is within 0.1° of the rim seen from infinitely far (`asin(1 / (256 · 2.61))`
-/// at the default field of view), near enough that depths keep their binary32 precision
-/// (about 10⁻⁴ of the bounding radius there).
-pub const FAR_VIEW_FACTOR: f64 = 256.0;
-
-/// The far camera of [`SamplingOptions::far_view`] along unit direction `d` (binary64) of a
-/// view of the sampling sphere `params`: [`FAR_VIEW_FACTOR`] sampling distances out, looking
-/// at the centre, its field of view just holding the bounding sphere. Both backends render it.
-pub(crate) fn far_view_camera(params: &SamplingParams, d: [f64; 3]) -> Camera {
-    let distance = f64::from(params.distance()) * FAR_VIEW_FACTOR;
-    let fov = 2.0 * (f64::from(params.radius) / distance).asin().to_degrees();
-    let center = widen(params.center);
-    let eye = std::array::from_fn(|k| center[k] + d[k] * distance);
-    Camera::look_at_f64(eye, center, fov, params.resolution)
 }
 
 /// Why tiled sampling failed: only its checkpoint file can.
@@ -681,15 +658,6 @@ impl ViewContext<'_> {
             let camera = Camera::sampling(self.params, direction);
             let cell = self.probe.as_ref().map(|p| p.cell(d, camera.eye()));
             self.render_camera(&camera, cell.as_ref(), hint, known, scratch, row, seen);
-            if self.options.far_view {
-                let (far, cell) = self.far_camera(d);
-                let mut part = std::mem::take(&mut scratch.camera_row);
-                self.render_camera(&far, cell.as_ref(), hint, known, scratch, &mut part, seen);
-                for (r, p) in row.iter_mut().zip(&part) {
-                    *r |= p;
-                }
-                scratch.camera_row = part;
-            }
             return;
         };
         let cameras = near_cameras(self.params, index, distance);
@@ -703,17 +671,6 @@ impl ViewContext<'_> {
             }
         }
         scratch.camera_row = part;
-    }
-
-    /// The far camera of [`SamplingOptions::far_view`] along unit direction `d`, and its probe
-    /// cell (the view's, scaled with the distance).
-    fn far_camera(&self, d: [f64; 3]) -> (Camera, Option<Cell>) {
-        let camera = far_view_camera(self.params, d);
-        let cell = self
-            .probe
-            .as_ref()
-            .map(|p| Cell::ball(camera.eye(), p.cell_radius() * FAR_VIEW_FACTOR));
-        (camera, cell)
     }
 
     /// Renders `camera`'s image into `row` (and the probe pass for the cameras of `cell`, when

@@ -328,25 +328,42 @@ fn the_default_probe_turns_itself_off_where_it_cannot_run() {
 #[test]
 fn the_spheres_lie_at_the_shells_and_answer_their_bands() {
     let params = shells::tests::params(2.0);
-    let c = plan(|s| s.far_views = true).unwrap();
+    let c = plan(|_| {}).unwrap();
     let spheres = c.spheres(&params, None).unwrap();
     let distances = c.shell_distances(&params).unwrap();
-    assert_eq!(spheres.len(), 1 + distances.len());
+    let far = c.far_distances(&params).unwrap();
+    let d = params.distance();
+    assert_eq!(far, [2.0, 4.0, 256.0].map(|f| (f64::from(d) * f) as f32));
+    assert_eq!(spheres.len(), 1 + distances.len() + far.len());
     assert_eq!(spheres[0].kind, SphereKind::Sampling);
     assert_eq!(spheres[0].shell, None);
-    assert!(spheres[0].far_views && !spheres[1].far_views);
     for (s, sphere) in spheres.iter().enumerate().skip(1) {
-        assert_eq!(sphere.kind, SphereKind::Shell(s as u32));
-        assert_eq!(sphere.shell, Some(distances[s - 1]));
+        let (kind, distance) = match s.checked_sub(distances.len() + 1) {
+            None => (SphereKind::Shell(s as u32), distances[s - 1]),
+            Some(j) => (SphereKind::Far(j as u32 + 1), far[j]),
+        };
+        assert_eq!(sphere.kind, kind);
+        assert_eq!(sphere.shell, Some(distance));
         assert_eq!(sphere.params.level, c.shell.level);
         // The default's probe cells lie at each view's own distance.
         assert_eq!(sphere.probe_band, None);
     }
-    // Another probe spans the band to the next sphere in and out.
+    // The file's records: the far band outermost first, then the shells inside.
+    let file = c.file_shell_distances(&params).unwrap();
+    assert!(file.windows(2).all(|w| w[0] > w[1]), "{file:?}");
+    assert_eq!(file.len(), far.len() + distances.len());
+    // Another probe spans the band to the next sphere in and out; the sampling sphere's stops
+    // at its own distance, and the far band's innermost starts there.
     let asked = plan(|s| s.research.probe = Probe::Pixels(1)).unwrap();
     let spheres = asked.spheres(&params, None).unwrap();
-    let bands = shells::bands(params.distance(), &distances);
+    let bands = shells::bands(d, &distances)
+        .into_iter()
+        .chain(shells::far_bands(d, &far));
     for (sphere, band) in spheres.iter().zip(bands) {
         assert_eq!(sphere.probe_band, band);
     }
+    assert_eq!(spheres[0].probe_band, Some([distances[0], d]));
+    let last = spheres.last().unwrap().probe_band;
+    assert_eq!(last, Some([far[1], far[2]]));
+    assert_eq!(spheres[3].probe_band, Some([d, far[1]]));
 }

@@ -16,8 +16,7 @@
 //! The cameras are [`Camera::sampling`]'s (same eye, basis, field of view, near plane and
 //! resolution; `view_matrix` turns one into a clip matrix), or in a near pass
 //! ([`SamplingOptions::shell`]) each of a near view's cameras ([`super::near_cameras`]) in a
-//! layer of its own, whose rows are ORed into the view's row on the CPU; with
-//! [`SamplingOptions::far_view`] each view's far camera the same way. The result is not
+//! layer of its own, whose rows are ORed into the view's row on the CPU. The result is not
 //! bit-identical to the CPU backend's: the GPU transforms in `f32` and snaps vertices with its
 //! own subpixel precision and tie rules, so pixels on triangle edges can change hands, and a
 //! patch seen only through such pixels can differ (tests/gpu.rs bounds the difference; BENCHMARKS.md
@@ -30,9 +29,7 @@
 //! submission and `views × ⌈patches / 64⌉ × 8` bytes read back. GPU memory besides the mesh:
 //! `resolution² × 8` bytes per batched view, capped at [`BATCH_TARGET_BYTES`].
 
-use super::camera::{normalize, widen};
 use super::marks::Marks;
-use super::tiled::far_view_camera;
 use super::{Camera, SamplingOptions, SamplingParams, VisibilityMatrix, near_cameras};
 pub use crate::gpu::GpuError;
 use crate::gpu::mesh::{self as upload};
@@ -158,15 +155,9 @@ impl GpuSampler {
             });
         }
         let views = view_count(params.level);
-        // Every view's cameras, view after view: one each (two with far views: the sampling
-        // camera, then the far one), or a near view's one or five.
+        // Every view's cameras, view after view: one each, or a near view's one or five (a far
+        // shell's one).
         let cameras: Vec<Camera> = match options.shell {
-            None if options.far_view => (0..views)
-                .flat_map(|v| {
-                    let d = normalize(widen(crate::sphere::direction(v)));
-                    [Camera::sampling_view(params, v), far_view_camera(params, d)]
-                })
-                .collect(),
             None => (0..views)
                 .map(|v| Camera::sampling_view(params, v))
                 .collect(),

@@ -108,11 +108,6 @@ impl Probe {
         }
     }
 
-    /// The radius of a view's cell without a band, in world units.
-    pub(super) fn cell_radius(&self) -> f64 {
-        self.cell
-    }
-
     /// The cell of the view with unit direction `d` (binary64) and eye `eye`.
     pub(super) fn cell(&self, d: [f64; 3], eye: [f64; 3]) -> Cell {
         match self.band {
