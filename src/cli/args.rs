@@ -515,6 +515,13 @@ pub struct EvalArgs {
         conflicts_with = "sweep"
     )]
     pub look_jitter: f32,
+    /// Beyond the sampling distance, each camera's field of view just frames the bounding
+    /// sphere from its eye (a telephoto camera: the model as large as at the sampling
+    /// distance), instead of the file's field of view, under which a far model shrinks to a
+    /// few pixels. The ideal is then every patch visible from the eye at the render's pixel
+    /// scale, not only those larger than a far camera's pixels.
+    #[arg(long, conflicts_with = "sweep")]
+    pub fit: bool,
     /// Render resolution [default: the file's sampling resolution; 512 with --sweep].
     #[arg(long, value_name = "PX")]
     pub resolution: Option<u32>,

@@ -17,7 +17,6 @@ use patchvis::bake::{
 use patchvis::format::VisibilityEncoding;
 use patchvis::ooc::Mesh;
 use patchvis::sampler::{FinerViews, FoldCorners, PassViews};
-use patchvis::sphere::view_count;
 use patchvis::tiling::PatchId;
 use serde_json::json;
 use std::time::Instant;
@@ -313,20 +312,32 @@ impl Summary<'_> {
                 )?;
             }
         }
-        if !b.shells.is_empty() {
-            let radii: Vec<String> = b
-                .shells
+        // The far band's shells come first in the file, then those inside the sampling sphere.
+        let distance = b.params.distance();
+        let (far, near): (Vec<_>, Vec<_>) = b.shells.iter().partition(|s| s.distance > distance);
+        for (is_far, shells) in [(false, near), (true, far)] {
+            let Some(first) = shells.first() else {
+                continue;
+            };
+            let (what, unit, scale) = match is_far {
+                false => ("near views", "bounding radii", b.params.radius),
+                true => ("far views", "sampling distances", distance),
+            };
+            let mut at: Vec<String> = shells
                 .iter()
-                .map(|shell| format!("{:.2}", shell.distance / b.params.radius))
+                .map(|shell| format!("{:.2}", shell.distance / scale))
                 .collect();
+            if is_far {
+                at.reverse();
+            }
             outln!(
-                "          near views: {} shells of {} views (level {}) at {} bounding radii, {} views sampled in {:.2} s",
-                b.shells.len(),
-                view_count(plan.shell.level),
-                plan.shell.level,
-                radii.join(", "),
-                b.shells.iter().map(|s| s.sampled_views).sum::<u32>(),
-                b.shells.iter().map(|s| s.seconds).sum::<f64>()
+                "          {what}: {} shells of {} views (level {}) at {} {unit}, {} views sampled in {:.2} s",
+                shells.len(),
+                first.visibility.views(),
+                first.level,
+                at.join(", "),
+                shells.iter().map(|s| s.sampled_views).sum::<u32>(),
+                shells.iter().map(|s| s.seconds).sum::<f64>()
             )?;
         }
         let shells = match b.shells.len() {

@@ -169,6 +169,7 @@ pub fn run(args: EvalArgs) -> Result<()> {
         resolution: args.resolution.unwrap_or(sampling.resolution),
         look_jitter_deg: args.look_jitter,
         seed: args.seed,
+        fit: args.fit,
     };
     let mut bands = Vec::with_capacity(scales.len());
     for &scale in &scales {

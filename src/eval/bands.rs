@@ -82,6 +82,22 @@ impl ViewSet {
     }
 }
 
+/// `camera` with the field of view that frames the bounding sphere (`center`, `radius`) from
+/// its eye, looking at the centre, where that is narrower than `fov_deg` (beyond the sampling
+/// distance); else `camera` itself.
+fn framed(camera: Camera, center: [f32; 3], radius: f32, fov_deg: f32) -> Camera {
+    let eye = camera.eye();
+    let distance = (0..3)
+        .map(|k| (eye[k] - f64::from(center[k])).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    let fov = 2.0 * (f64::from(radius) / distance).min(1.0).asin().to_degrees();
+    if fov >= f64::from(fov_deg) {
+        return camera;
+    }
+    Camera::look_at_f64(eye, center.map(f64::from), fov, camera.resolution())
+}
+
 /// The cameras of an evaluation, before they are placed at a distance.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BandViews {
@@ -93,6 +109,9 @@ pub struct BandViews {
     pub look_jitter_deg: f32,
     /// Seed of the turns: the same in every band, so the same camera turns alike.
     pub seed: u64,
+    /// Beyond the sampling distance, each camera's field of view frames the bounding sphere
+    /// from its eye (`eval --fit`) instead of keeping the file's.
+    pub fit: bool,
 }
 
 /// One distance of an evaluation: its cameras and what they showed.
@@ -122,11 +141,15 @@ impl Band {
         stages: &mut Stages,
     ) -> Band {
         let params = sampling_params(pvis, views.resolution, scale);
-        let cameras = views::jitter_looks(
-            &views.views.cameras(&params),
-            f64::from(views.look_jitter_deg),
-            views.seed,
-        );
+        let mut cameras = views.views.cameras(&params);
+        if views.fit {
+            let sampling = pvis.sampling();
+            cameras = cameras
+                .into_iter()
+                .map(|c| framed(c, sampling.center, sampling.radius, sampling.fov_deg))
+                .collect();
+        }
+        let cameras = views::jitter_looks(&cameras, f64::from(views.look_jitter_deg), views.seed);
         let metrics = stages.run("eval", || evaluator.evaluate(pvis, &cameras, progress));
         let summary = EvalSummary::of(&metrics);
         Band {

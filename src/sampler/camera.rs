@@ -93,7 +93,7 @@ impl Camera {
     }
 
     /// [`Camera::look_at`] in binary64.
-    pub(super) fn look_at_f64(
+    pub(crate) fn look_at_f64(
         eye: [f64; 3],
         target: [f64; 3],
         fov_deg: f64,
