@@ -703,6 +703,26 @@ pub(crate) mod tests {
                 "--shell-min",
             ),
             (
+                &|s: &mut BakeSettings| s.rows.far_shells = vec![1.0],
+                "--far-shells 1",
+            ),
+            (
+                &|s: &mut BakeSettings| s.rows.far_shells = vec![4.0, 2.0],
+                "--far-shells 4,2",
+            ),
+            (
+                &|s: &mut BakeSettings| s.rows.far_shells = vec![2.0, f64::NAN],
+                "--far-shells 2,NaN",
+            ),
+            (
+                &|s: &mut BakeSettings| s.rows.far_shells = vec![MAX_FAR_SHELL * 2.0],
+                "--far-shells",
+            ),
+            (
+                &|s: &mut BakeSettings| s.rows.shells = MAX_SHELLS,
+                "--shells 8 with 2 --far-shells",
+            ),
+            (
                 &|s: &mut BakeSettings| s.rows.shell_min = f64::NAN,
                 "--shell-min",
             ),

@@ -193,7 +193,7 @@ pub struct BakeArgs {
     /// the outermost from it alone. `none`: no far band (cameras beyond D get the sampling
     /// sphere's rows, which miss rim they see past).
     #[arg(long, value_name = "LIST|none", value_parser = parse_far_shells,
-          default_value = "2,4,256")]
+          default_value = "2,256")]
     pub far_shells: FarShells,
     /// Continue an interrupted bake from its checkpoint (OUT.pvis.ckpt, written after every
     /// sphere level); a checkpoint of other inputs or settings is refused.
@@ -729,7 +729,7 @@ fn parse_far_shells(s: &str) -> Result<FarShells, String> {
         .map(|f| {
             f.trim()
                 .parse::<f64>()
-                .map_err(|_| format!("expected `none` or multiples of the sampling distance such as 2,4,256; `{f}` is not a number"))
+                .map_err(|_| format!("expected `none` or multiples of the sampling distance such as 2,256; `{f}` is not a number"))
         })
         .collect::<Result<_, _>>()
         .map(FarShells)

@@ -230,14 +230,21 @@ fn every_shell_has_checkpoints_of_its_own_and_the_stored_levels_fold() {
     assert_eq!(c.shell.supersample.fold_corners, PROBE_FOLD_CORNERS);
     assert_eq!(c.shell.probe, Some(DEFAULT_PROBE_PIXELS));
     assert_eq!(c.shell.level, 4);
+    // The far band's shells are sampled as the near ones.
+    assert_eq!(c.far, c.shell);
     let all = checkpoints(&c);
-    assert_eq!(all.len(), 1 + shells::DEFAULT_SHELLS as usize);
+    let near = shells::DEFAULT_SHELLS as usize;
+    assert_eq!(all.len(), 1 + near + shells::DEFAULT_FAR_SHELLS.len());
     for (s, pass) in all.iter().enumerate().skip(1) {
+        let name = match s <= near {
+            true => format!("out.pvis.shell{s}.vs1.ckpt"),
+            false => format!("out.pvis.far{}.vs1.ckpt", s - near),
+        };
         assert_eq!(
             *pass,
             PassCheckpoints {
                 coarse: None,
-                fine: Some(format!("out.pvis.shell{s}.vs1.ckpt").into()),
+                fine: Some(name.into()),
             }
         );
     }
@@ -246,7 +253,8 @@ fn every_shell_has_checkpoints_of_its_own_and_the_stored_levels_fold() {
         s.research.fold_min_pixels = Some(4);
         s.preset = Preset::Conservative;
         s.level = Some(4);
-        s.shells = 1
+        s.shells = 1;
+        s.far_shells = Vec::new()
     })
     .unwrap();
     assert_eq!(
@@ -262,12 +270,17 @@ fn every_shell_has_checkpoints_of_its_own_and_the_stored_levels_fold() {
     assert_eq!(c.shell.level, MAX_LEVEL);
     assert_eq!(c.shell.supersample.extra_levels, 0);
     assert_eq!(checkpoints(&c)[1].fine, Some("out.pvis.shell1.ckpt".into()));
-    // The sampling sphere's fold level, then each shell's own.
+    // The sampling sphere's fold level, then each shell's own, near and far.
     let mut levels = vec![5];
     levels.extend([MAX_LEVEL; shells::DEFAULT_SHELLS as usize]);
+    levels.extend([MAX_LEVEL; shells::DEFAULT_FAR_SHELLS.len()]);
     assert_eq!(c.pass_levels(), levels);
     // No shells: the sampling sphere's passes alone.
-    let c = plan(|s| s.shells = 0).unwrap();
+    let c = plan(|s| {
+        s.shells = 0;
+        s.far_shells = Vec::new()
+    })
+    .unwrap();
     assert_eq!(checkpoints(&c).len(), 1);
     assert_eq!(c.pass_levels(), vec![5]);
 }
@@ -333,7 +346,7 @@ fn the_spheres_lie_at_the_shells_and_answer_their_bands() {
     let distances = c.shell_distances(&params).unwrap();
     let far = c.far_distances(&params).unwrap();
     let d = params.distance();
-    assert_eq!(far, [2.0, 4.0, 256.0].map(|f| (f64::from(d) * f) as f32));
+    assert_eq!(far, [2.0, 256.0].map(|f| (f64::from(d) * f) as f32));
     assert_eq!(spheres.len(), 1 + distances.len() + far.len());
     assert_eq!(spheres[0].kind, SphereKind::Sampling);
     assert_eq!(spheres[0].shell, None);
@@ -364,6 +377,6 @@ fn the_spheres_lie_at_the_shells_and_answer_their_bands() {
     }
     assert_eq!(spheres[0].probe_band, Some([distances[0], d]));
     let last = spheres.last().unwrap().probe_band;
-    assert_eq!(last, Some([far[1], far[2]]));
+    assert_eq!(last, Some([far[0], far[1]]));
     assert_eq!(spheres[3].probe_band, Some([d, far[1]]));
 }
