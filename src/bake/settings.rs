@@ -651,13 +651,16 @@ pub(crate) mod tests {
         let mut longer = bytes.clone();
         longer.push(0);
         assert_eq!(RowSettings::decode(&longer), None);
-        // A count of always-visible ids past the bytes left, and a flag of 2.
-        let mut huge = RowSettings::default().encode();
-        let at = 1 + 8 + 4 + 4 + 4 + 8 + 8 + 8 + 1;
-        huge[at..at + 4].copy_from_slice(&u32::MAX.to_le_bytes());
-        assert_eq!(RowSettings::decode(&huge), None);
+        // Counts of far shells and of always-visible ids past the bytes left, and a flag of 2.
+        let far = 1 + 8 + 4 + 4 + 4 + 8 + 8 + 8;
+        let ids = far + 4 + 8 * DEFAULT_FAR_SHELLS.len();
+        for at in [far, ids] {
+            let mut huge = RowSettings::default().encode();
+            huge[at..at + 4].copy_from_slice(&u32::MAX.to_le_bytes());
+            assert_eq!(RowSettings::decode(&huge), None, "count at {at}");
+        }
         let mut flag = RowSettings::default().encode();
-        flag[at - 1] = 2;
+        *flag.last_mut().unwrap() = 2;
         assert_eq!(RowSettings::decode(&flag), None);
     }
 
