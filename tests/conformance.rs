@@ -17,7 +17,7 @@
 //! PATCHVIS_REGENERATE=1 cargo test --test conformance   # rewrite vectors and expectations
 //! ```
 //!
-//! Cost: 98 small vectors; each valid one is parsed once per prefix length (a few thousand
+//! Cost: 107 small vectors; each valid one is parsed once per prefix length (a few thousand
 //! parses, each stopping at the length check), well under a second.
 #![cfg(feature = "bake")]
 
@@ -157,9 +157,15 @@ fn dump(pvis: &Pvis<'_>) -> String {
         );
     }
     let k = pvis.shell_count();
+    // The sampling sphere is shell `j`; the others are SHEL's records (spec § SHEL, Numbering).
+    let j = pvis.sampling_shell();
+    let records = || (0..=k).filter(move |&s| s != j);
     if k > 0 {
         let _ = writeln!(out, "shells: {k}");
-        for shell in 1..=k {
+        if pvis.version() >= 6 {
+            let _ = writeln!(out, "sampling shell: {j}");
+        }
+        for shell in records() {
             let sh = pvis.shell(shell);
             let _ = writeln!(
                 out,
@@ -184,7 +190,7 @@ fn dump(pvis: &Pvis<'_>) -> String {
         pvis.view_row(view, &mut row);
         let _ = writeln!(out, "view {view}: {}", bits(&row));
     }
-    for shell in 1..=k {
+    for shell in records() {
         for view in 0..pvis.shell(shell).views {
             pvis.shell_view_row(shell, view, &mut row);
             let _ = writeln!(out, "shell {shell} view {view}: {}", bits(&row));
@@ -194,6 +200,9 @@ fn dump(pvis: &Pvis<'_>) -> String {
     let mut positions = query_positions();
     if k > 0 {
         positions.extend(shell_positions());
+    }
+    if pvis.version() >= 6 {
+        positions.extend(far_positions());
     }
     for eye in positions {
         let visible = pvis.query(eye, &mut scratch);
@@ -222,7 +231,7 @@ fn dump(pvis: &Pvis<'_>) -> String {
             patches.join(",")
         );
         if k > 0 {
-            let _ = writeln!(out, "{}", far_query(pvis, eye, visible.band));
+            let _ = writeln!(out, "{}", far_query(pvis, eye, visible.band > j));
         }
     }
     out
@@ -231,9 +240,9 @@ fn dump(pvis: &Pvis<'_>) -> String {
 /// The answer of a far-only reader (spec § Far-only readers) to `eye`, as a `far-query` line
 /// in the `query` format of a file without shells: § Query's rule on the sampling sphere
 /// alone, taken literally from the sampling sphere's rows, with `inside` for every eye nearer
-/// than the sampling distance: for an eye in `band` ≥ 1 (the full reader's answer), the band-0
-/// rule with `inside_sphere` true.
-fn far_query(pvis: &Pvis<'_>, eye: [f32; 3], band: u32) -> String {
+/// than the sampling distance (`nearer`: the full reader's band is above the sampling
+/// shell's number).
+fn far_query(pvis: &Pvis<'_>, eye: [f32; 3], nearer: bool) -> String {
     let s = pvis.sampling();
     let c = s.center;
     let d = [eye[0] - c[0], eye[1] - c[1], eye[2] - c[2]];
@@ -245,7 +254,7 @@ fn far_query(pvis: &Pvis<'_>, eye: [f32; 3], band: u32) -> String {
             pvis.view_row(view, &mut row);
             answer.iter_mut().zip(&row).for_each(|(a, r)| *a |= r);
         }
-        (band >= 1, leaf)
+        (nearer, leaf)
     } else {
         for p in 0..pvis.patch_count() {
             answer[p as usize / 64] |= 1 << (p % 64);
@@ -285,6 +294,32 @@ fn shell_positions() -> Vec<[f32; 3]> {
         [0.0, 0.0, 1.75],
         [1.0, 0.5, -0.5],
         [0.01, -0.02, 0.03],
+    ]
+}
+
+/// The extra eye positions of a version-6 file (vectors 022 on, centred at the origin with the
+/// sampling sphere at distance 3 and far shells among 6, 12, 24 and 768): beyond the outermost
+/// far shell (1000 sampling distances out and at 10³⁰), exactly on each of those spheres (on an
+/// axis, so the eye is not inside it), just inside and outside the outermost, between far
+/// shells, and between the sampling sphere and the innermost far shell.
+fn far_positions() -> Vec<[f32; 3]> {
+    vec![
+        [3000.0, 0.0, 0.0],
+        [0.0, 0.0, 1e30],
+        [-1e30, 1e30, -1e30],
+        [768.0, 0.0, 0.0],
+        [0.0, -767.5, 0.0],
+        [0.0, 0.0, -768.5],
+        [-400.0, 300.0, 0.0],
+        [0.0, -24.0, 0.0],
+        [10.0, 10.0, -10.0],
+        [0.0, 0.0, 12.0],
+        [0.0, 0.0, -11.5],
+        [-6.0, 0.0, 0.0],
+        [5.0, -5.0, 0.5],
+        [0.0, 5.9, 0.0],
+        [-2.0, -3.0, 2.0],
+        [0.0, 0.0, -3.0],
     ]
 }
 
@@ -342,8 +377,12 @@ struct ValidSpec {
     /// Give patches spread cone axes and let views see the patches facing them (plus a little
     /// noise), so the rows have the structure real bakes have and encoding 2 grows a real tree.
     facing: bool,
-    /// Sampling shells (version 5): `(distance, level)` each, outermost first.
+    /// Sampling shells: `(distance, level)` each, in the file's order (decreasing distance);
+    /// those beyond the sampling distance make it version 6.
     shells: Vec<(f32, u32)>,
+    /// Each shell's payload encoding, where they differ from `encoding` (empty: all
+    /// `encoding`): the payloads are taken from the file written in each encoding.
+    shell_encodings: Vec<VisibilityEncoding>,
 }
 
 fn valid_specs() -> Vec<ValidSpec> {
@@ -361,14 +400,17 @@ fn valid_specs() -> Vec<ValidSpec> {
         layout: PatchTableLayout::Full,
         facing: false,
         shells: Vec::new(),
+        shell_encodings: Vec::new(),
     };
-    // Version 5: sampling shells, around the origin with the sampling sphere at distance 3.
+    // Versions 5 and 6: sampling shells, around the origin with the sampling sphere at
+    // distance 3.
     let v5 = |name, level, counts: Vec<u32>, seed, shells| ValidSpec {
         center: [0.0; 3],
         layout: PatchTableLayout::Compact,
         shells,
         ..base(name, level, counts, seed)
     };
+    let v6 = v5;
     vec![
         ValidSpec {
             center: [0.0; 3],
@@ -523,6 +565,62 @@ fn valid_specs() -> Vec<ValidSpec> {
                 vec![(2.5, 2), (2.0, 3)],
             )
         },
+        // Version 6: the far band.
+        v6(
+            "022-v6-level2-two-far-shells",
+            2,
+            (1..=65).map(|i| i % 3 + 1).collect(),
+            22,
+            vec![(12.0, 2), (6.0, 1)],
+        ),
+        // The spec's example of § Query: three far shells and two near ones; each payload
+        // in another encoding than its neighbours, the far shell at 12 raw.
+        ValidSpec {
+            facing: true,
+            shell_encodings: vec![
+                VisibilityEncoding::Tree,
+                VisibilityEncoding::Raw,
+                VisibilityEncoding::Table,
+                VisibilityEncoding::Raw,
+                VisibilityEncoding::Tree,
+            ],
+            ..v6(
+                "023-v6-level2-three-far-two-near-mixed-encodings",
+                2,
+                (1..=40).map(|i| i % 4 + 1).collect(),
+                23,
+                vec![(768.0, 1), (12.0, 3), (6.0, 2), (2.5, 2), (1.75, 0)],
+            )
+        },
+        ValidSpec {
+            encoding: VisibilityEncoding::Raw,
+            ..v6(
+                "024-v6-level1-raw-far-and-near",
+                1,
+                vec![3, 1, 4, 1, 5, 9, 2],
+                24,
+                vec![(768.0, 0), (6.0, 2), (2.25, 1)],
+            )
+        },
+        ValidSpec {
+            encoding: VisibilityEncoding::Table,
+            ..v6(
+                "025-v6-level2-eight-shells",
+                2,
+                (1..=65).map(|i| i % 3 + 1).collect(),
+                25,
+                vec![
+                    (768.0, 1),
+                    (24.0, 2),
+                    (12.0, 0),
+                    (6.0, 3),
+                    (2.5, 2),
+                    (2.25, 1),
+                    (2.0, 2),
+                    (1.75, 3),
+                ],
+            )
+        },
     ]
 }
 
@@ -623,7 +721,20 @@ fn build_valid(spec: &ValidSpec) -> Vec<u8> {
         visibility: &matrix,
         shells: &shells,
     };
-    let bytes = encode_as(&contents, spec.encoding, spec.layout);
+    let mut bytes = encode_as(&contents, spec.encoding, spec.layout);
+    if !spec.shell_encodings.is_empty() {
+        let payloads: Vec<Vec<u8>> = spec
+            .shell_encodings
+            .iter()
+            .enumerate()
+            .map(|(k, &encoding)| {
+                let other = encode_as(&contents, encoding, spec.layout);
+                let (_, shel, _) = find(&other, b"SHEL");
+                shel_payloads(&other[shel..])[k].clone()
+            })
+            .collect();
+        bytes = with_shel_payloads(&bytes, &payloads);
+    }
     if !spec.unknown_section {
         return bytes;
     }
@@ -636,6 +747,41 @@ fn build_valid(spec: &ValidSpec) -> Vec<u8> {
         ),
     );
     assemble(u32_at(&bytes, 8), &sections)
+}
+
+/// The payloads of a SHEL section body, in record order.
+fn shel_payloads(shel: &[u8]) -> Vec<Vec<u8>> {
+    let count = u32_at(shel, 0) as usize;
+    let mut at = 8 + 16 * count;
+    (0..count)
+        .map(|k| {
+            let length = u64_at(shel, 8 + 16 * k + 8) as usize;
+            at += length;
+            shel[at - length..at].to_vec()
+        })
+        .collect()
+}
+
+/// `bytes` with its SHEL payloads replaced by `payloads` (the records' lengths updated), laid
+/// out again.
+fn with_shel_payloads(bytes: &[u8], payloads: &[Vec<u8>]) -> Vec<u8> {
+    let sections: Vec<_> = sections_of(bytes)
+        .into_iter()
+        .map(|(tag, body)| {
+            if &tag != b"SHEL" {
+                return (tag, body);
+            }
+            let count = u32_at(&body, 0) as usize;
+            assert_eq!(count, payloads.len());
+            let mut shel = body[..8 + 16 * count].to_vec();
+            for (k, payload) in payloads.iter().enumerate() {
+                put_u64(&mut shel, 8 + 16 * k + 8, payload.len() as u64);
+            }
+            shel.extend(payloads.iter().flatten());
+            (tag, shel)
+        })
+        .collect();
+    assemble(u32_at(bytes, 8), &sections)
 }
 
 /// The sections of a file, in table order: `(tag, body)`.
@@ -1107,13 +1253,6 @@ fn invalid_v4_specs() -> Vec<(&'static str, Corruption)> {
 /// The invalid vectors of the SHEL section (version 5): each corrupts valid 018 (three shells,
 /// encoding 2) or, for a rule of raw rows, 019 in one targeted way.
 fn invalid_v5_specs() -> Vec<(&'static str, Corruption)> {
-    /// Mutates the SHEL body at `shel` (its offset), then fixes the CRC.
-    fn in_shel(mut bytes: Vec<u8>, mutate: impl FnOnce(&mut Vec<u8>, usize)) -> Option<Vec<u8>> {
-        let (_, shel, _) = find(&bytes, b"SHEL");
-        mutate(&mut bytes, shel);
-        fix_crc(&mut bytes);
-        Some(bytes)
-    }
     /// Replaces the SHEL body with `f(body)` and lays the file out again.
     fn rebuilt(bytes: Vec<u8>, f: impl Fn(Vec<u8>) -> Vec<([u8; 4], Vec<u8>)>) -> Vec<u8> {
         let sections: Vec<_> = sections_of(&bytes)
@@ -1127,10 +1266,6 @@ fn invalid_v5_specs() -> Vec<(&'static str, Corruption)> {
             })
             .collect();
         assemble(u32_at(&bytes, 8), &sections)
-    }
-    /// Offset of shell `k`'s record (from 1) in a SHEL body at `shel`.
-    fn record(shel: usize, k: usize) -> usize {
-        shel + 8 + 16 * (k - 1)
     }
     /// Offset of shell `k`'s payload in a SHEL body at `shel`.
     fn payload(bytes: &[u8], shel: usize, k: usize) -> usize {
@@ -1217,6 +1352,54 @@ fn invalid_v5_specs() -> Vec<(&'static str, Corruption)> {
     ]
 }
 
+/// Mutates the SHEL body at `shel` (its offset), then fixes the CRC.
+fn in_shel(mut bytes: Vec<u8>, mutate: impl FnOnce(&mut Vec<u8>, usize)) -> Option<Vec<u8>> {
+    let (_, shel, _) = find(&bytes, b"SHEL");
+    mutate(&mut bytes, shel);
+    fix_crc(&mut bytes);
+    Some(bytes)
+}
+
+/// Offset of record `k` (from 1) in a SHEL body at `shel`.
+fn record(shel: usize, k: usize) -> usize {
+    shel + 8 + 16 * (k - 1)
+}
+
+/// The invalid vectors of the far band's distance rules: each corrupts valid 023 (version 6:
+/// records at 768, 12, 6, 2.5 and 1.75 around a sampling sphere at 3) or, for the version-5
+/// rule, 018 (records at 2.5, 2 and 1.75) in one targeted way.
+fn invalid_v6_specs() -> Vec<(&'static str, Corruption)> {
+    vec![
+        // Version 5 has no far band: a first record beyond the sampling distance is refused.
+        ("190-v5-record-beyond-sampling-distance", |b| {
+            (u32_at(&b, 8) == 5).then_some(())?;
+            in_shel(b, |b, shel| put_u32(b, record(shel, 1), 6.0f32.to_bits()))
+        }),
+        ("191-v6-record-at-sampling-distance", |b| {
+            (u32_at(&b, 8) == 6).then_some(())?;
+            in_shel(b, |b, shel| put_u32(b, record(shel, 3), 3.0f32.to_bits()))
+        }),
+        // A near record (2.75) before a far one (4): not decreasing across the sampling sphere.
+        ("192-v6-far-record-after-a-near-one", |b| {
+            (u32_at(&b, 8) == 6).then_some(())?;
+            in_shel(b, |b, shel| {
+                put_u32(b, record(shel, 3), 2.75f32.to_bits());
+                put_u32(b, record(shel, 4), 4.0f32.to_bits());
+            })
+        }),
+        ("193-v6-distance-infinite", |b| {
+            (u32_at(&b, 8) == 6).then_some(())?;
+            in_shel(b, |b, shel| {
+                put_u32(b, record(shel, 1), f32::INFINITY.to_bits())
+            })
+        }),
+        ("194-v6-distance-nan", |b| {
+            (u32_at(&b, 8) == 6).then_some(())?;
+            in_shel(b, |b, shel| put_u32(b, record(shel, 2), f32::NAN.to_bits()))
+        }),
+    ]
+}
+
 /// Every vector the generator makes: `(relative path, bytes)`.
 fn generate() -> Vec<(String, Vec<u8>)> {
     let specs = valid_specs();
@@ -1248,6 +1431,7 @@ fn generate() -> Vec<(String, Vec<u8>)> {
     };
     let (v4_base, v4_blocks) = (compact("013-v4"), compact("014-v4"));
     let (v5_base, v5_raw, v5_one) = (compact("018-v5"), compact("019-v5"), compact("017-v5"));
+    let v6_base = compact("023-v6");
     for (name, corrupt) in invalid_v4_specs() {
         let bytes = corrupt(v4_base.clone())
             .or_else(|| corrupt(v4_blocks.clone()))
@@ -1258,6 +1442,12 @@ fn generate() -> Vec<(String, Vec<u8>)> {
         let bytes = corrupt(v5_base.clone())
             .or_else(|| corrupt(v5_raw.clone()))
             .unwrap_or_else(|| panic!("{name} applies to neither version-5 base"));
+        out.push((format!("invalid/{name}.pvis"), bytes));
+    }
+    for (name, corrupt) in invalid_v6_specs() {
+        let bytes = corrupt(v6_base.clone())
+            .or_else(|| corrupt(v5_base.clone()))
+            .unwrap_or_else(|| panic!("{name} applies to neither base"));
         out.push((format!("invalid/{name}.pvis"), bytes));
     }
     // A SHEL section in a version-4 file is an unknown section (spec § SHEL): 017 relabelled

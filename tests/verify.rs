@@ -38,10 +38,12 @@ fn valid_vectors_pass() {
         assert_eq!(out.status.code(), Some(0), "{file}: {}", stdout(&out));
         let text = stdout(&out);
         assert_eq!(text.lines().count(), 1, "{text}");
-        // Version-4 and -5 vectors say so in their name; of the others, raw and table-coded
+        // Version-4 to -6 vectors say so in their name; of the others, raw and table-coded
         // ones are version 2 (the oldest that holds them), tree-coded ones version 3.
-        let version = if file.contains("-v5-") {
+        let version = if file.contains("-v6-") {
             VERSION
+        } else if file.contains("-v5-") {
+            5
         } else if file.contains("-v4-") {
             4
         } else if file.contains("-raw") || file.contains("-table") {

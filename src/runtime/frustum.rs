@@ -64,8 +64,9 @@ struct Plane {
 }
 
 impl Plane {
-    /// The plane `a·x + b·y + c·z + d ≥ 0`, scaled by a power of two (exact unless `d`
-    /// overflows or underflows, which only makes the test keep more).
+    /// The plane `a·x + b·y + c·z + d ≥ 0`, scaled by a power of two: exact unless a
+    /// coefficient scaled down lands among the subnormals or `d` scaled up overflows (spec
+    /// § Frustum culling, Scaling).
     fn new([a, b, c, d]: [f32; 4]) -> Plane {
         let largest = a.abs().max(b.abs()).max(c.abs());
         // The biased exponent of a normal `largest`, `m · 2^(e − 127)` with `m` in [1, 2).

@@ -100,11 +100,12 @@ pub struct PatchInfo {
     pub cone_cos: f32,
 }
 
-/// One sampling shell (spec § SHEL): shell 0 is the sampling sphere (CAMR, VISB), shells
-/// `1..=K` are the SHEL records, nearer and nearer the model.
+/// One shell of a file (spec § SHEL): the sampling sphere (CAMR, VISB) or a SHEL record.
+/// Shells are numbered `0..=K` by decreasing distance, the sampling sphere at
+/// [`Pvis::sampling_shell`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Shell {
-    /// Camera distance from the centre (CAMR's for shell 0).
+    /// Camera distance from the centre (CAMR's for the sampling sphere).
     pub distance: f32,
     /// Sphere subdivision level of the shell's views.
     pub level: u32,

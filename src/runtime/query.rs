@@ -12,13 +12,14 @@ use crate::sphere;
 /// The answer to a query: which patches are visible, and which shells' views answered (spec
 /// § Query). Borrows the caller's scratch space.
 ///
-/// Shell 0 is the sampling sphere; shells `1..=K` ([`super::Pvis::shell_count`]) are the
-/// file's sampling shells, nearer and nearer the model. The eye's [`band`](Self::band) says
-/// which it is inside, and so which one or two shells' rows were combined:
+/// The file's shells `0..=K` ([`super::Pvis::shell_count`]) are numbered by decreasing
+/// distance, the sampling sphere among them at [`super::Pvis::sampling_shell`] (0 without a
+/// far band). The eye's [`band`](Self::band) says which it is inside, and so which one or two
+/// shells' rows were combined:
 ///
 /// | `band`       | where the eye is                          | `shells`         | `inside_sphere` |
 /// |--------------|-------------------------------------------|------------------|-----------------|
-/// | 0            | at or beyond the sampling sphere          | `[0, 0]`         | false           |
+/// | 0            | at or beyond the outermost shell          | `[0, 0]`         | false           |
 /// | `1..=K`      | inside shell `band − 1`, not inside `band`| `[band − 1, band]` | false         |
 /// | `K + 1`      | inside the innermost shell (shell `K`)    | `[K, K]`         | true            |
 ///
@@ -31,8 +32,8 @@ pub struct Visible<'s> {
     /// shells), where no sampled view is nearer: the answer is then only an approximation, and
     /// callers may prefer to draw everything.
     pub inside_sphere: bool,
-    /// How many shells (the sampling sphere counted as shell 0) the eye is strictly inside:
-    /// `0..=K + 1`. See the table above.
+    /// How many of the shells `0..=K` the eye is strictly inside: `0..=K + 1`. See the table
+    /// above.
     pub band: u32,
     /// The shells whose rows were combined, outer first: `[band − 1, band]` between two
     /// shells, the same shell twice where only one answered.

@@ -223,9 +223,11 @@ fn error_after(mutate: impl FnOnce(&mut Vec<u8>)) -> Error {
 fn header_errors() {
     assert_eq!(error_after(|f| f[0] = b'X'), Error::BadMagic);
     assert_eq!(Pvis::parse(b"PVIX").unwrap_err(), Error::BadMagic);
+    // The first version past this reader's.
+    let next = consts::VERSION + 1;
     assert_eq!(
-        error_after(|f| f[8] = 6),
-        Error::UnsupportedVersion { found: 6 }
+        error_after(|f| f[8] = next as u8),
+        Error::UnsupportedVersion { found: next }
     );
     assert_eq!(
         error_after(|f| f[8] = 0),

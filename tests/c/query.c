@@ -200,16 +200,24 @@ int main(int argc, char **argv) {
         printf("patch %u: first %u count %u\n", p, first, count);
     }
 
-    /* Sampling shells (version 5): shell 0 is the sampling sphere, 1..K the SHEL records. */
-    uint32_t shells = patchvis_shell_count(&file);
+    /* Sampling shells: 0..K by decreasing distance, the sampling sphere among them (shell 0
+     * unless the file has a far band, version 6). It is the one at the sampling distance,
+     * which no SHEL record may have; the others are the SHEL records. */
+    uint32_t shells = patchvis_shell_count(&file), sampling = shells + 1;
     PatchvisShell shell;
     if (patchvis_shell(&file, shells + 1, &shell) != PATCHVIS_ERR_RANGE ||
-        patchvis_shell(&file, 0, NULL) != PATCHVIS_ERR_ARGUMENT ||
-        patchvis_shell(&file, 0, &shell) != PATCHVIS_OK || shell.level != info.level ||
-        shell.views != info.views || shell.distance != info.distance)
+        patchvis_shell(&file, 0, NULL) != PATCHVIS_ERR_ARGUMENT)
         return 3;
+    for (uint32_t k = 0; k <= shells; k++) {
+        if (patchvis_shell(&file, k, &shell) != PATCHVIS_OK) return 3;
+        if (shell.distance != info.distance) continue;
+        if (sampling <= shells || shell.level != info.level || shell.views != info.views) return 3;
+        sampling = k;
+    }
+    if (sampling > shells) return 3;
     if (shells > 0) printf("shells: %u\n", shells);
-    for (uint32_t k = 1; k <= shells; k++) {
+    for (uint32_t k = 0; k <= shells; k++) {
+        if (k == sampling) continue;
         if (patchvis_shell(&file, k, &shell) != PATCHVIS_OK) return 3;
         printf("shell %u: distance %g level %u views %u encoding %u bytes %llu\n", k,
                shell.distance, shell.level, shell.views, shell.encoding,
