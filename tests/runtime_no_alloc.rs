@@ -1,8 +1,8 @@
 //! **Invariant** check: the reader never allocates. The library's counting global allocator
 //! watches `Pvis::parse`, `query`, `view_row`, streaming and expanded queries, and iterating
-//! the answer, on a version-4 file and on a version-5 file with sampling shells (eyes in every
-//! band). It counts per thread, so the harness's threads, which may allocate at any time, do
-//! not disturb the count of the test's own.
+//! the answer, on a version-4 file, a version-5 file with sampling shells and a version-6 file
+//! with a far band too (eyes in every band). It counts per thread, so the harness's threads,
+//! which may allocate at any time, do not disturb the count of the test's own.
 #![cfg(feature = "bake")]
 
 use patchvis::format::{BakeContents, ShellRows, encode};
@@ -39,14 +39,23 @@ fn parse_query_streaming_expanded_and_iteration_allocate_nothing() {
         matrix.set(v, v);
         matrix.set(v, 99 - v);
     }
-    // Two shells, of levels 2 and 1, inside the sampling distance (2.92).
+    // Near shells of levels 2 and 1 inside the sampling distance (2.92), far ones outside.
     let mut near = VisibilityMatrix::new(18, 100);
     for v in 0..18 {
         for p in (v..100).step_by(7) {
             near.set(v, p);
         }
     }
+    // Far shells (version 6) at 40 and 6, then near ones at 2 and 1.3.
     let shells = [
+        ShellRows {
+            distance: 40.0,
+            visibility: &matrix,
+        },
+        ShellRows {
+            distance: 6.0,
+            visibility: &near,
+        },
         ShellRows {
             distance: 2.0,
             visibility: &matrix,
@@ -56,7 +65,7 @@ fn parse_query_streaming_expanded_and_iteration_allocate_nothing() {
             visibility: &near,
         },
     ];
-    for shells in [&shells[..0], &shells[..]] {
+    for shells in [&shells[..0], &shells[2..], &shells[..]] {
         let bytes = encode(&BakeContents {
             sampling: &params,
             triangle_count: 100,
@@ -109,10 +118,10 @@ fn reader_allocates_nothing(bytes: &[u8]) {
     let mut streaming = pvis.streaming(&mut stream_scratch);
     let mut expanded = pvis.expand(&mut table);
     for i in 0..200 {
-        // An orbit whose radius sweeps from outside the sampling sphere to inside the
-        // innermost shell and back, so that every band and shell boundary is crossed.
+        // An orbit whose radius sweeps from beyond the outermost shell to inside the
+        // innermost one and back, so that every band and shell boundary is crossed.
         let a = i as f32 * 0.05;
-        let r = 0.5 + 2.0 * (1.0 + (a * 0.7).cos());
+        let r = 0.5 * 200f32.powf(0.5 * (1.0 + (a * 0.7).cos()));
         let eye = [r * a.cos(), 0.3, r * a.sin()];
         let s = streaming.query(eye);
         seen += s.count();
