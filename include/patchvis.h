@@ -109,15 +109,17 @@ typedef struct PatchvisVisible {
                                 for a file without shells): the answer is then approximate and
                                 a renderer may prefer to draw everything */
     uint32_t band;           /* how many shells the eye is strictly inside, the sampling sphere
-                                counted as shell 0: 0 at or beyond the sampling sphere, 1..K
-                                between shells band - 1 and band, K + 1 inside shell K */
+                                counted among them: 0 at or beyond shell 0, 1..K between
+                                shells band - 1 and band, K + 1 inside shell K */
     uint32_t shells[2];      /* the shells whose rows were combined, outer first; the same
                                 shell twice where one answered */
     uint32_t inner_leaf[3];  /* the three views of shell shells[1] whose rows were combined */
 } PatchvisVisible;
 
-/* One sampling shell (spec/FORMAT.md, section SHEL): shell 0 is the sampling sphere, shells
- * 1..K the file's SHEL records, nearer and nearer the model. */
+/* One sampling shell (spec/FORMAT.md, section SHEL). Shells 0..K are numbered by decreasing
+ * distance: shell J (patchvis_sampling_shell) is the sampling sphere, the others the file's
+ * SHEL records, the J beyond the sampling distance (version 6's far band) before it and the
+ * ones nearer the model after it. */
 typedef struct PatchvisShell {
     float distance;          /* camera distance from the centre */
     uint32_t level;          /* sphere subdivision level of the shell's views */
@@ -130,8 +132,13 @@ typedef struct PatchvisShell {
  * file of version 1-4); 0 for a NULL or unparsed file. */
 uint32_t patchvis_shell_count(const PatchvisFile *file);
 
-/* Describes shell s (0 = the sampling sphere, 1..K) in *out. Returns PATCHVIS_OK,
- * PATCHVIS_ERR_ARGUMENT (out NULL), PATCHVIS_ERR_NOT_PARSED or PATCHVIS_ERR_RANGE (s > K). */
+/* J: the shell number of the sampling sphere, the file's SHEL records beyond the sampling
+ * distance (0 without them, every file of version 1-5); 0 for a NULL or unparsed file. */
+uint32_t patchvis_sampling_shell(const PatchvisFile *file);
+
+/* Describes shell s (0..K, outermost first; J is the sampling sphere) in *out. Returns
+ * PATCHVIS_OK, PATCHVIS_ERR_ARGUMENT (out NULL), PATCHVIS_ERR_NOT_PARSED or PATCHVIS_ERR_RANGE
+ * (s > K). */
 int32_t patchvis_shell(const PatchvisFile *file, uint32_t s, PatchvisShell *out);
 
 /* sizeof(PatchvisFile) as the library was built; compare to catch a mismatched header. */

@@ -194,7 +194,7 @@ pub struct PatchvisVisible {
     /// 1 if the eye is inside the innermost shell (the sampling sphere for a file without
     /// shells): the answer is then approximate, and a renderer may prefer to draw everything.
     pub inside_sphere: u32,
-    /// How many shells the eye is strictly inside, the sampling sphere counted as shell 0:
+    /// How many shells the eye is strictly inside, the sampling sphere counted among them:
     /// `0..=K + 1` (`runtime::Visible::band`).
     pub band: u32,
     /// The shells whose rows were combined, outer first; the same shell twice where one
@@ -445,8 +445,9 @@ pub unsafe extern "C" fn patchvis_info(file: *const PatchvisFile, out: *mut Patc
     PATCHVIS_OK
 }
 
-/// One sampling shell of a file (spec § SHEL; `runtime::Shell`): shell 0 is the sampling
-/// sphere, shells `1..=K` the SHEL records.
+/// One sampling shell of a file (spec § SHEL; `runtime::Shell`). Shells `0..=K` are numbered
+/// by decreasing distance: the sampling sphere is shell `J` (`patchvis_sampling_shell`), the
+/// SHEL records the others, those beyond the sampling distance first.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PatchvisShell {
@@ -473,9 +474,20 @@ pub unsafe extern "C" fn patchvis_shell_count(file: *const PatchvisFile) -> u32 
     unsafe { handle(file) }.map_or(0, |pvis| pvis.shell_count())
 }
 
-/// Describes shell `s` (0 = the sampling sphere, `1..=K`) in `*out`. Returns 0,
-/// `PATCHVIS_ERR_ARGUMENT` (`out` null), `PATCHVIS_ERR_NOT_PARSED` or `PATCHVIS_ERR_RANGE`
-/// (`s > K`).
+/// `J`, the shell number of the sampling sphere: how many SHEL records lie beyond the sampling
+/// distance (version 6's far band); 0 for a file without them, a null or an unparsed `file`.
+///
+/// # Safety
+/// `file` as for every call.
+#[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
+pub unsafe extern "C" fn patchvis_sampling_shell(file: *const PatchvisFile) -> u32 {
+    // SAFETY: caller contract on `file`.
+    unsafe { handle(file) }.map_or(0, |pvis| pvis.sampling_shell())
+}
+
+/// Describes shell `s` (`0..=K`, outermost first; `J` is the sampling sphere) in `*out`.
+/// Returns 0, `PATCHVIS_ERR_ARGUMENT` (`out` null), `PATCHVIS_ERR_NOT_PARSED` or
+/// `PATCHVIS_ERR_RANGE` (`s > K`).
 ///
 /// # Safety
 /// `file` as for every call; `out` null or valid for a write of a `PatchvisShell`.

@@ -14,10 +14,11 @@
 // scratch, the answer), handed out like a stack and given back by `close` (a region closed out of order is
 // reused once the regions above it are closed too). Everything is synchronous after `load`.
 //
-// The module is a full reader (the library with its `shells` feature): an eye nearer than the
-// sampling sphere is answered from the file's sampling shells (spec § SHEL, § Query), with the
-// eye's `band` and the one or two `shells` that answered; `insideSphere` is true only nearer
-// than the innermost shell's cameras (the sampling sphere's, for a file without shells).
+// The module is a full reader (the library with its `shells` feature): every eye is answered
+// from the one or two sampling shells around it (spec § SHEL, § Query), nearer the model or
+// beyond the sampling distance (version 6's far band), with the eye's `band` and the `shells`
+// that answered; `insideSphere` is true only nearer than the innermost shell's cameras (the
+// sampling sphere's, for a file without shells).
 //
 // A refused file's message is the reader's own: the module returns its parts (the kind of
 // error and the values; patchvis_error_parts) and `errorMessage` below fills the reader's
@@ -162,9 +163,9 @@ export class PvisFile {
    * `{ insideSphere, band, shells, views, innerViews, patches, ranges }`, where `patches` are
    * the visible patch ids ascending, `ranges` the triangle ranges to draw as `[first, count]`
    * pairs with adjacent ranges merged, `shells` the one or two sampling shells whose rows were
-   * joined (`[outer, inner]`; 0 is the sampling sphere), `views` and `innerViews` their three
-   * views each, `band` how many shells the eye is inside (0 at or beyond the sampling
-   * sphere, K + 1 inside the innermost of the file's K shells), and `insideSphere` true when
+   * joined (`[outer, inner]`, numbered 0..K outermost first, the sampling sphere among them),
+   * `views` and `innerViews` their three views each, `band` how many shells the eye is inside
+   * (0 at or beyond the outermost, K + 1 inside the innermost), and `insideSphere` true when
    * the eye is nearer than the innermost shell's cameras (a caller may draw everything then).
    * Answered by the streaming reader: while the camera stays in one leaf face of each
    * answering shell a query decodes nothing; a move to another leaf decodes only the rows it
@@ -373,7 +374,7 @@ const RULE_TEXTS = [
   "VISB code must not end in a zero byte",
   "SHEL shell_count must be in 1..=8",
   "SHEL reserved field must be 0",
-  "SHEL distance must be finite, below the previous shell's (CAMR distance for the first) and >= CAMR radius",
+  "SHEL distance must be finite, below the previous shell's (CAMR distance for the first before version 6), not CAMR distance and >= CAMR radius",
   "SHEL shell level"
 ];
 // END generated

@@ -44,6 +44,7 @@ const state = {
   answer: null, // { patches, ranges, inside, band, shells }
   drawn: 0, // triangles drawn
   lastEye: null,
+  bounds: null, // the model's bounding sphere (THREE.Sphere)
   options: { culling: true, colours: false },
 };
 
@@ -133,18 +134,32 @@ function upperBound(values, x) {
 function frame(object) {
   const box = new THREE.Box3().setFromObject(object);
   const sphere = box.getBoundingSphere(new THREE.Sphere());
-  camera.near = sphere.radius / 100;
-  camera.far = sphere.radius * 100;
+  state.bounds = sphere;
   camera.position.copy(sphere.center).add(new THREE.Vector3(0, 0.3, 1).multiplyScalar(3.2 * sphere.radius));
   orbit.target.copy(sphere.center);
   fly.movementSpeed = sphere.radius;
   camera.lookAt(sphere.center);
-  camera.updateProjectionMatrix();
+  clip();
+}
+
+/** Near and far planes that hold the model from wherever the camera is, near or far. */
+function clip() {
+  if (!state.bounds) return;
+  const { center, radius } = state.bounds;
+  const d = camera.position.distanceTo(center);
+  const near = Math.max(radius / 100, (d - radius) / 2);
+  const far = Math.max(radius * 100, 2 * (d + radius));
+  if (near !== camera.near || far !== camera.far) {
+    camera.near = near;
+    camera.far = far;
+    camera.updateProjectionMatrix();
+  }
 }
 
 /** Queries the reader for the camera (when it moved, or `force`) and sets the draw groups. */
 function update(force = false) {
   if (!state.file) return;
+  clip();
   const eye = camera.position;
   if (force || !state.lastEye || !state.lastEye.equals(eye)) {
     const t0 = performance.now();
@@ -162,9 +177,9 @@ function update(force = false) {
     $("time").textContent = ms > 0 ? `${ms.toFixed(3)} ms` : "< 0.1 ms";
   }
   const { ranges, inside, patches, band, shells } = state.answer;
-  // Nearer the model than the sampling sphere the answer comes from the sampling shells around
-  // the camera; only nearer than the innermost shell's cameras is it approximate, and
-  // everything is drawn there.
+  // The answer comes from the sampling shells around the camera, near the model or far from
+  // it; only nearer than the innermost shell's cameras is it approximate, and everything is
+  // drawn there.
   const all = !state.options.culling || inside;
   const draw = all ? [[0, state.triangles]] : ranges;
   let drawn = 0;
@@ -189,11 +204,12 @@ function update(force = false) {
   const patchCount = state.file.patchCount;
   $("patches").textContent = `${all ? patchCount : patches.length} / ${patchCount}`;
   $("triangles").textContent = `${drawn} / ${state.triangles} (${((100 * drawn) / state.triangles).toFixed(1)} %)`;
+  // Shells are numbered from the outermost (0), the sampling sphere among them.
   const region = $("region");
   region.textContent = inside
     ? `inside the innermost shell (band ${band}): all drawn`
     : band === 0
-      ? "outside the sampling sphere: answer valid"
+      ? "beyond the outermost shell (band 0): answer valid"
       : `between shells ${shells[0]} and ${shells[1]} (band ${band}): answer valid`;
   region.className = inside ? "invalid" : "valid";
 }

@@ -85,6 +85,9 @@ fn shells_and_their_answers_match_the_dump() {
     // SAFETY: `file` was parsed from static bytes; outputs are writable.
     let count = unsafe { patchvis_shell_count(&file) };
     assert_eq!(count, 3);
+    // SAFETY: as above; null is answered too. Version 5: the sampling sphere is shell 0.
+    assert_eq!(unsafe { patchvis_sampling_shell(&file) }, 0);
+    assert_eq!(unsafe { patchvis_sampling_shell(core::ptr::null()) }, 0);
     let mut shell = PatchvisShell::default();
     for k in 1..=count {
         // SAFETY: as above.
@@ -696,4 +699,145 @@ fn frustum_queries_match_the_reader_and_refuse_misuse() {
             PATCHVIS_ERR_ARGUMENT
         );
     }
+}
+
+/// A version-6 file (three far shells beyond the sampling distance, two nearer the model)
+/// through the ABI: the sampling sphere is shell `J = 3` of `0..=5`, and eyes in every band,
+/// from 1000 sampling distances out to the centre, get the Rust reader's answers from the
+/// stateless and the streaming query.
+#[cfg(feature = "bake")]
+#[test]
+fn far_band_shells_and_their_answers_are_the_readers() {
+    use crate::format::{BakeContents, ShellRows, encode};
+    use crate::runtime::Pvis;
+    use crate::sampler::{SamplingParams, VisibilityMatrix};
+    use crate::tiling::Patch;
+
+    let params = SamplingParams {
+        level: 2,
+        resolution: 64,
+        fov_deg: 60.0,
+        center: [0.0; 3],
+        radius: 1.5,
+    };
+    let d = params.distance();
+    let patches: Vec<Patch> = (0..70u32)
+        .map(|i| Patch {
+            first: i,
+            count: 1,
+            area: 1.0,
+            center: [0.0; 3],
+            radius: 1.0,
+            cone_axis: [0.0; 3],
+            cone_cos: -1.0,
+        })
+        .collect();
+    // Each sphere's rows differ: view v of sphere k sees patch p where k + 2 divides v + p + k.
+    let rows = |k: u32, level: u32| {
+        let views = crate::sphere::view_count(level);
+        let mut matrix = VisibilityMatrix::new(views, 70);
+        for v in 0..views {
+            for p in 0..70 {
+                if (v + p + k).is_multiple_of(k + 2) {
+                    matrix.set(v, p);
+                }
+            }
+        }
+        matrix
+    };
+    let spheres = [
+        (256.0 * d, 1),
+        (4.0 * d, 2),
+        (2.0 * d, 1),
+        (0.8 * d, 2),
+        (0.6 * d, 1),
+    ];
+    let matrices: Vec<VisibilityMatrix> =
+        (1..).zip(spheres).map(|(k, (_, l))| rows(k, l)).collect();
+    let shells: Vec<ShellRows> = spheres
+        .iter()
+        .zip(&matrices)
+        .map(|(&(distance, _), visibility)| ShellRows {
+            distance,
+            visibility,
+        })
+        .collect();
+    let sampling = rows(0, params.level);
+    let bytes = encode(&BakeContents {
+        sampling: &params,
+        triangle_count: 70,
+        patches: &patches,
+        visibility: &sampling,
+        shells: &shells,
+    });
+    let pvis = Pvis::parse(&bytes).unwrap();
+    let (code, file) = parsed(&bytes);
+    assert_eq!((code, pvis.version()), (PATCHVIS_OK, 6));
+    // SAFETY: `file` was parsed from `bytes`, which outlive it; outputs are writable.
+    let (count, j) = unsafe { (patchvis_shell_count(&file), patchvis_sampling_shell(&file)) };
+    assert_eq!((count, j), (5, 3));
+    let mut shell = PatchvisShell::default();
+    for s in 0..=count {
+        // SAFETY: as above.
+        assert_eq!(unsafe { patchvis_shell(&file, s, &mut shell) }, PATCHVIS_OK);
+        let expected = match s {
+            3 => (d, params.level),
+            _ => spheres[s as usize - usize::from(s > 3)],
+        };
+        assert_eq!((shell.distance, shell.level), expected, "shell {s}");
+    }
+    // SAFETY: as above.
+    let (words, stream_words) = unsafe {
+        (
+            patchvis_scratch_words(&file),
+            patchvis_stream_scratch_words(&file),
+        )
+    };
+    let mut scratch = vec![0u64; words];
+    let mut rust_scratch = vec![0u64; words];
+    let mut stream_scratch = vec![0u64; stream_words];
+    let mut stream = MaybeUninit::<PatchvisStream>::uninit();
+    // SAFETY: the scratch outlives the stream; nothing else uses it.
+    let ok = unsafe {
+        patchvis_stream_init(
+            &file,
+            stream_scratch.as_mut_ptr(),
+            stream_words,
+            stream.as_mut_ptr(),
+        )
+    };
+    assert_eq!(ok, PATCHVIS_OK);
+    let mut bands = [false; 7];
+    let radii = [1000.0, 300.0, 30.0, 3.0, 1.5, 1.0, 0.9, 0.7, 0.5, 0.0].map(|x| x * d);
+    for (i, r) in radii.iter().enumerate() {
+        for u in [[0.36f32, 0.48, 0.8], [-0.6, 0.64, -0.48], [0.0, -0.6, 0.8]] {
+            let eye = u.map(|x| x * r);
+            let expected = pvis.query(eye, &mut rust_scratch);
+            let visible = query_ok(&file, &eye, &mut scratch);
+            let mut streamed = MaybeUninit::<PatchvisVisible>::uninit();
+            // SAFETY: the stream was initialised above; `eye` has 3 floats.
+            let code = unsafe {
+                patchvis_stream_query(stream.as_mut_ptr(), eye.as_ptr(), streamed.as_mut_ptr())
+            };
+            assert_eq!(code, PATCHVIS_OK);
+            // SAFETY: written by the successful call.
+            let streamed = unsafe { streamed.assume_init() };
+            let place = |v: &PatchvisVisible| (v.band, v.shells, v.leaf, v.inner_leaf);
+            let want = (
+                expected.band,
+                expected.shells,
+                expected.leaf,
+                expected.inner_leaf,
+            );
+            assert_eq!(place(&visible), want, "eye {i} at {eye:?}");
+            assert_eq!(place(&streamed), want, "eye {i} at {eye:?}");
+            assert_eq!(visible.inside_sphere, u32::from(expected.inside_sphere));
+            assert_eq!(scratch, expected.bits());
+            // SAFETY: the streamed answer's bits live in the stream's scratch, unused since.
+            let bits = unsafe { core::slice::from_raw_parts(streamed.bits, streamed.words) };
+            assert_eq!(bits, expected.bits());
+            bands[visible.band as usize] = true;
+        }
+    }
+    assert_eq!(bands, [true; 7]);
 }

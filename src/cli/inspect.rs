@@ -20,6 +20,13 @@ fn parse<'a>(path: &Path, bytes: &'a [u8]) -> Result<Pvis<'a>> {
     Pvis::parse(bytes).map_err(|e| anyhow!("{}: {e}", path.display()))
 }
 
+/// The shells of a file's SHEL records (`0..=K` less the sampling sphere's `J`), outermost
+/// first.
+fn records(pvis: &Pvis<'_>) -> impl Iterator<Item = u32> {
+    let sampling = pvis.sampling_shell();
+    (0..=pvis.shell_count()).filter(move |&s| s != sampling)
+}
+
 /// Runs `patchvis info`.
 pub fn info(args: &InfoArgs) -> Result<()> {
     let bytes = read(&args.file)?;
@@ -45,9 +52,11 @@ pub fn info(args: &InfoArgs) -> Result<()> {
                 "patch_table": pvis.patch_table_bytes(),
                 "shells": pvis.shells_bytes(),
             },
-            "shells": (1..=pvis.shell_count()).map(|k| {
+            "sampling_shell": pvis.sampling_shell(),
+            "shells": records(&pvis).map(|k| {
                 let shell = pvis.shell(k);
                 json!({
+                    "shell": k,
                     "distance": shell.distance,
                     "level": shell.level,
                     "views": shell.views,
@@ -102,7 +111,13 @@ pub fn info(args: &InfoArgs) -> Result<()> {
                 pvis.shell_count(),
                 pvis.shells_bytes()
             )?;
-            for k in 1..=pvis.shell_count() {
+            if pvis.sampling_shell() > 0 {
+                outln!(
+                    "    the sampling sphere is shell {}, the shells before it lie beyond it",
+                    pvis.sampling_shell()
+                )?;
+            }
+            for k in records(&pvis) {
                 let shell = pvis.shell(k);
                 outln!(
                     "    shell {k}: distance {} ({:.3} radii), {} views (level {}), {} bytes (encoding {})",

@@ -2,13 +2,22 @@
  * query.c — exercises the patchvis C ABI (include/patchvis.h) on one .pvis file.
  *
  *     query FILE.pvis [X,Y,Z ...]
+ *     query FILE.pvis --bands
  *     query FILE.pvis --frustum [X,Y,Z ...]
  *
  * For a valid file prints, in the conformance dump's format (tests/conformance/README.md),
- * the header counts, every patch's triangle range, every view's row and one `query` line per
- * position given (checking on the way that patchvis_ranges merges the visible ranges); the positions are echoed as given, so the lines compare byte for byte with
- * the expected dump. For a refused file prints `error: <the reader's one-line verdict>` and
- * exits 1. tests/c/run.sh compares both against the conformance vectors.
+ * the header counts, every patch's triangle range, the shells (their count, the sampling
+ * sphere's number J and every other shell's record), every view's row and one `query` line
+ * per position given, checking on the way that patchvis_ranges merges the visible ranges and
+ * that the band and answering shells follow the band rule; the positions are echoed as
+ * given, so the lines compare byte for byte with the expected dump. For a refused file prints
+ * `error: <the reader's one-line verdict>` and exits 1. tests/c/run.sh compares both against
+ * the conformance vectors.
+ *
+ * With --bands, prints after the header counts, ranges and shells the positions to query
+ * instead (one X,Y,Z a line, no colon): eyes in every band of the file's shells, from 1000
+ * sampling distances out to the centre. run.sh queries them and compares the answers with
+ * `patchvis query`.
  *
  * With --frustum, prints instead one line per finite position: a camera there looking at a
  * point half a radius beside the model's centre (OpenGL perspective, 40 degrees), its
@@ -23,6 +32,9 @@
 #include <string.h>
 
 #include "patchvis.h"
+
+/* Most shells a file has besides the sampling sphere (spec/FORMAT.md, Resource limits). */
+#define MAX_SHELLS 8
 
 static uint8_t *read_file(const char *path, size_t *len) {
     FILE *f = fopen(path, "rb");
@@ -75,6 +87,54 @@ static void view_projection(const double eye[3], const double target[3], double 
         for (int k = 0; k < 4; k++) v += proj[4 * k + i % 4] * view[4 * (i / 4) + k];
         out[i] = (float)v;
     }
+}
+
+/* The --bands mode: see the header comment. Eyes in three directions at radii in every band:
+ * beyond the outermost shell (up to 1000 times the sampling distance), between each two
+ * shells (their geometric mean), on the sampling sphere and inside the innermost shell. */
+static void band_positions(const PatchvisInfo *info, const float *distances, uint32_t shells) {
+    double radii[2 * MAX_SHELLS + 8];
+    size_t n = 0;
+    radii[n++] = 1000.0 * info->distance;
+    radii[n++] = 1.5 * distances[0];
+    for (uint32_t s = 1; s <= shells; s++) radii[n++] = sqrt((double)distances[s - 1] * distances[s]);
+    radii[n++] = info->distance;
+    radii[n++] = 0.9 * distances[shells];
+    radii[n++] = 0.5 * distances[shells];
+    static const double directions[3][3] = {
+        {0.36, 0.48, 0.8}, {-0.6, 0.64, -0.48}, {0.0, -0.6, 0.8}};
+    for (size_t i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++) {
+            const double *u = directions[k];
+            printf("%.9g,%.9g,%.9g\n", (float)(info->center[0] + radii[i] * u[0]),
+                   (float)(info->center[1] + radii[i] * u[1]),
+                   (float)(info->center[2] + radii[i] * u[2]));
+        }
+    /* The centre itself: inside every shell. */
+    printf("%.9g,%.9g,%.9g\n", info->center[0], info->center[1], info->center[2]);
+}
+
+/* Checks an answer against the band rule (spec/FORMAT.md, section Query): the band counts the
+ * shells the eye is inside (checked where the eye is not within a few ulps of a shell's
+ * sphere, which the reader decides in its own float arithmetic); band 0 answers from shell 0,
+ * 1..K from shells band - 1 and band, K + 1 from shell K with inside_sphere. */
+static int check_band(const PatchvisInfo *info, const float eye[3], const float *distances,
+                      uint32_t shells, const PatchvisVisible *vis) {
+    if (!isfinite(eye[0]) || !isfinite(eye[1]) || !isfinite(eye[2]))
+        return vis->band == shells + 1 && vis->inside_sphere ? 0 : 1;
+    double d2 = 0;
+    for (int k = 0; k < 3; k++) d2 += ((double)eye[k] - info->center[k]) * (eye[k] - info->center[k]);
+    for (uint32_t s = 0; s <= shells; s++) {
+        double r2 = (double)distances[s] * distances[s];
+        if (d2 < r2 * (1 - 1e-5) && vis->band <= s) return 1;
+        if (d2 > r2 * (1 + 1e-5) && vis->band > s) return 1;
+    }
+    uint32_t outer = vis->band == 0 ? 0 : vis->band - 1;
+    uint32_t inner = vis->band > shells ? shells : vis->band;
+    if (vis->band > shells + 1 || vis->shells[0] != outer || vis->shells[1] != inner ||
+        vis->inside_sphere != (vis->band == shells + 1))
+        return 1;
+    return 0;
 }
 
 /* The --frustum mode: see the header comment. */
@@ -200,28 +260,32 @@ int main(int argc, char **argv) {
         printf("patch %u: first %u count %u\n", p, first, count);
     }
 
-    /* Sampling shells: 0..K by decreasing distance, the sampling sphere among them (shell 0
-     * unless the file has a far band, version 6). It is the one at the sampling distance,
-     * which no SHEL record may have; the others are the SHEL records. */
-    uint32_t shells = patchvis_shell_count(&file), sampling = shells + 1;
+    /* Sampling shells 0..K by decreasing distance: shell J is the sampling sphere, the others
+     * the SHEL records (J of them beyond the sampling distance, version 6). */
+    uint32_t shells = patchvis_shell_count(&file);
+    uint32_t sampling = patchvis_sampling_shell(&file);
+    float distances[MAX_SHELLS + 1];
     PatchvisShell shell;
-    if (patchvis_shell(&file, shells + 1, &shell) != PATCHVIS_ERR_RANGE ||
-        patchvis_shell(&file, 0, NULL) != PATCHVIS_ERR_ARGUMENT)
+    if (shells > MAX_SHELLS || sampling > shells || patchvis_sampling_shell(NULL) != 0 ||
+        patchvis_shell(&file, shells + 1, &shell) != PATCHVIS_ERR_RANGE ||
+        patchvis_shell(&file, 0, NULL) != PATCHVIS_ERR_ARGUMENT ||
+        patchvis_shell(&file, sampling, &shell) != PATCHVIS_OK || shell.level != info.level ||
+        shell.views != info.views || shell.distance != info.distance)
         return 3;
-    for (uint32_t k = 0; k <= shells; k++) {
-        if (patchvis_shell(&file, k, &shell) != PATCHVIS_OK) return 3;
-        if (shell.distance != info.distance) continue;
-        if (sampling <= shells || shell.level != info.level || shell.views != info.views) return 3;
-        sampling = k;
-    }
-    if (sampling > shells) return 3;
-    if (shells > 0) printf("shells: %u\n", shells);
-    for (uint32_t k = 0; k <= shells; k++) {
-        if (k == sampling) continue;
-        if (patchvis_shell(&file, k, &shell) != PATCHVIS_OK) return 3;
-        printf("shell %u: distance %g level %u views %u encoding %u bytes %llu\n", k,
+    if (shells > 0) printf("shells: %u\nsampling shell: %u\n", shells, sampling);
+    for (uint32_t s = 0; s <= shells; s++) {
+        if (patchvis_shell(&file, s, &shell) != PATCHVIS_OK) return 3;
+        distances[s] = shell.distance;
+        if (s > 0 && !(shell.distance < distances[s - 1])) return 3;
+        if (s == sampling) continue;
+        printf("shell %u: distance %g level %u views %u encoding %u bytes %llu\n", s,
                shell.distance, shell.level, shell.views, shell.encoding,
                (unsigned long long)shell.bytes);
+    }
+    if (argc >= 3 && strcmp(argv[2], "--bands") == 0) {
+        band_positions(&info, distances, shells);
+        free(data);
+        return 0;
     }
 
     size_t words = patchvis_scratch_words(&file);
@@ -267,6 +331,7 @@ int main(int argc, char **argv) {
             memcmp(streamed.inner_leaf, vis.inner_leaf, sizeof vis.inner_leaf) != 0 ||
             memcmp(streamed.bits, vis.bits, words * sizeof *vis.bits) != 0)
             return 4;
+        if (check_band(&info, eye, distances, shells, &vis) != 0) return 4;
         printf("query %s -> inside %s", argv[i], vis.inside_sphere ? "true" : "false");
         /* A file with shells also says which band and shells answered. */
         if (shells > 0) printf(" band %u shells [%u,%u]", vis.band, vis.shells[0], vis.shells[1]);

@@ -2,7 +2,9 @@
 // conformance vector (tests/conformance): each valid file opens with the dump's counts and
 // answers every `query` line of its dump (inside flag, band, answering shells, both shells'
 // views, the visible patches) with the triangle ranges its `patch` lines give, merged; each
-// invalid file is refused with the reference reader's exact message. The module is a full
+// invalid file is refused with the reference reader's exact message. Every `query` line is
+// asked, whatever its band: eyes nearer the model, at the sampling distance and beyond it
+// (version 6's far band). Dump lines this test does not know are skipped. The module is a full
 // reader (Cargo feature `wasm` includes `shells`), so the dumps' `far-query` lines, a far-only
 // reader's answers, are not its answers. Run by tests/wasm/run.sh (CI); needs Node 18+.
 import { readFileSync, readdirSync } from "node:fs";
@@ -20,6 +22,7 @@ const failures = [];
 
 let queries = 0;
 let shellQueries = 0; // of files with sampling shells
+let farQueries = 0; // of files with sampling shells, eyes beyond the sampling distance
 
 function check(name, ok, what) {
   if (!ok) failures.push(`${name}: ${what}`);
@@ -41,6 +44,10 @@ for (const entry of readdirSync(join(vectors, "valid")).filter((f) => f.endsWith
   check(name, file.patchCount === field("patches"), `patches ${file.patchCount}`);
   check(name, file.triangleCount === field("triangles"), `triangles ${file.triangleCount}`);
   check(name, file.level === field("level") && file.views === field("views"), "level/views");
+  // The sampling sphere: `camera: center [x, y, z] radius r distance d ...`.
+  const camera = /^camera: center \[([^\]]*)\] radius \S+ distance (\S+)/m.exec(dump);
+  const center = camera ? camera[1].split(", ").map(number) : [0, 0, 0];
+  const distance = camera ? number(camera[2]) : Infinity;
   const range = new Map();
   for (const l of lines) {
     const m = /^patch (\d+): first (\d+) count (\d+)$/.exec(l);
@@ -57,8 +64,11 @@ for (const entry of readdirSync(join(vectors, "valid")).filter((f) => f.endsWith
       continue;
     }
     queries++;
-    if (m[3] !== undefined) shellQueries++;
     const [x, y, z] = m[1].split(",").map(number);
+    if (m[3] !== undefined) {
+      shellQueries++;
+      if (Math.hypot(x - center[0], y - center[1], z - center[2]) > distance) farQueries++;
+    }
     const got = file.query(x, y, z);
     const patches = list(m[7]);
     const merged = [];
@@ -105,6 +115,6 @@ if (failures.length > 0) {
   process.exit(1);
 }
 console.log(
-  `wasm reader: ${queries} queries (${shellQueries} of files with sampling shells) and ${refused} ` +
-    "refusals match the conformance vectors",
+  `wasm reader: ${queries} queries (${shellQueries} of files with sampling shells, ${farQueries} ` +
+    `of them beyond the sampling distance) and ${refused} refusals match the conformance vectors`,
 );

@@ -4,8 +4,9 @@
 # builds the demo (web/build.sh, with the debug patchvis binary), then
 #   1. bakes tests/data/obj/globe.obj (textured) to .glb and .gltf and checks both with two
 #      independent readers (tests/web/check_gltf.mjs);
-#   2. drives web/ in headless Chromium (tests/web/viewer.mjs): 24 camera positions over every
-#      band of the bunny's sampling shells against `patchvis query`, a dropped .glb + .pvis
+#   2. drives web/ in headless Chromium (tests/web/viewer.mjs): 33 camera positions over every
+#      band of the bunny's shells, near the model and up to 1000 sampling distances out,
+#      against `patchvis query`, a dropped .glb + .pvis
 #      pair, no console errors; the screenshot goes to tests/web/out/viewer.png (docs/viewer.png
 #      is one).
 # Used by .ci/run; needs Node 18 or newer, npm and Chromium (CHROMIUM, default

@@ -1,11 +1,12 @@
 // Drives the viewer (web/index.html) in headless Chromium and checks its answers against
 // `patchvis query`: serves web/ on an ephemeral local port, loads the bunny demo (a default
-// bake, with sampling shells), moves the camera to 24 positions spread over every band (inside
-// the innermost shell, between each two shells, at the sampling distance D, and beyond it up to
-// 1000 D), and for each compares the page's visible patches, ranges, inside flag, band and
-// answering shells with the command's, and the triangles the page draws with the ranges' sum
-// (everything only inside the innermost shell). Fails on any console error, page error or
-// failed request, or if a band has no eye. Writes a screenshot. Used by tests/web/run.sh.
+// bake: shells near the model and far ones beyond the sampling distance D), moves the camera
+// to positions spread over every band (inside the innermost shell, between each two shells, at
+// D, and beyond the outermost shell up to 1000 D; 33 with the default shells), and for each
+// compares the page's visible patches, ranges, inside flag, band and answering shells with the
+// command's, and the triangles the page draws with the ranges' sum (everything only inside the
+// innermost shell). Fails on any console error, page error or failed request, on fewer than 24
+// eyes, or if a band has no eye. Writes a screenshot. Used by tests/web/run.sh.
 //
 //   node tests/web/viewer.mjs PATCHVIS_BINARY SCREENSHOT.png
 import { createServer } from "node:http";
@@ -27,17 +28,18 @@ function run(args) {
   return JSON.parse(out.stdout);
 }
 
-// The eyes: Fibonacci directions around the sampling sphere's centre, at 8 distances, 3 eyes
-// each: 1000, 10 and 1.5 times the sampling distance D_0 and D_0 itself (band 0, or 1 where
-// the rounded eye falls inside), the geometric mean of each two neighbouring shells' distances
-// (bands 1..K), and 0.9 and 0.5 times the innermost shell's (band K + 1, drawn whole).
+// The eyes: Fibonacci directions around the sampling sphere's centre, 3 eyes at each distance:
+// 1000 and 10 times the sampling distance D and 1.5 times the outermost shell's (band 0 where
+// they lie beyond it), the geometric mean of each two neighbouring shells' distances (bands
+// 1..K), D itself (either side of it, as the eye rounds), and 0.9 and 0.5 times the innermost
+// shell's (band K + 1, drawn whole). The shells: the sampling sphere and the file's K others.
 const info = run(["info", PVIS, "--json"]);
 const { camera } = info;
-const distances = [camera.distance, ...info.shells.map((s) => s.distance)];
+const distances = [camera.distance, ...info.shells.map((s) => s.distance)].sort((a, b) => b - a);
 const between = distances.slice(1).map((d, k) => Math.sqrt(d * distances[k]));
 const innermost = distances[distances.length - 1];
-const radii = [1000, 10, 1.5, 1].map((x) => x * camera.distance);
-radii.push(...between, 0.9 * innermost, 0.5 * innermost);
+const radii = [1000 * camera.distance, 10 * camera.distance, 1.5 * distances[0]];
+radii.push(...between, camera.distance, 0.9 * innermost, 0.5 * innermost);
 const eyes = [];
 const n = 3 * radii.length;
 for (let i = 0; i < n; i++) {
@@ -111,6 +113,7 @@ try {
   for (let band = 0; band < distances.length + 1; band++) {
     if (!bands.has(band)) problems.push(`no eye in band ${band} (${distances.length - 1} shells)`);
   }
+  if (eyes.length < 24) problems.push(`only ${eyes.length} eyes`);
   console.log(
     `bands: ${[...bands].sort(([a], [b]) => a - b).map(([b, k]) => `${k} eyes in band ${b}`).join(", ")}`,
   );
