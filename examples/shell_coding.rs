@@ -55,7 +55,7 @@ fn main() {
     let pvis = Pvis::parse(&bytes).expect("a valid .pvis file");
     let words = pvis.row_words();
     let patches = i64::from(pvis.patch_count());
-    // Every row of every shell, shell 0 (the sampling sphere) first.
+    // Every row of every shell, outermost first (the sampling sphere among them).
     let rows: Vec<Vec<Vec<u64>>> = (0..=pvis.shell_count())
         .map(|s| {
             (0..pvis.shell(s).views)

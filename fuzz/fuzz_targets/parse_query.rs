@@ -72,7 +72,7 @@ fn exercise(file: &[u8], eyes: &[[f32; 3]]) {
     } else {
         !0u64 << (patches % 64)
     };
-    // Every shell's rows (shell 0 is the sampling sphere; version 5 adds SHEL's shells).
+    // Every shell's rows (0..=K by decreasing distance, the sampling sphere among them).
     let shells: Vec<Vec<u64>> = (0..=pvis.shell_count())
         .map(|s| {
             let mut rows = vec![0u64; words * pvis.shell(s).views as usize];
