@@ -461,7 +461,8 @@ pub struct QueryArgs {
           requires = "view_proj")]
     pub depth: DepthArg,
     /// Instead of one query, time N queries per mode (expanded; streaming staying in a leaf;
-    /// streaming along a smooth orbit, counting leaf changes) and print median nanoseconds.
+    /// streaming along a smooth orbit, counting leaf changes) from seeded eyes at 1.5 times
+    /// the sampling distance, and print median nanoseconds.
     #[arg(long, value_name = "N")]
     pub bench: Option<u32>,
     /// Print JSON instead of text.
