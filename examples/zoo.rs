@@ -12,8 +12,11 @@
 //! (`--conservative` with the all-corner fold).
 //!
 //! The zoo is the bundled `assets/bunny.ply` (a dense scan), `assets/ant.ply` (thin legs and
-//! antennae) and `assets/airplane.ply` (few large triangles, thin wings), plus two generated
-//! models of about `--triangles` triangles: `exposed-engine` and `truss`. Each model is baked
+//! antennae), `assets/airplane.ply` (few large triangles, thin wings) and three CAD models
+//! (`assets/README.md`): `cycloidal.ply` (a gear drive of 119 parts with narrow gaps),
+//! `omnicopter.stl` (a frame of thin rods and wires) and `fm1_satellite.glb` (a sheet-metal box
+//! with the electronics inside, seen through holes and slots), plus two generated models of
+//! about `--triangles` triangles: `exposed-engine` and `truss`. Each model is baked
 //! once per mode as `patchvis bake MESH -o FILE.pvis --shells 0 [--conservative]` does (the
 //! library's recipe, CPU backend, the command's defaults but for the shells) and evaluated as `patchvis eval MESH FILE.pvis
 //! --views N --seed S --resolution R` does, at R = the bake's `--resolution` (512) and 2R: the
@@ -55,17 +58,20 @@ const RESOLUTION_SCALES: [u32; 2] = [1, 2];
 
 /// Where a zoo model's mesh comes from.
 enum Source {
-    /// A PLY under `assets/`.
+    /// A mesh under `assets/`.
     Asset(&'static str),
     /// A generated model of about this many triangles.
     Generated(fn(u64) -> Box<dyn Model>),
 }
 
 /// The zoo, in table order.
-static ZOO: [(&str, Source); 5] = [
+static ZOO: [(&str, Source); 8] = [
     ("bunny", Source::Asset("bunny.ply")),
     ("ant", Source::Asset("ant.ply")),
     ("airplane", Source::Asset("airplane.ply")),
+    ("cycloidal", Source::Asset("cycloidal.ply")),
+    ("omnicopter", Source::Asset("omnicopter.stl")),
+    ("fm1-satellite", Source::Asset("fm1_satellite.glb")),
     (
         "exposed-engine",
         Source::Generated(|t| Box::new(ExposedEngine::new(t))),
@@ -130,7 +136,7 @@ struct Args {
         default_value = "default,conservative"
     )]
     modes: Vec<Mode>,
-    /// Models, comma-separated [default: bunny,ant,airplane,exposed-engine,truss].
+    /// Models, comma-separated [default: every model].
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     models: Vec<String>,
     /// About how many triangles the generated models have.

@@ -448,7 +448,11 @@ mod tests {
             let merged = merge(&parts).unwrap();
             assert_eq!(merged.bytes, single.bytes);
             // The shells too, whether or not the writer stores them yet.
-            assert_eq!(merged.shells.len(), crate::bake::DEFAULT_SHELLS as usize);
+            let far = crate::bake::DEFAULT_FAR_SHELLS.len();
+            assert_eq!(
+                merged.shells.len(),
+                far + crate::bake::DEFAULT_SHELLS as usize
+            );
             for ((distance, rows), shell) in merged.shells.iter().zip(&single.shells) {
                 assert_eq!((*distance, rows), (shell.distance, &shell.visibility));
             }

@@ -73,7 +73,10 @@ pub use settings::{
 };
 pub use shard::{SHARD_COUNT_ENV, Shard, ShardError};
 pub use shard_run::ShardBaked;
-pub use shells::{DEFAULT_SHELL_MIN, DEFAULT_SHELLS, MAX_SHELLS, bands, shell_distances};
+pub use shells::{
+    DEFAULT_FAR_SHELLS, DEFAULT_SHELL_MIN, DEFAULT_SHELLS, MAX_FAR_SHELL, MAX_SHELLS, bands,
+    far_bands, far_distances, shell_distances,
+};
 pub use stages::{StageRecord, Stages};
 pub use tiling_file::{TilingFile, read_tiling_file, write_tiling_file};
 

@@ -40,8 +40,16 @@ fn shells_lie_at_their_radii_and_follow_the_sampling_spheres_numbering() {
         f64::from(spatial.params.distance()),
         f64::from(spatial.params.radius),
     );
-    assert_eq!(spatial.shells.len(), shells::DEFAULT_SHELLS as usize);
-    for (s, shell) in spatial.shells.iter().enumerate() {
+    // The far band's shells first, outermost first, then the near ones.
+    let far = shells::DEFAULT_FAR_SHELLS.len();
+    assert_eq!(spatial.shells.len(), far + shells::DEFAULT_SHELLS as usize);
+    for (j, shell) in spatial.shells[..far].iter().enumerate() {
+        let expected = (d * shells::DEFAULT_FAR_SHELLS[far - 1 - j]) as f32;
+        assert_eq!(shell.distance, expected, "far shell {j}");
+        assert_eq!(shell.visibility.views(), view_count(1));
+        assert_eq!(shell.sampled_views, view_count(2));
+    }
+    for (s, shell) in spatial.shells[far..].iter().enumerate() {
         let expected =
             (d * (1.1 * r / d).powf((s + 1) as f64 / f64::from(shells::DEFAULT_SHELLS))) as f32;
         assert!(
@@ -112,6 +120,10 @@ fn every_pass_checkpoints_and_a_resumed_bake_gives_the_same_file() {
         names,
         [
             "b.pvis.ckpt",
+            "b.pvis.far1.ckpt",
+            "b.pvis.far1.vs1.m4.ckpt",
+            "b.pvis.far2.ckpt",
+            "b.pvis.far2.vs1.m4.ckpt",
             "b.pvis.shell1.ckpt",
             "b.pvis.shell1.vs1.m4.ckpt",
             "b.pvis.shell2.ckpt",
