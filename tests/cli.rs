@@ -570,13 +570,58 @@ const VERSION_4_FILE: &str = concat!(
 /// The small bake of the shells' tests: 200 patches, level 2, 64 px.
 const SHELL_FLAGS: [&str; 6] = ["--patches", "200", "--level", "2", "--resolution", "64"];
 
+/// The far band (format version 6): a default bake also samples shells at 2 and 256 sampling
+/// distances, which come first in the file; the sampling sphere's and the near shells' rows
+/// are those of a bake without it, byte for byte.
+#[test]
+fn default_bakes_sample_the_far_band_before_the_near_shells() {
+    let default = Bake::new(&SHELL_FLAGS).stats().run();
+    let out = common::stdout(&default.output);
+    assert!(
+        out.contains(
+            "far views: 2 shells of 66 views (level 2) at 2.00, 256.00 sampling distances"
+        ) && out.contains(", 4 sampling shells ("),
+        "{out}"
+    );
+    let near = Bake::new(&SHELL_FLAGS)
+        .args(&["--far-shells", "none"])
+        .run();
+    let (bytes, near_bytes) = (default.bytes(), near.bytes());
+    let (pvis, v5) = (
+        patchvis::runtime::Pvis::parse(&bytes).unwrap(),
+        patchvis::runtime::Pvis::parse(&near_bytes).unwrap(),
+    );
+    assert_eq!((pvis.version(), pvis.shell_count()), (6, 4));
+    assert_eq!((v5.version(), v5.shell_count()), (5, 2));
+    assert_eq!(pvis.sampling_shell(), 2);
+    let d = pvis.sampling().distance;
+    assert_eq!(pvis.shell(0).distance, (f64::from(d) * 256.0) as f32);
+    assert_eq!(pvis.shell(1).distance, (f64::from(d) * 2.0) as f32);
+    let words = pvis.row_words();
+    let (mut a, mut b) = (vec![0u64; words], vec![0u64; words]);
+    for (s, t) in [(2, 0), (3, 1), (4, 2)] {
+        assert_eq!(pvis.shell(s).distance, v5.shell(t).distance);
+        for v in 0..pvis.shell(s).views {
+            pvis.shell_view_row(s, v, &mut a);
+            v5.shell_view_row(t, v, &mut b);
+            assert_eq!(a, b, "shell {s} view {v}");
+        }
+    }
+    let shells = default.stats()["shells"].as_array().unwrap().clone();
+    assert_eq!(shells.len(), 4);
+    assert_eq!(shells[0]["views"], 66);
+}
+
 /// Near cameras (issue 22): a default bake samples two shells at `D·(1.1·R/D)^(s/2)`, each
 /// with the stored level's views and supersampling, reported in `--stats` and the summary;
 /// `--shells 0` writes the bytes bakes wrote before shells, and the bytes each shell adds
 /// are the difference.
 #[test]
 fn default_bakes_sample_two_shells_and_shells_0_writes_the_version_4_bytes() {
-    let default = Bake::new(&SHELL_FLAGS).stats().run();
+    let default = Bake::new(&SHELL_FLAGS)
+        .args(&["--far-shells", "none"])
+        .stats()
+        .run();
     let out = common::stdout(&default.output);
     assert!(
         out.contains("near views: 2 shells of 66 views (level 2) at 1.70, 1.10 bounding radii")
@@ -622,7 +667,8 @@ fn default_bakes_sample_two_shells_and_shells_0_writes_the_version_4_bytes() {
     // sampling sphere's rows do not depend on the shells (the probe's cells span the
     // camera distances the sphere answers for, which the shells bound).
     let none = Bake::new(&SHELL_FLAGS)
-        .args(&["--shells", "0", "--probe", "off", "--sampled-rows"])
+        .args(&["--shells", "0", "--far-shells", "none", "--probe", "off"])
+        .args(&["--sampled-rows"])
         .stats()
         .run();
     assert!(
@@ -631,7 +677,7 @@ fn default_bakes_sample_two_shells_and_shells_0_writes_the_version_4_bytes() {
     );
     assert_eq!(none.stats()["shells"], serde_json::json!([]));
     let plain = Bake::new(&SHELL_FLAGS)
-        .args(&["--probe", "off", "--sampled-rows"])
+        .args(&["--far-shells", "none", "--probe", "off", "--sampled-rows"])
         .stats()
         .run();
     let plain_shells = plain.stats()["shells"].as_array().unwrap().clone();
@@ -693,6 +739,8 @@ fn bad_shell_flags_are_usage_errors() {
         out_path.to_str().unwrap(),
         "--shells",
         "8",
+        "--far-shells",
+        "none",
         "--shell-min",
         "2.6131255",
     ]);

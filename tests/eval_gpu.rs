@@ -191,9 +191,10 @@ fn eval_file(pvis: &Path) -> Value {
 #[test]
 fn sweep_bakes_what_bake_writes_in_each_mode() {
     // The sweep bakes no sampling shells: it evaluates at the sampling distance.
-    let default = eval_file(&bake_small(&["--shells", "0"]).pvis);
+    let none = ["--shells", "0", "--far-shells", "none"];
+    let default = eval_file(&bake_small(&none).pvis);
     let plain = eval_file(
-        &bake_small(&["--view-supersample", "0", "--probe", "off", "--shells", "0"]).pvis,
+        &bake_small(&[&none[..], &["--view-supersample", "0", "--probe", "off"]].concat()).pvis,
     );
     for (mode, file) in [("default", &default), ("plain", &plain)] {
         let point = sweep_point(mode);

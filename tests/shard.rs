@@ -174,7 +174,7 @@ fn two_passes_and_scheduler_shards_merge_into_the_single_bake() {
     let merged = ok(merge_loud(&[&parts[2], &parts[0], &parts[1]], &out));
     let summary = common::stdout(&merged);
     assert!(
-        summary.contains("merged 3 shards: 66 views, 150 patches, 2 sampling shells"),
+        summary.contains("merged 3 shards: 66 views, 150 patches, 4 sampling shells"),
         "{summary}"
     );
     assert!(std::fs::read(&out).unwrap() == single(dir.path(), &flags, "1"));
@@ -304,7 +304,7 @@ fn merge_refuses_missing_repeated_foreign_and_damaged_parts() {
         1,
         &[
             s(&old_part),
-            "part file version 2, expected 8",
+            "part file version 2, expected 9",
             "bake this shard again",
         ],
     );

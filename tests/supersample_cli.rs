@@ -243,11 +243,12 @@ fn one_fold_corner_folds_each_finer_row_into_one_stored_view() {
 #[test]
 fn defaults_and_conservative_are_the_documented_flag_combinations() {
     // Default: one level of view supersampling, the probe pass at 1 pixel, the cover fold,
-    // over the sampling sphere (its shells sample as without the probe: no shells here).
-    let default = bake_default(&["--level", "1", "--shells", "0"]);
+    // over the sampling sphere (`--probe 1`'s cells span the bands between spheres of views,
+    // the default's lie at each sphere's own distance: no shells, near or far, here).
+    let default = bake_default(&["--level", "1", "--shells", "0", "--far-shells", "none"]);
     let flags = [
         &folded_level_1("0", "cover")[..],
-        &["--probe", "1", "--shells", "0"],
+        &["--probe", "1", "--shells", "0", "--far-shells", "none"],
     ];
     assert_eq!(default.bytes(), bake_default(&flags.concat()).bytes());
     // Without the probe: every finer patch folded into every corner.
@@ -275,11 +276,14 @@ fn defaults_and_conservative_are_the_documented_flag_combinations() {
     // the same rows.
     let (_, covered) = rows(&bake(&centroids));
     assert!(covered.count_ones() < probed.count_ones());
-    // Unless --level is given, --conservative stores level 5, its shells level 4.
-    let five = bake(&["--conservative", "--shells", "1"]).bytes();
+    // Unless --level is given, --conservative stores level 5, its shells, near and far,
+    // level 4.
+    let five = bake(&["--conservative", "--shells", "1", "--far-shells", "2"]).bytes();
     let file = Pvis::parse(&five).unwrap();
     assert_eq!(file.sampling().level, 5);
-    assert_eq!((file.shell(0).level, file.shell(1).level), (5, 4));
+    assert_eq!(file.sampling_shell(), 1);
+    let levels = [0, 1, 2].map(|s| file.shell(s).level);
+    assert_eq!(levels, [4, 5, 4]);
 }
 
 #[test]

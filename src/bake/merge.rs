@@ -286,11 +286,12 @@ fn encode_passes(
         .map(|_| stored(plan.far))
         .collect();
     // In the file's order: the far band outermost first, then the shells inside.
-    let shells: Vec<VisibilityMatrix> = far.into_iter().rev().chain(inner).collect();
-    // The parts carry the file's camera: the shells are where the single bake puts them.
-    let distances = plan
-        .file_shell_distances(&params)
+    // The parts carry the file's camera: the shells are where the single bake puts them (the
+    // far band left out, as it does, where binary32 cannot hold it around the model).
+    let (distances, dropped, _) = plan
+        .file_shells_in_world(&params)
         .map_err(|e| MergeError::part(path, format!("{e}; bake this shard again")))?;
+    let shells: Vec<VisibilityMatrix> = far.into_iter().rev().chain(inner).skip(dropped).collect();
     let order = encode::file_patch_order(plan.rows.patch_order, &first.patches, &visibility);
     let (patches, visibility, shells) = match order {
         Some(order) => (

@@ -399,6 +399,27 @@ impl Plan {
         Ok(all)
     }
 
+    /// [`Plan::file_shell_distances`] for a file whose rows were sampled in a working frame of
+    /// their own (a model far from unit scale, `frame.rs`), and how many far shells lead the
+    /// rows but are left out of the file: all of them, with the reason, where binary32 cannot
+    /// hold the far band's distances around the model (near `f32::MAX`); then the sampling
+    /// sphere's rows answer every camera beyond it.
+    pub fn file_shells_in_world(
+        &self,
+        params: &SamplingParams,
+    ) -> Result<(Vec<f32>, usize, Option<String>), SettingsError> {
+        let far = self.rows.far_shells.len();
+        match self.far_distances(params) {
+            Ok(_) => Ok((self.file_shell_distances(params)?, 0, None)),
+            Err(why) if far > 0 => Ok((
+                self.shell_distances(params)?,
+                far,
+                Some(format!("the far band is left out: {}", why.0)),
+            )),
+            Err(why) => Err(why),
+        }
+    }
+
     /// The spheres of views to sample around the sampling sphere `params` (at the stored
     /// level), in sampling order (the sampling sphere, the shells inside it outermost first,
     /// the far band innermost first), with their checkpoints beside `checkpoint` (none

@@ -355,12 +355,14 @@ impl Recipe {
         }
         // The file's shells are where a bake of the original in its own frame puts them: the
         // same rule on the file's camera.
-        let shells: Vec<BakedShell> = self
-            .plan
-            .file_shell_distances(&params)?
+        let (distances, dropped, why) = self.plan.file_shells_in_world(&params)?;
+        if let Some(why) = why {
+            progress.warn(&why);
+        }
+        let shells: Vec<BakedShell> = distances
             .into_iter()
-            .zip(shell_matrices)
-            .zip(shell_sampling)
+            .zip(shell_matrices.into_iter().skip(dropped))
+            .zip(shell_sampling.into_iter().skip(dropped))
             .map(
                 |((distance, visibility), (level, sampled_views, seconds))| BakedShell {
                     distance,

@@ -121,8 +121,9 @@ fn recipe_for(template: &BakeSettings, patches: u32, finest: u32) -> Result<Reci
         rows: RowSettings {
             level: Some(0),
             // The sweep evaluates the sampling sphere's levels at the sampling distance: no
-            // shells.
+            // shells, near or far.
             shells: 0,
+            far_shells: Vec::new(),
             ..template.rows.clone()
         },
         ..template.clone()

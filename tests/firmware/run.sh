@@ -5,7 +5,7 @@
 # on QEMU's netduinoplus2 (STM32F405) with semihosting, and compares every answer with the
 # dump's `query` lines: the firmware is a full reader (the library with feature `shells`), so
 # every eye is answered from the shells around it, with its band and both shells' views. Then
-# a small version-6 bake of the bundled bunny (far shells at 2, 4 and 256 sampling distances,
+# a small version-6 bake of the bundled bunny (far shells at 2 and 256 sampling distances,
 # two nearer the model) is queried in every band, from 1,000 sampling distances out to its
 # centre, against `patchvis query` (a debug build of the binary). Reports the reader's flash
 # (the `size_probe` firmware less `size_base`) and the RAM the queries used (stack high-water,
