@@ -172,7 +172,7 @@ pub struct BakeArgs {
     /// instead of drawing everything; inside the innermost shell the answer is flagged
     /// inside_sphere. Cost: each shell is one more sampling pass of the stored level (its
     /// views render several frustums each) and one more visibility matrix in the file. 0: no
-    /// shells, a version-4 file as before.
+    /// near shells (with --far-shells none, a version-4 file).
     #[arg(long, default_value_t = patchvis::bake::DEFAULT_SHELLS, value_name = "N")]
     pub shells: u32,
     /// The innermost shell's radius over the bounding radius: above 1 and below D/R (2.61 at
