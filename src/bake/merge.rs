@@ -283,7 +283,7 @@ fn encode_passes(
     let visibility = stored(plan.main);
     let inner: Vec<VisibilityMatrix> = (0..plan.rows.shells).map(|_| stored(plan.shell)).collect();
     let far: Vec<VisibilityMatrix> = (0..plan.rows.far_shells.len())
-        .map(|_| stored(plan.far))
+        .map(|_| stored(plan.shell))
         .collect();
     // In the file's order: the far band outermost first, then the shells inside.
     // The parts carry the file's camera: the shells are where the single bake puts them (the

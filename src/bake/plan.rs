@@ -146,10 +146,10 @@ pub struct Plan {
     pub rows: RowSettings,
     /// The sampling sphere.
     pub main: SphereSampling,
-    /// Each sampling shell.
+    /// Each sampling shell, near or far. The far band's are sampled as the near ones: without
+    /// the finer level or the probe, a camera between a far shell's views misses what a gap
+    /// shows (the exposed engine at 2×D: 94.3 % of views identical without the finer level).
     pub shell: SphereSampling,
-    /// Each shell of the far band.
-    pub far: SphereSampling,
     /// Whether the probe is the default bake's, which [`Plan::for_mesh`] turns off where it
     /// cannot run, and whose cells lie at each view's own distance.
     pub default_probe: bool,
@@ -260,14 +260,6 @@ impl Plan {
                 supersample: supersample(extra_levels.min(MAX_LEVEL - shell_level)),
                 probe,
             },
-            // The far band's shells are sampled as the near shells are: without the finer
-            // level or the probe, a camera between the sphere's views misses what a gap shows
-            // (the exposed engine at 2×D: 94.3 % of views identical without the finer level).
-            far: SphereSampling {
-                level: shell_level,
-                supersample: supersample(extra_levels.min(MAX_LEVEL - shell_level)),
-                probe,
-            },
             // Split needs the probe's rows: asking for it makes the probe a must.
             default_probe: r.probe == Probe::Default
                 && !conservative
@@ -334,13 +326,9 @@ impl Plan {
     /// each shell's, then each far shell's ([`Supersample::pass_levels`]).
     pub fn pass_levels(&self) -> Vec<u32> {
         let shell = self.shell.supersample.pass_levels(self.shell.level);
-        let far = self.far.supersample.pass_levels(self.far.level);
         let mut levels = self.main.supersample.pass_levels(self.main.level);
-        for _ in 0..self.rows.shells {
+        for _ in 0..self.rows.shells as usize + self.rows.far_shells.len() {
             levels.extend_from_slice(&shell);
-        }
-        for _ in 0..self.rows.far_shells.len() {
-            levels.extend_from_slice(&far);
         }
         levels
     }
@@ -453,8 +441,7 @@ impl Plan {
             .map(|(((kind, shell), band), checkpoints)| {
                 let sampling = match kind {
                     SphereKind::Sampling => self.main,
-                    SphereKind::Shell(_) => self.shell,
-                    SphereKind::Far(_) => self.far,
+                    SphereKind::Shell(_) | SphereKind::Far(_) => self.shell,
                 };
                 let resolution = match kind {
                     SphereKind::Shell(_) => self.rows.shell_resolution.unwrap_or(params.resolution),
@@ -533,7 +520,7 @@ impl Plan {
             )
             .chain(
                 (1..=self.rows.far_shells.len())
-                    .map(|j| sphere(&format!(".far{j}"), self.far.supersample)),
+                    .map(|j| sphere(&format!(".far{j}"), self.shell.supersample)),
             )
             .collect()
     }

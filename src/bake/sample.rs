@@ -6,7 +6,7 @@
 //! it are counted in the bake's minimum (`Recipe::check_mesh`). A shard samples the views it
 //! owns in each pass, each seeded and rendered as in the whole bake.
 
-use super::plan::{Plan, Sphere, SphereKind};
+use super::plan::{Plan, Sphere};
 use super::rows::SphereRows;
 use super::{Backend, BakeError, BakeSettings, Shard};
 use crate::ooc::Mesh;
@@ -115,10 +115,8 @@ impl Run<'_> {
             memory: Some(self.settings.memory.split().sampling),
             views,
             probe: sphere.sampling.probe,
-            shell: match sphere.kind {
-                SphereKind::Sampling => None,
-                SphereKind::Shell(_) | SphereKind::Far(_) => sphere.shell,
-            },
+            // `None` for the sampling sphere.
+            shell: sphere.shell,
             band: sphere.probe_band,
             folds_into: None,
             finer: crate::sampler::FinerViews::Midpoints,

@@ -107,37 +107,14 @@ fn shells_and_their_answers_match_the_dump() {
         );
     }
     // SAFETY: as above.
-    let (words, stream_words) = unsafe {
-        (
-            patchvis_scratch_words(&file),
-            patchvis_stream_scratch_words(&file),
-        )
-    };
+    let words = unsafe { patchvis_scratch_words(&file) };
     let mut scratch = vec![0u64; words];
-    let mut stream_scratch = vec![0u64; stream_words];
-    let mut stream = MaybeUninit::<PatchvisStream>::uninit();
-    // SAFETY: the scratch outlives the stream; nothing else uses it.
-    let ok = unsafe {
-        patchvis_stream_init(
-            &file,
-            stream_scratch.as_mut_ptr(),
-            stream_words,
-            stream.as_mut_ptr(),
-        )
-    };
-    assert_eq!(ok, PATCHVIS_OK);
+    let (_stream_scratch, mut stream) = stream_over(&file);
     let mut bands = [false; 5];
     for line in SHELLS_DUMP.lines().filter(|l| l.starts_with("query ")) {
         let position = line["query ".len()..].split(' ').next().unwrap();
         let eye: Vec<f32> = position.split(',').map(|t| t.parse().unwrap()).collect();
-        let mut streamed = MaybeUninit::<PatchvisVisible>::uninit();
-        // SAFETY: the stream was initialised above; `eye` has 3 floats.
-        let code = unsafe {
-            patchvis_stream_query(stream.as_mut_ptr(), eye.as_ptr(), streamed.as_mut_ptr())
-        };
-        assert_eq!(code, PATCHVIS_OK);
-        // SAFETY: written by the successful call.
-        let streamed = unsafe { streamed.assume_init() };
+        let streamed = stream_query(&mut stream, &eye);
         let visible = query_ok(&file, &eye, &mut scratch);
         let patches: Vec<String> = (0..300u32)
             .filter(|&p| scratch[p as usize / 64] >> (p % 64) & 1 == 1)
@@ -787,26 +764,10 @@ fn far_band_shells_and_their_answers_are_the_readers() {
         assert_eq!((shell.distance, shell.level), expected, "shell {s}");
     }
     // SAFETY: as above.
-    let (words, stream_words) = unsafe {
-        (
-            patchvis_scratch_words(&file),
-            patchvis_stream_scratch_words(&file),
-        )
-    };
+    let words = unsafe { patchvis_scratch_words(&file) };
     let mut scratch = vec![0u64; words];
     let mut rust_scratch = vec![0u64; words];
-    let mut stream_scratch = vec![0u64; stream_words];
-    let mut stream = MaybeUninit::<PatchvisStream>::uninit();
-    // SAFETY: the scratch outlives the stream; nothing else uses it.
-    let ok = unsafe {
-        patchvis_stream_init(
-            &file,
-            stream_scratch.as_mut_ptr(),
-            stream_words,
-            stream.as_mut_ptr(),
-        )
-    };
-    assert_eq!(ok, PATCHVIS_OK);
+    let (_stream_scratch, mut stream) = stream_over(&file);
     let mut bands = [false; 7];
     let radii = [1000.0, 300.0, 30.0, 3.0, 1.5, 1.0, 0.9, 0.7, 0.5, 0.0].map(|x| x * d);
     for (i, r) in radii.iter().enumerate() {
@@ -814,14 +775,7 @@ fn far_band_shells_and_their_answers_are_the_readers() {
             let eye = u.map(|x| x * r);
             let expected = pvis.query(eye, &mut rust_scratch);
             let visible = query_ok(&file, &eye, &mut scratch);
-            let mut streamed = MaybeUninit::<PatchvisVisible>::uninit();
-            // SAFETY: the stream was initialised above; `eye` has 3 floats.
-            let code = unsafe {
-                patchvis_stream_query(stream.as_mut_ptr(), eye.as_ptr(), streamed.as_mut_ptr())
-            };
-            assert_eq!(code, PATCHVIS_OK);
-            // SAFETY: written by the successful call.
-            let streamed = unsafe { streamed.assume_init() };
+            let streamed = stream_query(&mut stream, &eye);
             let place = |v: &PatchvisVisible| (v.band, v.shells, v.leaf, v.inner_leaf);
             let want = (
                 expected.band,
@@ -840,4 +794,30 @@ fn far_band_shells_and_their_answers_are_the_readers() {
         }
     }
     assert_eq!(bands, [true; 7]);
+}
+
+/// A streaming state over `file`, initialised, and the scratch it borrows: keep both alive
+/// together (moving them moves no borrowed memory: the scratch is on the heap).
+fn stream_over(file: &PatchvisFile) -> (Vec<u64>, MaybeUninit<PatchvisStream>) {
+    // SAFETY: a parsed file.
+    let words = unsafe { patchvis_stream_scratch_words(file) };
+    let mut scratch = vec![0u64; words];
+    let mut stream = MaybeUninit::<PatchvisStream>::uninit();
+    // SAFETY: the scratch outlives the stream (the caller keeps both); nothing else uses it.
+    let ok =
+        unsafe { patchvis_stream_init(file, scratch.as_mut_ptr(), words, stream.as_mut_ptr()) };
+    assert_eq!(ok, PATCHVIS_OK);
+    (scratch, stream)
+}
+
+/// `patchvis_stream_query` of the state [`stream_over`] made, from `eye`, which must succeed.
+fn stream_query(stream: &mut MaybeUninit<PatchvisStream>, eye: &[f32]) -> PatchvisVisible {
+    assert_eq!(eye.len(), 3);
+    let mut visible = MaybeUninit::<PatchvisVisible>::uninit();
+    // SAFETY: the stream was initialised by `stream_over`; `eye` has 3 floats.
+    let code =
+        unsafe { patchvis_stream_query(stream.as_mut_ptr(), eye.as_ptr(), visible.as_mut_ptr()) };
+    assert_eq!(code, PATCHVIS_OK);
+    // SAFETY: written by the successful call.
+    unsafe { visible.assume_init() }
 }

@@ -282,7 +282,7 @@ fn parse_shel<'a>(
     let mut shells = Shells::new(body, section.offset, count);
     // Version 6 lets the first records lie beyond the sampling distance (the far band).
     let mut outer = if version >= FAR_BAND_VERSION {
-        f32::MAX
+        f32::INFINITY
     } else {
         sampling.distance
     };
@@ -291,12 +291,9 @@ fn parse_shel<'a>(
         let record = section.offset + SHEL_HEADER_LEN + SHELL_RECORD_LEN * u64::from(k - 1);
         let distance = shells.distance(k);
         // Strictly decreasing, finite, never the sampling sphere's own distance, and inside
-        // it no nearer than the radius. The bounds are finite, so a distance between is.
-        if !(distance >= sampling.radius
-            && distance <= outer
-            && (k == 1 || distance < outer)
-            && distance != sampling.distance)
-        {
+        // it no nearer than the radius. Below `outer` and at least the radius, it is neither
+        // NaN nor infinite.
+        if !(distance >= sampling.radius && distance < outer && distance != sampling.distance) {
             return Err(Error::InvalidFloat {
                 what: Rule::ShellDistance,
                 offset: record,

@@ -230,8 +230,6 @@ fn every_shell_has_checkpoints_of_its_own_and_the_stored_levels_fold() {
     assert_eq!(c.shell.supersample.fold_corners, PROBE_FOLD_CORNERS);
     assert_eq!(c.shell.probe, Some(DEFAULT_PROBE_PIXELS));
     assert_eq!(c.shell.level, 4);
-    // The far band's shells are sampled as the near ones.
-    assert_eq!(c.far, c.shell);
     let all = checkpoints(&c);
     let near = shells::DEFAULT_SHELLS as usize;
     assert_eq!(all.len(), 1 + near + shells::DEFAULT_FAR_SHELLS.len());
