@@ -43,6 +43,7 @@ fn main() -> ExitCode {
         Command::Verify(args) => cli::verify::run(&args),
         Command::Tile(args) => cli::shard::tile(&args).map(|()| ExitCode::SUCCESS),
         Command::Merge(args) => cli::shard::merge(&args).map(|()| ExitCode::SUCCESS),
+        Command::Conformance(args) => cli::conformance::run(&args),
     };
     match result {
         Ok(code) => code,

@@ -34,6 +34,9 @@ pub enum Command {
     Tile(TileArgs),
     /// Merge the parts of a sharded bake (`bake --shard`) into the .pvis one bake writes.
     Merge(MergeArgs),
+    /// Test another .pvis reader against the conformance vectors, through a line protocol on
+    /// its stdin and stdout.
+    Conformance(ConformanceArgs),
 }
 
 /// `patchvis bake`.
@@ -420,6 +423,34 @@ pub struct VerifyArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `patchvis conformance`.
+#[derive(Debug, clap::Args)]
+pub struct ConformanceArgs {
+    /// The reader to test: a shell command whose process answers the line protocol of
+    /// tests/conformance/README.md ("Testing another reader") on stdin and stdout.
+    #[arg(long, value_name = "CMD", required_unless_present = "serve")]
+    pub reader: Option<String>,
+    /// The vectors' folder (tests/conformance in the sources): valid/, invalid/ and
+    /// far-only.txt.
+    #[arg(long, default_value = "tests/conformance", value_name = "DIR")]
+    pub vectors: PathBuf,
+    /// Seconds to wait for each reply before the vector fails.
+    #[arg(long, default_value_t = 10.0, value_name = "S", value_parser = parse_timeout)]
+    pub timeout: f64,
+    /// Answer the protocol on stdin and stdout as the reference reader does, instead: the
+    /// peer that --reader expects.
+    #[arg(long, conflicts_with = "reader")]
+    pub serve: bool,
+}
+
+/// A positive, finite number of seconds, at most a day.
+fn parse_timeout(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(t) if t > 0.0 && t <= 86_400.0 => Ok(t),
+        _ => Err(format!("{s}: expected seconds in (0, 86400]")),
+    }
 }
 
 /// `patchvis query`.

@@ -3,6 +3,7 @@
 pub mod args;
 pub mod bake;
 mod bake_common;
+pub mod conformance;
 pub mod eval;
 pub mod eval_bands;
 pub mod eval_frame;

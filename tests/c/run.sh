@@ -3,7 +3,8 @@
 # with `cc`, and compares its output with every conformance vector's expectation: the header
 # counts, patch ranges, shells (in order; the dump's `sampling shell` line where it has one),
 # view rows and every query line of each valid vector's dump (other dump lines are not
-# compared), and the exact error line of each invalid vector. Then, against the Rust reader's
+# compared), and the exact error line of each invalid vector; tests/c/serve.c through
+# `patchvis conformance`. Then, against the Rust reader's
 # answers through `patchvis query` (a debug build of the binary): the frustum queries
 # (query.c --frustum), and a version-6 bake (far shells beyond the sampling distance) queried
 # in every band, from 1000 sampling distances out to its centre (query.c --bands). Used by
@@ -22,8 +23,16 @@ native=$(sed -n 's/.*native-static-libs: //p' "$target-native-libs.txt" | tail -
 
 cc -std=c11 -Wall -Wextra -Werror -pedantic -O2 -Iinclude tests/c/query.c \
     "$target/release/libpatchvis.a" $native -lm -o "$target/query"
+cc -std=c11 -Wall -Wextra -Werror -pedantic -O2 -Iinclude tests/c/serve.c \
+    "$target/release/libpatchvis.a" $native -lm -o "$target/serve"
 cargo build --quiet --bin patchvis
 patchvis="${CARGO_TARGET_DIR:-target}/debug/patchvis"
+
+# The C ABI through the conformance harness (tests/conformance/README.md, "Testing another
+# reader"): every vector, truncated copies and frustum queries included.
+harness=$("$patchvis" conformance --reader "$target/serve") ||
+    { grep -v '^pass ' <<< "$harness"; echo "C ABI: conformance harness FAILED"; exit 1; }
+tail -n 1 <<< "$harness"
 
 # The lines compared, in order. A shell's number is left out: the dump and query.c may number
 # the SHEL records differently, and the order says which is which.

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the WebAssembly reader (wasm/build.sh), a full reader with the sampling shells, and
 # runs tests/wasm/conformance.mjs with Node: every conformance vector's `query` lines and
-# refusals through wasm/patchvis.mjs. Used by .ci/run; needs the wasm32-unknown-unknown Rust
+# refusals through wasm/patchvis.mjs; then the same module through `patchvis conformance
+# --reader 'node tests/wasm/adapter.mjs'`. Used by .ci/run; needs the wasm32-unknown-unknown Rust
 # target and Node 18 or newer. Where npm is present it first installs web/package.json's
 # packages (binaryen's wasm-opt among them), and then the module must meet its size targets:
 # at most 32,000 bytes, 13,000 gzipped.
@@ -13,6 +14,12 @@ fi
 built=$(bash wasm/build.sh)
 echo "$built"
 node tests/wasm/conformance.mjs
+# The module through the conformance harness (tests/conformance/README.md, "Testing another
+# reader"), truncated copies of every valid vector included.
+cargo build --quiet --bin patchvis
+harness=$("${CARGO_TARGET_DIR:-target}/debug/patchvis" conformance --reader 'node tests/wasm/adapter.mjs') ||
+  { grep -v '^pass ' <<< "$harness"; echo "wasm reader: conformance harness FAILED" >&2; exit 1; }
+tail -n 1 <<< "$harness"
 raw=$(wc -c < wasm/patchvis.wasm)
 gz=$(gzip -9 -c wasm/patchvis.wasm | wc -c)
 if [[ $built == *"wasm-opt -Oz"* ]] && { [ "$raw" -gt 32000 ] || [ "$gz" -gt 13000 ]; }; then
