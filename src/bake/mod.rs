@@ -9,16 +9,28 @@
 //! outputs so that they appear whole or not at all. The heap budget and its split between the
 //! stages is [`MemoryBudget`].
 //!
-//! ```no_run
+//! ```
 //! use patchvis::bake::{Backend, BakeSettings, Outputs, Stages};
 //! use patchvis::progress::NoProgress;
+//! use patchvis::runtime::Pvis;
 //!
-//! let recipe = BakeSettings { patches: 500, ..BakeSettings::default() }.check()?;
-//! let mesh = recipe.open("bunny.ply".as_ref())?;
+//! # let dir = tempfile::tempdir()?;
+//! # let mesh_path = dir.path().join("octahedron.obj");
+//! # std::fs::write(&mesh_path, "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n\
+//! #     f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n")?;
+//! # let out = dir.path().join("octahedron.pvis");
+//! let mut settings = BakeSettings { patches: 4, ..BakeSettings::default() };
+//! settings.rows.resolution = 64; // a small ID buffer for a small model
+//! let recipe = settings.check()?;
+//! let mesh = recipe.open(&mesh_path)?; // PLY, OBJ, STL or glTF, memory-mapped
 //! let mut stages = Stages::new();
 //! let baked = recipe.run(&mesh, &Backend::Cpu, &NoProgress, &mut stages)?;
-//! let outputs = Outputs { pvis: "bunny.pvis".into(), mesh: None };
-//! recipe.write(&baked, &mesh, &outputs, &mut stages)?;
+//! let outputs = Outputs { pvis: out.clone(), mesh: None };
+//! recipe.write(&baked, &mesh, &outputs, &mut stages)?; // a temporary file, then renamed
+//!
+//! let bytes = std::fs::read(&out)?;
+//! let pvis = Pvis::parse(&bytes)?;
+//! assert_eq!(pvis.patch_count(), 4);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!

@@ -21,6 +21,27 @@
 //! it, for devices too small for the shells' 2.9 KB of code. The WebAssembly module and the
 //! Cortex-M4F firmware keep the shells.
 //!
+//! ```
+//! use patchvis::runtime::Pvis;
+//!
+//! # let bytes: &[u8] = include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"),
+//! #     "/tests/conformance/valid/023-v6-level2-three-far-two-near-mixed-encodings.pvis"));
+//! let pvis = Pvis::parse(bytes)?; // validates everything once; no query can fail afterwards
+//! let mut scratch = vec![0u64; pvis.scratch_words()]; // or any caller-owned memory
+//! let visible = pvis.query([10.0, 10.0, -10.0], &mut scratch);
+//! assert!(!visible.inside_sphere);
+//! assert_eq!((visible.band, visible.shells), (1, [0, 1])); // between far shells 768 and 12
+//! for (first, count) in pvis.ranges(&visible) {
+//!     assert!(count > 0); // draw triangles first..first + count of the --mesh-out mesh
+//! }
+//!
+//! // A moving camera: the streaming reader decodes only where the leaf changed.
+//! let mut state = vec![0u64; pvis.scratch_bound()];
+//! let mut frames = pvis.streaming(&mut state);
+//! assert_eq!(frames.query([10.0, 10.0, -10.0]).count(), visible.count());
+//! # Ok::<(), patchvis::runtime::Error>(())
+//! ```
+//!
 //! **Invariant:** nothing here allocates or panics on any input; the only panics are `assert!`s
 //! on caller contracts (an out-of-range patch index, a too-small scratch buffer).
 //! Needs only `core` (and the core-only [`crate::sphere`]). Format: `spec/FORMAT.md`.

@@ -119,6 +119,14 @@ fn child(face: &Face, k: usize, [dab, dbc, dca]: [[f32; 3]; 3]) -> Face {
 /// child 1 if `dir · (m_bc × m_ab) ≥ 0`, else child 2 if `dir · (m_ca × m_bc) ≥ 0`, else
 /// child 3 — so a direction exactly on an edge or vertex resolves deterministically, and
 /// every direction (even zero or NaN) lands in exactly one leaf.
+///
+/// ```
+/// use patchvis::sphere::{locate, view_count};
+///
+/// let face = locate([0.3, 0.5, 0.8], 4);
+/// assert_eq!(face.level(), 4);
+/// assert!(face.views.iter().all(|&v| v < view_count(4))); // 1026 views at level 4
+/// ```
 pub fn locate(dir: [f32; 3], level: u32) -> Face {
     // `≥ 0` is positive; NaN compares false and so counts as negative.
     let negative = |c: f32| usize::from(c.partial_cmp(&0.0).is_none_or(|o| o.is_lt()));
