@@ -1,4 +1,5 @@
-//! What the integration tests share: the bundled model, one way to run the `patchvis` binary,
+//! What the integration tests share: the bundled model, running the `patchvis` binary to its end
+//! (`tests/hostile/support.rs` also spawns it, with deadlines and signals),
 //! one way to bake the bunny with it, and reading what it wrote. Each test crate uses a part
 //! of it (`mod common;`).
 #![allow(dead_code)]
