@@ -150,7 +150,10 @@ fn verify(bytes: &[u8], file: &str, time_limit: Option<f64>) -> Result<Summary, 
     }
     bars.start("rows", rows);
     // `None`: no limit, or one too far off to be a time.
-    let deadline = time_limit.and_then(|s| Some((start + Duration::try_from_secs_f64(s).ok()?, s)));
+    let deadline = time_limit.and_then(|s| {
+        let limit = Duration::try_from_secs_f64(s).ok()?;
+        Some((start.checked_add(limit)?, s))
+    });
     let mut done = 0u64;
     // Every view of the sampling sphere (shell 0) and of every sampling shell.
     for shell in 0..=pvis.shell_count() {
