@@ -18,3 +18,12 @@ mod inputs;
 
 #[path = "hostile/geometry.rs"]
 mod geometry;
+
+#[path = "hostile/stray.rs"]
+mod stray;
+
+#[path = "hostile/bounded.rs"]
+mod bounded;
+
+#[path = "hostile/parts.rs"]
+mod parts;

@@ -7,13 +7,18 @@
 //!   bits), then one bit flipped or the file cut where the input says. The intact file must
 //!   read back field for field; every damaged one must be refused (the CRC-32C catches any
 //!   single flipped bit and any truncation).
+//! - crafted (the same input, continued): every shard's part of that bake, then the input's
+//!   byte written into one of them where the input says and its CRC-32C recomputed, as a
+//!   hostile user would. Reading must refuse it or accept it; the merge of an accepted one
+//!   with the other shards must refuse or merge, never panic, and a merged file must parse.
 //!
 //! Run: `cargo fuzz run part` (nightly).
 
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use patchvis::bake::{Part, PassRows, Plan, Probe, Research, RowSettings, Shard};
+use patchvis::bake::{LoadedPart, Part, PassRows, Plan, Probe, Research, RowSettings, Shard, merge};
+use patchvis::runtime::crc32c::crc32c;
 use patchvis::sampler::{FinerViews, FoldCorners, SamplingParams};
 use patchvis::tiling::Patch;
 
@@ -42,7 +47,8 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     let level = u32::from(level % (MAX_FUZZ_LEVEL + 1));
-    let patches = u32::from(patches % (MAX_FUZZ_PATCHES + 1));
+    // A part of no patches is refused, as a `.pvis` of none is.
+    let patches = u32::from(patches % MAX_FUZZ_PATCHES) + 1;
     let count = u32::from(count % 8) + 1;
     let shard = Shard::new(u32::from(index) % count, count).unwrap();
     let extra_levels = u32::from(threshold >> 1 & 1);
@@ -73,6 +79,49 @@ fuzz_target!(|data: &[u8]| {
         ..RowSettings::default()
     };
     let plan = Plan::new(settings.clone()).expect("the fuzzed settings plan");
+    let part = |shard: Shard| shard_part(&settings, &plan, shard, level, patches, bits);
+    let bytes = part(shard).encode();
+    assert_eq!(Part::decode(&bytes).map(|p| p.encode()).as_ref(), Ok(&bytes));
+    let at = usize::from(damage_at) * bytes.len() / 256;
+    let mut flipped = bytes.clone();
+    flipped[at] ^= 1 << (damage_bit % 8);
+    assert!(Part::decode(&flipped).is_err(), "bit flipped at {at}");
+    assert!(Part::decode(&bytes[..at]).is_err(), "cut at {at}");
+
+    // Crafted: the byte written and the checksum made to hold again.
+    let mut crafted = bytes;
+    let body = crafted.len() - 4;
+    crafted[at.min(body - 1)] = damage_bit;
+    let crc = crc32c(&crafted[..body]);
+    crafted[body..].copy_from_slice(&crc.to_le_bytes());
+    let Ok(crafted) = Part::decode(&crafted) else {
+        return;
+    };
+    let parts: Vec<LoadedPart> = (0..count)
+        .map(|i| LoadedPart {
+            path: format!("part-{i}").into(),
+            part: if i == shard.index {
+                crafted.clone()
+            } else {
+                part(Shard::new(i, count).unwrap())
+            },
+        })
+        .collect();
+    if let Ok(merged) = merge(&parts) {
+        assert!(patchvis::runtime::Pvis::parse(&merged.bytes).is_ok());
+    }
+});
+
+/// Shard `shard`'s part of a bake with `settings` (planned as `plan`) at `level`, of
+/// `patches` one-triangle patches, its row bits drawn from `bits`.
+fn shard_part(
+    settings: &RowSettings,
+    plan: &Plan,
+    shard: Shard,
+    level: u32,
+    patches: u32,
+    bits: &[u8],
+) -> Part {
     let words_per_row = (patches as usize).div_ceil(64);
     let mut next_bit = bits.iter().cycle();
     let passes = plan
@@ -95,12 +144,12 @@ fuzz_target!(|data: &[u8]| {
             }
         })
         .collect();
-    let part = Part {
+    Part {
         mesh_hash: 7,
         tiling_hash: 9,
         shard,
         triangle_count: patches,
-        settings,
+        settings: settings.clone(),
         params: SamplingParams {
             level,
             resolution: 64,
@@ -120,12 +169,5 @@ fuzz_target!(|data: &[u8]| {
             })
             .collect(),
         passes,
-    };
-    let bytes = part.encode();
-    assert_eq!(Part::decode(&bytes).as_ref(), Ok(&part));
-    let at = usize::from(damage_at) * bytes.len() / 256;
-    let mut flipped = bytes.clone();
-    flipped[at] ^= 1 << (damage_bit % 8);
-    assert!(Part::decode(&flipped).is_err(), "bit flipped at {at}");
-    assert!(Part::decode(&bytes[..at]).is_err(), "cut at {at}");
-});
+    }
+}

@@ -68,3 +68,24 @@ pub(crate) fn encode(
         encoding,
     )
 }
+
+/// [`encode`] of records read from parts: the reader's error where they break the format.
+pub(crate) fn try_encode(
+    encoding: VisibilityEncoding,
+    params: &SamplingParams,
+    triangle_count: u32,
+    patches: &[Patch],
+    visibility: &VisibilityMatrix,
+    shells: &[ShellRows],
+) -> Result<Vec<u8>, crate::runtime::Error> {
+    format::try_encode_with(
+        &BakeContents {
+            sampling: params,
+            triangle_count: u64::from(triangle_count),
+            patches,
+            visibility,
+            shells,
+        },
+        encoding,
+    )
+}

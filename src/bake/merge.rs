@@ -4,23 +4,28 @@
 //! single bake writes.
 //!
 //! Before anything is merged every part must be whole (`part.rs`'s checks), of the same mesh,
-//! settings and tiling as the others (their hashes), of the same shard count, hold exactly
+//! settings and tiling as the others (their hashes), with the same camera and patch records
+//! (bit for bit), of the same shard count, hold exactly
 //! the views its shard owns, and every shard must be there once. A part that differs from the
 //! others is named by its path; when the parts disagree, the value most of them share is
 //! taken as the bake's (the first part's on a tie). The merge needs no mesh: the parts carry
 //! the file's camera and patch records. Cost: the fold, the numbering and the encoding of a
 //! bake, and the parts in memory (together, the sampled rows once).
 
-use super::part::Part;
+use super::part::{HEAD_BYTES, Part};
 use super::plan::{Plan, SphereSampling};
 use super::rows::SphereRows;
+use super::wire::{PATCH_BYTES, Put};
 use super::{BakeError, encode};
 use crate::format::ShellRows;
+use crate::mapped::{FileBytes, open_regular};
 use crate::runtime::Pvis;
 use crate::sphere::view_count;
 use crate::tiling::renumbered_patches;
 use crate::visibility::{SamplingParams, VisibilityMatrix};
+use std::io::Read as _;
 use std::path::{Path, PathBuf};
+use xxhash_rust::xxh64::xxh64;
 
 /// A part and the path it was read from (which errors name).
 #[derive(Clone, Debug)]
@@ -69,19 +74,50 @@ pub struct Merged {
 }
 
 /// Reads the part file at `path`.
+///
+/// The magic and the version are read and checked first ([`Part::check_head`]), so a file
+/// of another kind is refused whatever its size; then the file is mapped, not read.
 pub fn read_part(path: &Path) -> Result<LoadedPart, MergeError> {
-    let bytes = crate::mapped::open_regular(path)
-        .and_then(|(mut file, meta)| {
-            let mut bytes = Vec::with_capacity(meta.len() as usize);
-            std::io::Read::read_to_end(&mut file, &mut bytes)?;
-            Ok(bytes)
-        })
-        .map_err(|e| MergeError::part(path, format!("cannot read: {e}")))?;
-    let part = Part::decode(&bytes).map_err(|reason| MergeError::part(path, reason))?;
+    let cannot = |e: std::io::Error| MergeError::part(path, format!("cannot read: {e}"));
+    let refused = |reason: String| MergeError::part(path, reason);
+    let (file, metadata) = open_regular(path).map_err(cannot)?;
+    let mut head = Vec::with_capacity(HEAD_BYTES);
+    std::io::Read::read_to_end(&mut (&file).take(HEAD_BYTES as u64), &mut head).map_err(cannot)?;
+    Part::check_head(&head, metadata.len()).map_err(refused)?;
+    let bytes = FileBytes::open(&file, metadata.len()).map_err(cannot)?;
+    let part = Part::decode(&bytes).map_err(refused)?;
     Ok(LoadedPart {
         path: path.to_path_buf(),
         part,
     })
+}
+
+/// XXH64 of a part's camera (every field, bit for bit) and triangle count.
+fn camera_hash(part: &Part) -> u64 {
+    let p = &part.params;
+    let mut bytes = Vec::with_capacity(32);
+    for word in [
+        p.level,
+        p.resolution,
+        p.fov_deg.to_bits(),
+        p.radius.to_bits(),
+    ]
+    .into_iter()
+    .chain(p.center.map(f32::to_bits))
+    .chain([part.triangle_count])
+    {
+        bytes.put_u32(word);
+    }
+    xxh64(&bytes, 0)
+}
+
+/// XXH64 of a part's patch records, bit for bit.
+fn records_hash(part: &Part) -> u64 {
+    let mut bytes = Vec::with_capacity(part.patches.len() * PATCH_BYTES);
+    for patch in &part.patches {
+        bytes.put_patch(patch);
+    }
+    xxh64(&bytes, 0)
 }
 
 /// The value of `key` most parts share (the earliest part's on a tie).
@@ -126,6 +162,8 @@ fn check_set(parts: &[LoadedPart]) -> Result<u32, MergeError> {
     let mesh = consensus(parts, |p| p.mesh_hash);
     let settings = consensus(parts, |p| p.settings.hash());
     let tiling = consensus(parts, |p| p.tiling_hash);
+    let camera = consensus(parts, camera_hash);
+    let records = consensus(parts, records_hash);
     let count = consensus(parts, |p| u64::from(p.shard.count)) as u32;
     for LoadedPart { path, part } in parts {
         let differs = |what: &str, found: u64, expected: u64| {
@@ -152,6 +190,22 @@ fn check_set(parts: &[LoadedPart]) -> Result<u32, MergeError> {
                 "sampled another tiling (another tiling file, --patches, --tiling or --memory)",
                 part.tiling_hash,
                 tiling,
+            ));
+        }
+        // Parts of one tiling carry one camera and one set of records: the merge writes
+        // the first part's, so each must be the same.
+        if camera_hash(part) != camera {
+            return Err(differs(
+                "has another camera or triangle count than the other parts",
+                camera_hash(part),
+                camera,
+            ));
+        }
+        if records_hash(part) != records {
+            return Err(differs(
+                "has other patch records than the other parts",
+                records_hash(part),
+                records,
             ));
         }
         if part.shard.count != count {
@@ -309,14 +363,22 @@ fn encode_passes(
             visibility,
         })
         .collect();
-    let bytes = encode::encode(
+    let bytes = encode::try_encode(
         plan.rows.encoding,
         &params,
         first.triangle_count,
         &patches,
         &visibility,
         &shell_rows,
-    );
+    )
+    .map_err(|e| {
+        MergeError::part(
+            path,
+            format!(
+                "its camera and patch records break the .pvis format: {e}; bake this shard again"
+            ),
+        )
+    })?;
     let visibility_bytes = Pvis::parse(&bytes)
         .map(|p| p.visibility_bytes())
         .map_err(|e| {

@@ -25,7 +25,9 @@
 //! its camera, passes and views are exactly what that plan and its shard say. The shells'
 //! distances follow from the camera and the settings
 //! (`shells.rs`), so the merge computes them as the bake does. The camera and patch
-//! records are the original mesh's (a mesh baked in a working frame gets them as
+//! records are checked as the reader checks a `.pvis`'s (`Part::decode`), so that a part
+//! crafted under a recomputed checksum is refused, never merged into a file the format
+//! forbids. They are the original mesh's (a mesh baked in a working frame gets them as
 //! `Recipe::run` computes them). As the sampler's checkpoint does (`sampler/checkpoint.rs`),
 //! the version is bumped whenever the rows change for the same inputs, and the CRC-32C
 //! catches damage that would otherwise merge into a file that verifies but differs.
@@ -34,6 +36,7 @@ use super::plan::Plan;
 use super::settings::RowSettings;
 use super::shard::Shard;
 use super::wire::{Fields, PATCH_BYTES, Put};
+use crate::runtime::consts::MAX_PATCHES;
 use crate::runtime::crc32c::crc32c;
 use crate::sphere::view_count;
 use crate::tiling::Patch;
@@ -45,6 +48,10 @@ const MAGIC: &[u8; 8] = b"PVISPART";
 /// the same settings, and whenever the layout or the settings' codec does.
 const VERSION: u32 = 9;
 const CRC_BYTES: usize = 4;
+/// Bytes of the magic and the version, which [`Part::check_head`] checks.
+pub const HEAD_BYTES: usize = 12;
+/// Byte offset of the triangle count.
+const TRIANGLES_AT: usize = 44;
 /// What a refused part's message tells the user to do.
 const BAKE_AGAIN: &str = "bake this shard again";
 
@@ -131,20 +138,7 @@ impl Part {
     /// settings hash, the levels, ascending views, rows of the right length with zero
     /// padding). Never panics.
     pub fn decode(bytes: &[u8]) -> Result<Part, String> {
-        if bytes.len() < 12 + CRC_BYTES || &bytes[..8] != MAGIC {
-            return Err(format!(
-                "not a patchvis part file ({} bytes, expected the magic PVISPART); give the \
-                 files patchvis bake --shard wrote",
-                bytes.len()
-            ));
-        }
-        let version = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
-        if version != VERSION {
-            return Err(format!(
-                "part file version {version}, expected {VERSION} (written by another patchvis \
-                 build); {BAKE_AGAIN} with this one"
-            ));
-        }
+        Part::check_head(bytes, bytes.len() as u64)?;
         let body = bytes.len() - CRC_BYTES;
         let stored = u32::from_le_bytes([
             bytes[body],
@@ -159,16 +153,113 @@ impl Part {
                 bytes.len()
             ));
         }
-        Part::fields(&bytes[12..body]).ok_or_else(|| {
+        let (part, camera_at) = Part::fields(&bytes[12..body]).ok_or_else(|| {
             format!(
                 "part file's fields are out of range though its checksum holds (written by a \
                  faulty build?); {BAKE_AGAIN}"
             )
-        })
+        })?;
+        part.check(12 + camera_at).map_err(|e| {
+            format!("{e} (its checksum holds: written by a faulty build?); {BAKE_AGAIN}")
+        })?;
+        Ok(part)
     }
 
-    /// The fields after the version, or `None` if any is out of range.
-    fn fields(bytes: &[u8]) -> Option<Part> {
+    /// What the reader checks of a `.pvis`'s camera and patch table (spec § CAMR, § PTCH),
+    /// here before the merge writes them: a finite camera whose distance binary32 holds;
+    /// at least one and at most `MAX_PATCHES` patches whose triangle ranges are non-empty,
+    /// contiguous from triangle 0 and cover the part's triangles; finite bounding spheres of
+    /// non-negative radius, finite cone axes, cone cosines in [-1, 1], finite non-negative
+    /// areas. `camera_at` is the camera's byte offset in the file, the patch records follow
+    /// it; an error names the byte of the first field that breaks a rule.
+    fn check(&self, camera_at: usize) -> Result<(), String> {
+        let p = &self.params;
+        if !(p.center.iter().all(|c| c.is_finite())
+            && p.radius.is_finite()
+            && p.radius > 0.0
+            && p.distance().is_finite())
+        {
+            return Err(format!(
+                "byte {}: the camera's centre {:?} and radius {}, expected finite numbers, a \
+                 positive radius and a camera distance binary32 holds",
+                camera_at + 12,
+                p.center,
+                p.radius
+            ));
+        }
+        let count = self.patches.len();
+        if count == 0 || count > MAX_PATCHES as usize {
+            return Err(format!(
+                "byte {}: {count} patches, expected 1 to {MAX_PATCHES}",
+                camera_at + 28
+            ));
+        }
+        let records_at = camera_at + 32;
+        let mut next = 0u64;
+        for (i, patch) in self.patches.iter().enumerate() {
+            let at = records_at + i * PATCH_BYTES;
+            if u64::from(patch.first) != next || patch.count == 0 {
+                return Err(format!(
+                    "byte {at}: patch {i} covers triangles {}+{}, expected a non-empty range \
+                     starting at {next}",
+                    patch.first, patch.count
+                ));
+            }
+            next += u64::from(patch.count);
+            let sphere = patch.center.iter().all(|c| c.is_finite())
+                && patch.radius.is_finite()
+                && patch.radius >= 0.0;
+            let cone = patch.cone_axis.iter().all(|c| c.is_finite())
+                && (-1.0..=1.0).contains(&patch.cone_cos);
+            let area = patch.area.is_finite() && patch.area >= 0.0;
+            if !(sphere && cone && area) {
+                return Err(format!(
+                    "byte {at}: patch {i} has area {}, centre {:?}, radius {}, cone axis {:?} \
+                     and cosine {}, expected finite numbers, a non-negative area and radius \
+                     and a cosine in [-1, 1]",
+                    patch.area, patch.center, patch.radius, patch.cone_axis, patch.cone_cos
+                ));
+            }
+        }
+        if next != u64::from(self.triangle_count) {
+            return Err(format!(
+                "byte {}: the patches cover {next} triangles, expected the {} the part says \
+                 (byte {})",
+                records_at - 4,
+                self.triangle_count,
+                TRIANGLES_AT
+            ));
+        }
+        Ok(())
+    }
+
+    /// Checks the magic and the version, the first [`HEAD_BYTES`] of a file of `len` bytes
+    /// (`head` may hold more), so that a file of another kind is refused before the rest is
+    /// read.
+    pub fn check_head(head: &[u8], len: u64) -> Result<(), String> {
+        if len < (HEAD_BYTES + CRC_BYTES) as u64
+            || head.len() < HEAD_BYTES
+            || head[..8] != MAGIC[..]
+        {
+            return Err(format!(
+                "not a patchvis part file ({len} bytes, expected the magic PVISPART); give the \
+                 files patchvis bake --shard wrote"
+            ));
+        }
+        let version = u32::from_le_bytes([head[8], head[9], head[10], head[11]]);
+        if version != VERSION {
+            return Err(format!(
+                "part file version {version}, expected {VERSION} (written by another patchvis \
+                 build); {BAKE_AGAIN} with this one"
+            ));
+        }
+        Ok(())
+    }
+
+    /// The fields after the version and the offset of the camera among them, or `None` if
+    /// the layout does not hold (a count past the bytes, a pass or a view the settings and
+    /// the shard do not give, a padding bit set).
+    fn fields(bytes: &[u8]) -> Option<(Part, usize)> {
         let mut f = Fields::new(bytes);
         let mesh_hash = f.u64()?;
         let tiling_hash = f.u64()?;
@@ -183,6 +274,7 @@ impl Part {
         let settings = RowSettings::decode(block)?;
         // Settings that plan, and the camera of that plan's sampling sphere.
         let plan = Plan::new(settings.clone()).ok()?;
+        let camera_at = f.offset();
         let params = SamplingParams {
             level: f.u32()?,
             resolution: f.u32()?,
@@ -192,11 +284,7 @@ impl Part {
         };
         let camera = params.level == plan.level()
             && params.resolution == settings.resolution
-            && params.fov_deg.to_bits() == settings.fov_deg.to_bits()
-            && params.center.iter().all(|c| c.is_finite())
-            && params.radius.is_finite()
-            && params.radius > 0.0
-            && params.distance().is_finite();
+            && params.fov_deg.to_bits() == settings.fov_deg.to_bits();
         if !camera {
             return None;
         }
@@ -208,17 +296,6 @@ impl Part {
         let patches = (0..patch_count)
             .map(|_| f.patch())
             .collect::<Option<Vec<_>>>()?;
-        // Each record's triangles among the mesh's, its sphere finite.
-        let record = |p: &Patch| {
-            p.first
-                .checked_add(p.count)
-                .is_some_and(|end| end <= triangle_count)
-                && p.center.iter().all(|c| c.is_finite())
-                && p.radius.is_finite()
-        };
-        if !patches.iter().all(record) {
-            return None;
-        }
         let words_per_row = (patch_count as usize).div_ceil(64);
         let tail = patch_count % 64;
         let padding = if tail == 0 { 0 } else { !((1u64 << tail) - 1) };
@@ -257,7 +334,7 @@ impl Part {
                 words,
             });
         }
-        (f.offset() == bytes.len()).then_some(Part {
+        let part = Part {
             mesh_hash,
             tiling_hash,
             shard,
@@ -266,7 +343,8 @@ impl Part {
             params,
             patches,
             passes,
-        })
+        };
+        (f.offset() == bytes.len()).then_some((part, camera_at))
     }
 }
 

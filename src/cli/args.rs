@@ -87,8 +87,9 @@ pub struct BakeArgs {
     #[arg(long)]
     pub dilate: bool,
     /// Patches seen from every view: comma-separated ids, or a file of ids separated by
-    /// whitespace or commas (`#` starts a comment). Ids are the tiling's (spatial) numbering,
-    /// which a bake with `--patch-order spatial --mesh-out M.ply` shows.
+    /// whitespace or commas (`#` starts a comment; a regular file of at most 64 MiB). Ids are
+    /// the tiling's (spatial) numbering, which a bake with `--patch-order spatial --mesh-out
+    /// M.ply` shows.
     #[arg(long, value_name = "IDS|FILE")]
     pub always_visible: Option<String>,
     /// Conservative mode: stored level 5 (unless --level), the stored faces' centroids for
@@ -216,8 +217,11 @@ pub struct BakeArgs {
     #[arg(long, value_enum, default_value_t = PatchOrderArg::Covisibility, value_name = "ORDER")]
     pub patch_order: PatchOrderArg,
     /// How the file stores the visibility rows (spec/FORMAT.md § VISB): tree (encoding 2, the
-    /// smallest; format version 3), table (encoding 1, version 2: for readers that predate
-    /// version 3) or raw (encoding 0, one bit per view and patch, no decoding).
+    /// smallest), table (encoding 1) or raw (encoding 0, one bit per view and patch, no
+    /// decoding). It does not choose the version: a file with sampling shells (the default's
+    /// near shells and far band) is version 6 (5 without the far band) with the compact patch
+    /// table, whatever the encoding. Only with --shells 0 --far-shells none does tree write
+    /// version 4 and table or raw version 2, for readers that predate versions 3 to 6.
     #[arg(long, value_enum, default_value_t = EncodingArg::Tree, value_name = "ENCODING")]
     pub encoding: EncodingArg,
     /// Bake only shard I of N (I from 0 to N - 1) of the views into a part file (-o), for
@@ -411,8 +415,16 @@ pub struct InfoArgs {
     pub json: bool,
     /// Also print the visibility payload's size next to the raw matrix and the raw matrix
     /// compressed by `zstd -19` and `xz -9` (done in-process; no external tools needed).
+    /// It holds the matrix three times (every row decoded, the raw rows, the raw rows
+    /// renumbered: views × patches bits each), within --memory.
     #[arg(long)]
     pub compare: bool,
+    /// Heap --compare may use for the matrices it holds, e.g. 512MiB or 4GiB [default: half
+    /// of the available memory, at least 256 MiB]; a file whose matrices need more is
+    /// refused before any work. The compressors' own state (about 700 MiB for xz -9) comes on
+    /// top.
+    #[arg(long, value_name = "SIZE", value_parser = parse_size, requires = "compare")]
+    pub memory: Option<u64>,
 }
 
 /// `patchvis verify`.
@@ -423,6 +435,21 @@ pub struct VerifyArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Stop after this many seconds (decimals allowed) with the verdict "not verified" (exit
+    /// 1). verify decodes every row of every sphere of views: views × patches bits, which a
+    /// small file can make large (a 790 KB file of 65,538 views and 2^20 patches holds 2^36
+    /// bits: minutes). Past 2^32 bits it says so on stderr and shows its progress on a
+    /// terminal.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    pub time_limit: Option<f64>,
+}
+
+/// A duration in seconds: a finite, non-negative decimal number.
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("expected a number of seconds, found '{s}'")),
+    }
 }
 
 /// `patchvis conformance`.
@@ -493,8 +520,9 @@ pub struct QueryArgs {
     pub depth: DepthArg,
     /// Instead of one query, time N queries per mode (expanded; streaming staying in a leaf;
     /// streaming along a smooth orbit, counting leaf changes) from seeded eyes at 1.5 times
-    /// the sampling distance, and print median nanoseconds.
-    #[arg(long, value_name = "N")]
+    /// the sampling distance, and print median nanoseconds. N is 1 to 1000000.
+    #[arg(long, value_name = "N",
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(super::query_bench::MAX_QUERIES)))]
     pub bench: Option<u32>,
     /// Print JSON instead of text.
     #[arg(long)]
@@ -521,8 +549,10 @@ pub struct EvalArgs {
     /// The .pvis file (not with --sweep, which bakes its own).
     #[arg(required_unless_present = "sweep", value_name = "FILE.pvis")]
     pub file: Option<PathBuf>,
-    /// Number of seeded random camera positions.
-    #[arg(long, default_value_t = 200, value_name = "N")]
+    /// Number of seeded random camera positions, 1 to 1000000 (each is a render of the
+    /// whole mesh).
+    #[arg(long, default_value_t = 200, value_name = "N",
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(patchvis::eval::views::MAX_VIEWS)))]
     pub views: u32,
     /// Seed of the random camera positions.
     #[arg(long, default_value_t = 1, value_name = "S")]
@@ -561,8 +591,9 @@ pub struct EvalArgs {
     /// of random ones.
     #[arg(long, value_name = "L", conflicts_with_all = ["path", "sweep"])]
     pub sampling_level: Option<u32>,
-    /// Evaluate frame by frame along a path: `orbit` or `orbit:N` (N frames, default 120), or a
-    /// camera path file (one camera per line: `X Y Z` or `X Y Z TX TY TZ`).
+    /// Evaluate frame by frame along a path: `orbit` or `orbit:N` (N frames, 1 to 1000000,
+    /// default 120), or a camera path file (one camera per line: `X Y Z` or `X Y Z TX TY TZ`;
+    /// at most 1000000 cameras and 128 MiB).
     #[arg(long, value_name = "orbit[:N]|FILE", conflicts_with = "sweep")]
     pub path: Option<String>,
     /// Directory for pictures: PNGs of the worst views (full | reconstruction | difference),

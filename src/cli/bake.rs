@@ -15,7 +15,7 @@ use patchvis::bake::{
     RowSettings, Stages,
 };
 use patchvis::format::VisibilityEncoding;
-use patchvis::ooc::Mesh;
+use patchvis::ooc::{Mesh, read_regular};
 use patchvis::sampler::{FinerViews, FoldCorners, PassViews};
 use patchvis::tiling::PatchId;
 use serde_json::json;
@@ -358,8 +358,13 @@ impl Summary<'_> {
     }
 }
 
+/// The largest `--always-visible` file read: 64 MiB, several times every id of the largest
+/// patch count written out with a comment each.
+const IDS_FILE_MAX_BYTES: u64 = 64 << 20;
+
 /// `--always-visible`: comma-separated ids, or else the path of a file of ids separated by
-/// whitespace or commas with `#` comments. Sorted, without duplicates.
+/// whitespace or commas with `#` comments, a regular file of at most
+/// [`IDS_FILE_MAX_BYTES`]. Sorted, without duplicates.
 fn parse_patch_ids(spec: &str) -> Result<Vec<PatchId>, UsageError> {
     let list = |text: &str, origin: &str| -> Result<Vec<u32>, UsageError> {
         let mut ids = Vec::new();
@@ -389,10 +394,17 @@ fn parse_patch_ids(spec: &str) -> Result<Vec<PatchId>, UsageError> {
     if looks_like_ids {
         return list(spec, "list");
     }
-    let text = std::fs::read_to_string(spec).map_err(|e| {
+    let cannot = |e: &dyn std::fmt::Display| {
         UsageError(format!(
             "--always-visible {spec}: not a list of ids, and cannot read it as a file: {e}"
         ))
-    })?;
+    };
+    let bytes = read_regular(
+        std::path::Path::new(spec),
+        IDS_FILE_MAX_BYTES,
+        "a list of patch ids",
+    )
+    .map_err(|e| cannot(&e))?;
+    let text = String::from_utf8(bytes).map_err(|e| cannot(&e))?;
     list(&text, spec)
 }

@@ -13,13 +13,13 @@ use super::{UsageError, usage};
 use anyhow::{Context, Result, anyhow};
 use patchvis::bake::{MemoryBudget, Stages};
 use patchvis::eval::shade::RgbImage;
-use patchvis::eval::views::{self, PathCamera};
+use patchvis::eval::views::{self, MAX_VIEWS, PathCamera};
 use patchvis::eval::{
     Band, BandViews, EvalOptions, EvalSummary, Evaluator, ViewSet, metrics::Summary, open_mesh,
     path_plot,
 };
 use patchvis::format::{PvisFile, write_atomic};
-use patchvis::ooc::Mesh;
+use patchvis::ooc::{Mesh, read_regular};
 use patchvis::output::{NamedPath, check_outputs};
 use patchvis::runtime::Pvis;
 use patchvis::sampler::MAX_RESOLUTION;
@@ -50,13 +50,10 @@ impl Views {
         Ok(match (&args.path, args.sampling_level) {
             (Some(spec), _) => parse_path(spec)?,
             (None, Some(level)) => Views::Sampling { level },
-            (None, None) => {
-                usage(args.views == 0, || "--views 0: expected at least 1".into())?;
-                Views::Random {
-                    count: args.views,
-                    seed: args.seed,
-                }
-            }
+            (None, None) => Views::Random {
+                count: args.views,
+                seed: args.seed,
+            },
         })
     }
 
@@ -99,10 +96,10 @@ fn parse_path(spec: &str) -> Result<Views, UsageError> {
     let frames = match rest.strip_prefix(':') {
         None if rest.is_empty() => DEFAULT_ORBIT_FRAMES,
         Some(n) => match n.parse::<u32>() {
-            Ok(n) if n > 0 => n,
+            Ok(n) if (1..=MAX_VIEWS).contains(&n) => n,
             _ => {
                 return Err(UsageError(format!(
-                    "--path {spec}: expected orbit:N with N a positive frame count"
+                    "--path {spec}: expected orbit:N with N a frame count from 1 to {MAX_VIEWS}"
                 )));
             }
         },
@@ -493,19 +490,17 @@ fn check_output_dir(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))
 }
 
-/// A path file's cameras: a regular file, read whole, then parsed.
+/// The largest camera path file read: [`MAX_VIEWS`] lines of six numbers, with room.
+const PATH_FILE_MAX_BYTES: u64 = 128 << 20;
+
+/// A path file's cameras: a regular file of at most [`PATH_FILE_MAX_BYTES`], read whole,
+/// then parsed.
 fn read_camera_path(path: &Path) -> Result<Vec<PathCamera>> {
     // A FIFO would block the read, a device never end it.
-    let metadata =
-        std::fs::metadata(path).with_context(|| format!("{}: cannot read", path.display()))?;
-    if !metadata.is_file() {
-        return Err(anyhow!(
-            "{}: not a regular file, expected a camera path file",
-            path.display()
-        ));
-    }
-    let text = std::fs::read_to_string(path)
+    let bytes = read_regular(path, PATH_FILE_MAX_BYTES, "a camera path file")
         .with_context(|| format!("{}: cannot read", path.display()))?;
+    let text =
+        String::from_utf8(bytes).map_err(|e| anyhow!("{}: not UTF-8 text: {e}", path.display()))?;
     views::parse_camera_path(&text).map_err(|e| anyhow!("{}: {e}", path.display()))
 }
 

@@ -2,7 +2,7 @@
 //! (`info --compare`, `query --bench`) measure its payload and its three query modes.
 
 use super::UsageError;
-use super::args::{DepthArg, InfoArgs, QueryArgs};
+use super::args::{DepthArg, InfoArgs, QueryArgs, memory_budget};
 use super::out::outln;
 use super::view::LookAt;
 use anyhow::{Context, Result, anyhow};
@@ -31,6 +31,20 @@ fn records(pvis: &Pvis<'_>) -> impl Iterator<Item = u32> {
 pub fn info(args: &InfoArgs) -> Result<()> {
     let bytes = read(&args.file)?;
     let pvis = parse(&args.file, &bytes)?;
+    if args.compare {
+        // A small file can hold a large matrix: refused before anything is printed.
+        let (need, budget) = (compare_bytes(&pvis), memory_budget(args.memory).total());
+        if need > budget {
+            return Err(anyhow!(
+                "{}: info --compare holds {need} bytes for this file ({} views x {} patches, \
+                 the matrix three times), more than --memory {budget} bytes; give a larger \
+                 --memory",
+                args.file.display(),
+                pvis.sampling().views,
+                pvis.patch_count()
+            ));
+        }
+    }
     let s = pvis.sampling();
     if args.json {
         let report = json!({
@@ -135,6 +149,13 @@ pub fn info(args: &InfoArgs) -> Result<()> {
         compare(&pvis)?;
     }
     Ok(())
+}
+
+/// Heap bytes `info --compare` holds for `pvis`: every row decoded (the expanded table), then
+/// the raw rows twice ([`raw_matrices`]).
+fn compare_bytes(pvis: &Pvis<'_>) -> u64 {
+    let raw = u64::from(pvis.sampling().views) * u64::from(pvis.patch_count()).div_ceil(8);
+    8 * pvis.expanded_bound() as u64 + 2 * raw
 }
 
 /// The raw row-major matrix of a file, `ceil(P / 8)` bytes per view as VISB encoding 0: in

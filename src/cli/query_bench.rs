@@ -20,6 +20,10 @@ const BATCH: usize = 64;
 /// Queries of the stateless mode, which decodes a leaf's rows on every query.
 const STATELESS_QUERIES: usize = 200;
 
+/// The most queries `--bench` times per mode: a million is seconds of work, and each
+/// query's eye and answer are kept.
+pub(super) const MAX_QUERIES: u32 = 1_000_000;
+
 /// `query --bench N`: times each mode, then prints a line per mode.
 pub(super) fn bench(pvis: &Pvis<'_>, n: u32) -> Result<()> {
     let mut bench = Bench::new(pvis, n);

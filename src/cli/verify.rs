@@ -8,14 +8,27 @@
 //! `FILE: <first violation>`. Cost: one parse plus one pass over every row; the file is
 //! mapped, and anything that is not a regular file starting with the signature is refused
 //! before the rest is read.
+//!
+//! A row's cost is its patch count, not its bytes: rows that repeat their parents code in
+//! a few bits, so a small file can hold a large matrix (790 KB for 65,538 views of 2^20
+//! patches, 2^36 bits, minutes to decode). Past [`LONG_BITS`] decoded bits verify says so on
+//! stderr and draws its progress on a terminal; `--time-limit` stops it with the verdict
+//! "not verified".
 
 use super::args::VerifyArgs;
 use super::out::{StdoutError, outln};
+use super::progress::Bars;
 use patchvis::format::PvisFile;
+use patchvis::progress::Progress;
 use patchvis::runtime::Pvis;
 use serde_json::json;
 use std::fmt::Write as _;
 use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+/// Decoded bits past which verify says it will take long and shows its progress: about ten
+/// seconds of decoding.
+const LONG_BITS: u64 = 1 << 32;
 
 /// What a valid file holds, for the summary line.
 struct Summary {
@@ -39,7 +52,7 @@ pub fn run(args: &VerifyArgs) -> anyhow::Result<ExitCode> {
     // The signature is checked before the rest is read, and the file is mapped, not read.
     let verdict = PvisFile::open(&args.file)
         .map_err(|e| e.to_string())
-        .and_then(|bytes| verify(&bytes));
+        .and_then(|bytes| verify(&bytes, &file, args.time_limit));
     let code = match verdict {
         Ok(_) => ExitCode::SUCCESS,
         Err(_) => ExitCode::from(1),
@@ -88,8 +101,10 @@ fn report(
     }
 }
 
-/// Checks a whole file; `Err` is the first violation, as one line.
-fn verify(bytes: &[u8]) -> Result<Summary, String> {
+/// Checks a whole file (named `file` in the notice of a long check), within `time_limit`
+/// seconds if given; `Err` is the first violation, or why it stopped, as one line.
+fn verify(bytes: &[u8], file: &str, time_limit: Option<f64>) -> Result<Summary, String> {
+    let start = Instant::now();
     let pvis = Pvis::parse(bytes).map_err(|e| e.to_string())?;
     let sampling = pvis.sampling();
     let patches = pvis.patch_count();
@@ -122,15 +137,45 @@ fn verify(bytes: &[u8]) -> Result<Summary, String> {
     };
     let mut row = vec![0u64; words];
     let mut visible_pairs = 0u64;
+    let rows: u64 = (0..=pvis.shell_count())
+        .map(|s| u64::from(pvis.shell(s).views))
+        .sum();
+    let bits = rows * u64::from(patches);
+    let bars = Bars::new(bits > LONG_BITS);
+    if bits > LONG_BITS {
+        eprintln!(
+            "{file}: verifying decodes {bits} bits ({rows} rows of {patches} patches), which \
+             takes long; --time-limit bounds it"
+        );
+    }
+    bars.start("rows", rows);
+    // `None`: no limit, or one too far off to be a time.
+    let deadline = time_limit.and_then(|s| {
+        let limit = Duration::try_from_secs_f64(s).ok()?;
+        Some((start.checked_add(limit)?, s))
+    });
+    let mut done = 0u64;
     // Every view of the sampling sphere (shell 0) and of every sampling shell.
     for shell in 0..=pvis.shell_count() {
         for view in 0..pvis.shell(shell).views {
+            if let Some((deadline, seconds)) = deadline
+                && Instant::now() >= deadline
+            {
+                bars.finish();
+                return Err(format!(
+                    "not verified: stopped by --time-limit {seconds} after {done} of {rows} \
+                     rows ({bits} bits to decode in all)"
+                ));
+            }
             pvis.shell_view_row(shell, view, &mut row);
+            done += 1;
+            bars.inc(1);
             if row.last().is_some_and(|&w| w & padding != 0) {
                 let which = match shell {
                     0 => String::new(),
                     s => format!("shell {s} "),
                 };
+                bars.finish();
                 return Err(reader_bug(format_args!(
                     "{which}view {view}: decoded row sets bits past patch {}",
                     patches - 1
@@ -141,6 +186,7 @@ fn verify(bytes: &[u8]) -> Result<Summary, String> {
             }
         }
     }
+    bars.finish();
     Ok(Summary {
         version: pvis.version(),
         patches,

@@ -38,16 +38,19 @@ const RADIUS_SLACK: f64 = 1e-4;
 /// its image would grow past a cube face's.
 const SINGLE_CAMERA_MAX_DEG: f64 = 45.0;
 
-/// Whether every vertex of `mesh` projects into `camera`'s image (within
-/// a quarter pixel) and lies in front of its near plane: then the camera's full render
-/// shows every patch visible from its eye in any direction. Cost: one projection per vertex.
+/// Whether every vertex of `mesh`'s triangles projects into `camera`'s image (within a
+/// quarter pixel) and lies in front of its near plane: then the camera's full render shows
+/// every patch visible from its eye in any direction (a vertex no triangle uses draws
+/// nothing). Cost: one projection per triangle corner.
 pub fn frames_whole_mesh(camera: &Camera, mesh: &Mesh) -> bool {
     let resolution = f64::from(camera.resolution());
     let (lo, hi) = (-FRAME_MARGIN_PX, resolution + FRAME_MARGIN_PX);
     let near = camera.near();
-    (0..mesh.vertex_count()).all(|v| {
-        let [cx, cy, w] = camera.clip(mesh.position(v));
-        w >= near && cx >= lo * w && cx <= hi * w && cy >= lo * w && cy <= hi * w
+    (0..mesh.triangle_count()).all(|t| {
+        mesh.triangle(t).into_iter().all(|v| {
+            let [cx, cy, w] = camera.clip(mesh.position(v));
+            w >= near && cx >= lo * w && cx <= hi * w && cy >= lo * w && cy <= hi * w
+        })
     })
 }
 

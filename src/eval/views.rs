@@ -65,6 +65,11 @@ pub fn jitter_looks(cameras: &[Camera], max_deg: f64, seed: u64) -> Vec<Camera> 
 /// vector never needs to switch.
 pub const ORBIT_ELEVATION_DEG: f64 = 30.0;
 
+/// The most cameras one evaluation takes: random views, orbit frames or a path file's
+/// cameras. Each is a full render of the mesh, so a million is days of work already; more
+/// would only be a count the user mistyped, and the per-view results would outgrow memory.
+pub const MAX_VIEWS: u32 = 1_000_000;
+
 /// `frames` unit directions along one turn around the `+Y` axis that also swings by
 /// [`ORBIT_ELEVATION_DEG`] up and down: a smooth, closed path.
 pub fn orbit_directions(frames: u32) -> Vec<[f32; 3]> {
@@ -142,6 +147,11 @@ pub fn parse_camera_path(text: &str) -> Result<Vec<PathCamera>, PathError> {
                 )));
             }
         };
+        if cameras.len() == MAX_VIEWS as usize {
+            return Err(fail(format!(
+                "more than {MAX_VIEWS} cameras, the most an evaluation takes"
+            )));
+        }
         cameras.push(camera);
     }
     if cameras.is_empty() {

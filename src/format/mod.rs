@@ -108,12 +108,26 @@ pub fn encode(contents: &BakeContents) -> Vec<u8> {
 /// `triangle_count`, a matrix whose size disagrees with the level or patch count, limits
 /// exceeded, non-finite values. The message is the reader's error.
 pub fn encode_with(contents: &BakeContents, encoding: VisibilityEncoding) -> Vec<u8> {
-    let layout = match encoding {
+    encode_as(contents, encoding, layout_of(encoding))
+}
+
+/// [`encode_with`] for contents read from outside the bake (the parts of a sharded bake):
+/// patch ranges that break the format, or a file the reader refuses, are the reader's error
+/// instead of a panic. The matrices' sizes remain a caller contract.
+pub fn try_encode_with(
+    contents: &BakeContents,
+    encoding: VisibilityEncoding,
+) -> Result<Vec<u8>, crate::runtime::Error> {
+    try_encode_as(contents, encoding, layout_of(encoding))
+}
+
+/// The patch table `encoding` is written with by default.
+fn layout_of(encoding: VisibilityEncoding) -> PatchTableLayout {
+    match encoding {
         VisibilityEncoding::Tree => PatchTableLayout::Compact,
         // Written for readers of version 2, which know neither the tree nor the compact table.
         VisibilityEncoding::Raw | VisibilityEncoding::Table => PatchTableLayout::Full,
-    };
-    encode_as(contents, encoding, layout)
+    }
 }
 
 /// Encodes `contents` with `encoding` and the patch table `layout`. The file's version is the
@@ -134,6 +148,18 @@ pub fn encode_as(
     encoding: VisibilityEncoding,
     layout: PatchTableLayout,
 ) -> Vec<u8> {
+    try_encode_as(contents, encoding, layout)
+        .unwrap_or_else(|error| panic!("encode: the bake contents break the .pvis format: {error}"))
+}
+
+/// [`encode_as`], with the reader's error where the contents break the format (see
+/// [`try_encode_with`]).
+fn try_encode_as(
+    contents: &BakeContents,
+    encoding: VisibilityEncoding,
+    layout: PatchTableLayout,
+) -> Result<Vec<u8>, crate::runtime::Error> {
+    check_ranges(contents.triangle_count, contents.patches)?;
     let params = contents.sampling;
     let patch_count = contents.patches.len() as u64;
     let views = sphere::view_count(params.level.min(MAX_LEVEL));
@@ -224,10 +250,33 @@ pub fn encode_as(
     out.extend_from_slice(&crc.to_le_bytes());
     debug_assert_eq!(out.len() as u64, file_length);
 
-    if let Err(error) = Pvis::parse(&out) {
-        panic!("encode: the bake contents break the .pvis format: {error}");
+    Pvis::parse(&out)?;
+    Ok(out)
+}
+
+/// § PTCH's ranges, as the reader checks them: non-empty, contiguous from triangle 0, summing
+/// to `triangle_count`. The compact table stores counts alone, so it could not say where a
+/// range that breaks them starts.
+fn check_ranges(triangle_count: u64, patches: &[Patch]) -> Result<(), crate::runtime::Error> {
+    let mut next = 0u64;
+    for (patch, p) in (0u32..).zip(patches) {
+        if u64::from(p.first) != next || p.count == 0 {
+            return Err(crate::runtime::Error::PatchRange {
+                patch,
+                first: p.first,
+                count: p.count,
+                expected_first: next,
+            });
+        }
+        next += u64::from(p.count);
     }
-    out
+    if next != triangle_count {
+        return Err(crate::runtime::Error::TriangleCountMismatch {
+            header: triangle_count,
+            sum: next,
+        });
+    }
+    Ok(())
 }
 
 /// § SHEL: the shell count, a record per shell (distance, level, payload length) and the

@@ -37,5 +37,5 @@ mod records;
 
 pub(crate) use array::Array;
 pub(crate) use file_bytes::FileBytes;
-pub(crate) use input::open_regular;
+pub use input::{open_regular, read_regular};
 pub(crate) use records::RecordWriter;

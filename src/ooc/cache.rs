@@ -16,6 +16,13 @@
 //! | 64 | P, padded to 4 | the canonical path, UTF-8 lossy |
 //! | … | 12 V | vertices: `f32 x, y, z` |
 //! | … | 12 T | triangles: `u32 a, b, c` |
+//! | … | 8 | XXH64 (seed 0) of every byte before it (`u64`) |
+//!
+//! The bounds are those of every vertex, as converted; a mesh's own bounds are those of the
+//! vertices its triangles use, found when it is opened (`Mesh::bounds`). The checksum is
+//! checked at every open, like a checkpoint's: a cache damaged on disk (one flipped exponent
+//! bit moves a vertex by a factor of 2³²) is converted again, never baked. It costs one more
+//! pass over the cache when it is written and one when it is opened, at memory speed (XXH64).
 //!
 //! A cache is keyed by the input's canonical path (the file name is a 64-bit FNV-1a hash of
 //! it; the stored path guards against collisions), its length and a hash of all its bytes:
@@ -47,8 +54,11 @@ use super::Bounds;
 use xxhash_rust::xxh64::xxh64;
 
 /// Bumped whenever the layout or a converter's output changes, so stale caches are rebuilt.
-/// Version 2 keys by content (a hash) instead of modification time.
-pub(crate) const CACHE_VERSION: u8 = 2;
+/// Version 2 keys by content (a hash) instead of modification time; version 3 ends in a
+/// checksum.
+pub(crate) const CACHE_VERSION: u8 = 3;
+/// Bytes of the checksum that ends a cache file.
+const CHECKSUM_BYTES: usize = 8;
 const MAGIC: [u8; 7] = *b"PVMESH\0";
 /// Fixed part of the header, before the path.
 const HEADER_BYTES: usize = 64;
@@ -139,17 +149,15 @@ fn data_offset(path_len: usize) -> usize {
 pub(crate) struct CacheHeader {
     pub(crate) vertex_count: u32,
     pub(crate) triangle_count: u32,
-    pub(crate) bounds: Bounds,
     /// Offset of vertex 0.
     pub(crate) vertices_at: usize,
 }
 
-/// Reads a cache file's header; `None` unless it is complete, current and made from `key`.
-/// Index ranges are checked by the caller.
+/// Reads a cache file's header; `None` unless it is complete, current, whole (its checksum)
+/// and made from `key`. Index ranges are checked by the caller.
 pub(crate) fn read_header(bytes: &[u8], key: Option<&CacheKey>) -> Option<CacheHeader> {
     let head = bytes.get(..HEADER_BYTES)?;
     let u32_at = |at: usize| u32::from_le_bytes(head[at..at + 4].try_into().unwrap());
-    let f32_at = |at: usize| f32::from_le_bytes(head[at..at + 4].try_into().unwrap());
     if head[..7] != MAGIC || head[7] != CACHE_VERSION {
         return None;
     }
@@ -168,17 +176,18 @@ pub(crate) fn read_header(bytes: &[u8], key: Option<&CacheKey>) -> Option<CacheH
     }
     let (vertex_count, triangle_count) = (u32_at(28), u32_at(32));
     let expected = vertices_at as u64
-        + RECORD_BYTES as u64 * (u64::from(vertex_count) + u64::from(triangle_count));
+        + RECORD_BYTES as u64 * (u64::from(vertex_count) + u64::from(triangle_count))
+        + CHECKSUM_BYTES as u64;
     if bytes.len() as u64 != expected {
+        return None;
+    }
+    let (body, stored) = bytes.split_at(bytes.len() - CHECKSUM_BYTES);
+    if xxh64(body, 0) != u64::from_le_bytes(stored.try_into().ok()?) {
         return None;
     }
     Some(CacheHeader {
         vertex_count,
         triangle_count,
-        bounds: Bounds {
-            min: [f32_at(36), f32_at(40), f32_at(44)],
-            max: [f32_at(48), f32_at(52), f32_at(56)],
-        },
         vertices_at,
     })
 }
@@ -311,6 +320,9 @@ impl CacheWriter {
         }
         file.seek(SeekFrom::Start(0))?;
         file.write_all(&head)?;
+        let checksum = checksum(&mut file)?;
+        file.seek(SeekFrom::End(0))?;
+        file.write_all(&checksum.to_le_bytes())?;
         file.flush()?;
         match self.target {
             Target::Named { tmp, final_path } => {
@@ -324,6 +336,20 @@ impl CacheWriter {
             }
             Target::Anonymous(file) => Ok(file),
         }
+    }
+}
+
+/// XXH64 (seed 0) of every byte of `file`, read from its start through a fixed buffer.
+fn checksum(file: &mut File) -> io::Result<u64> {
+    file.seek(SeekFrom::Start(0))?;
+    let mut hasher = xxhash_rust::xxh64::Xxh64::new(0);
+    let mut buffer = vec![0u8; WRITE_BUFFER_BYTES];
+    loop {
+        let n = io::Read::read(file, &mut buffer)?;
+        if n == 0 {
+            return Ok(hasher.digest());
+        }
+        hasher.update(&buffer[..n]);
     }
 }
 

@@ -35,7 +35,6 @@ mod ply;
 mod stl;
 mod text;
 
-use std::fs::File;
 use std::path::{Path, PathBuf};
 
 pub use cache::default_cache_dir;
@@ -43,9 +42,10 @@ use cache::{CacheKey, CacheSource, CacheWriter};
 use error::Fault;
 pub use error::{ErrorPosition, MeshError, MeshErrorKind};
 
-use crate::mapped::{FileBytes, open_regular};
+use crate::mapped::FileBytes;
+pub use crate::mapped::{open_regular, read_regular};
 
-/// Axis-aligned bounds of a mesh's vertices.
+/// Axis-aligned bounds of a mesh's vertices: of those its triangles use ([`Mesh::bounds`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bounds {
     /// Componentwise minimum.
@@ -71,6 +71,10 @@ pub(crate) struct Layout {
 /// Bytes per vertex and per triangle in the owned (converted) layout: `f32 x, y, z` and
 /// `u32 a, b, c`, densely packed.
 const OWNED_RECORD_BYTES: usize = cache::RECORD_BYTES;
+
+/// Triangles per task of the pass that finds the used vertices' bounds: large enough that a
+/// task's setup is lost in its work.
+const USED_BOUNDS_BATCH: usize = 1 << 16;
 
 /// Default heap budget for opening a mesh when the caller gives none: 512 MiB.
 pub const DEFAULT_MEMORY_BUDGET: u64 = 512 << 20;
@@ -216,16 +220,13 @@ impl Mesh {
                     } else {
                         MeshSource::Converted
                     };
-                    return Ok(Mesh {
+                    return Ok(Mesh::served(
                         path,
                         bytes,
-                        layout: body.layout,
-                        vertex_count: parsed.schema.vertex_count,
-                        triangle_count: body.triangle_count,
-                        bounds: body.bounds,
+                        body.layout,
+                        (parsed.schema.vertex_count, body.triangle_count),
                         source,
-                        warnings: Vec::new(),
-                    });
+                    ));
                 }
                 Some(parsed)
             }
@@ -255,9 +256,8 @@ impl Mesh {
         let key = cache_dir.and(source).map(|s| s.key(&bytes));
         if let (Some(dir), Some(key)) = (cache_dir, &key) {
             let cached = dir.join(key.file_name());
-            if let Ok(file) = File::open(&cached) {
-                let len = file.metadata().map(|m| m.len()).unwrap_or(0);
-                let hit = FileBytes::open(&file, len)
+            if let Ok((file, metadata)) = open_regular(&cached) {
+                let hit = FileBytes::open(&file, metadata.len())
                     .ok()
                     .and_then(|map| Mesh::from_cache(&path, map, Some(key), MeshSource::CacheHit));
                 if let Some(mesh) = hit {
@@ -301,29 +301,74 @@ impl Mesh {
         let index = head.vertices_at + head.vertex_count as usize * OWNED_RECORD_BYTES;
         // One sequential pass: a damaged cache must not make `triangle` return indices that
         // `position` would refuse.
-        let indices_ok = bytes[index..]
+        let indices_ok = bytes[index..][..head.triangle_count as usize * OWNED_RECORD_BYTES]
             .chunks_exact(4)
             .all(|i| u32::from_le_bytes(four(i, 0)) < head.vertex_count);
         if !indices_ok || head.vertex_count == 0 || head.triangle_count == 0 {
             return None;
         }
-        Some(Mesh {
-            path: path.to_path_buf(),
+        let layout = Layout {
+            x: head.vertices_at,
+            y: head.vertices_at + 4,
+            z: head.vertices_at + 8,
+            vertex_stride: OWNED_RECORD_BYTES,
+            index,
+            face_stride: OWNED_RECORD_BYTES,
+        };
+        let counts = (head.vertex_count, head.triangle_count);
+        Some(Mesh::served(
+            path.to_path_buf(),
             bytes,
-            layout: Layout {
-                x: head.vertices_at,
-                y: head.vertices_at + 4,
-                z: head.vertices_at + 8,
-                vertex_stride: OWNED_RECORD_BYTES,
-                index,
-                face_stride: OWNED_RECORD_BYTES,
+            layout,
+            counts,
+            source,
+        ))
+    }
+
+    /// The mesh in `bytes` at `layout`, validated, of `counts` vertices and triangles, with
+    /// the bounds of the vertices its triangles use: one pass over the triangles, in
+    /// parallel (a minimum and a maximum are exact, so any split gives the same bounds). A
+    /// vertex no triangle uses, which real exports carry, decides nothing: not the camera,
+    /// not the working frame, not the out-of-core tiling's order.
+    fn served(
+        path: PathBuf,
+        bytes: FileBytes,
+        layout: Layout,
+        (vertex_count, triangle_count): (u32, u32),
+        source: MeshSource,
+    ) -> Mesh {
+        use rayon::prelude::*;
+        let mut mesh = Mesh {
+            path,
+            bytes,
+            layout,
+            vertex_count,
+            triangle_count,
+            bounds: Bounds {
+                min: [0.0; 3],
+                max: [0.0; 3],
             },
-            vertex_count: head.vertex_count,
-            triangle_count: head.triangle_count,
-            bounds: head.bounds,
             source,
             warnings: Vec::new(),
-        })
+        };
+        let merge = |mut a: ply::BoundsBuilder, b: ply::BoundsBuilder| {
+            let b = b.finish();
+            a.add(b.min);
+            a.add(b.max);
+            a
+        };
+        mesh.bounds = (0..triangle_count)
+            .into_par_iter()
+            .with_min_len(USED_BOUNDS_BATCH)
+            .fold(ply::BoundsBuilder::new, |mut b, t| {
+                for v in mesh.triangle(t) {
+                    b.add(mesh.position(v));
+                }
+                b
+            })
+            .reduce(ply::BoundsBuilder::new, merge)
+            .finish();
+        mesh
     }
     /// A mesh held in memory (tests, generated meshes). Validates like [`Mesh::open`]: every
     /// index below `positions.len()`, every coordinate finite. `name` stands in for the path
@@ -365,7 +410,6 @@ impl Mesh {
                 ),
             );
         }
-        let mut bounds = ply::BoundsBuilder::new();
         for (v, p) in positions.iter().enumerate() {
             if !p.iter().all(|c| c.is_finite()) {
                 return fail(
@@ -373,7 +417,6 @@ impl Mesh {
                     format!("vertex {v} is {p:?}, expected finite coordinates"),
                 );
             }
-            bounds.add(*p);
         }
         for (t, tri) in triangles.iter().enumerate() {
             if let Some(i) = tri.iter().find(|&&i| i >= vertex_count) {
@@ -385,7 +428,7 @@ impl Mesh {
                 );
             }
         }
-        Mesh::owned(path, &positions, &triangles, bounds.finish())
+        Mesh::owned(path, &positions, &triangles)
     }
 
     /// Stores validated positions and triangles in the owned layout.
@@ -393,7 +436,6 @@ impl Mesh {
         path: PathBuf,
         positions: &[[f32; 3]],
         triangles: &[[u32; 3]],
-        bounds: Bounds,
     ) -> Result<Mesh, MeshError> {
         let vertex_bytes = positions.len() * OWNED_RECORD_BYTES;
         let len = vertex_bytes + triangles.len() * OWNED_RECORD_BYTES;
@@ -417,24 +459,23 @@ impl Mesh {
             }
         })
         .map_err(|e| MeshError::io(&path, &e))?;
-        Ok(Mesh {
+        let layout = Layout {
+            x: 0,
+            y: 4,
+            z: 8,
+            vertex_stride: OWNED_RECORD_BYTES,
+            index: vertex_bytes,
+            face_stride: OWNED_RECORD_BYTES,
+        };
+        // Both counts were checked against u32 by the caller.
+        let counts = (positions.len() as u32, triangles.len() as u32);
+        Ok(Mesh::served(
             path,
             bytes,
-            layout: Layout {
-                x: 0,
-                y: 4,
-                z: 8,
-                vertex_stride: OWNED_RECORD_BYTES,
-                index: vertex_bytes,
-                face_stride: OWNED_RECORD_BYTES,
-            },
-            // Both counts were checked against u32 by the caller.
-            vertex_count: positions.len() as u32,
-            triangle_count: triangles.len() as u32,
-            bounds,
-            source: MeshSource::Memory,
-            warnings: Vec::new(),
-        })
+            layout,
+            counts,
+            MeshSource::Memory,
+        ))
     }
 
     /// The file this mesh was read from.
@@ -496,7 +537,7 @@ impl Mesh {
         ]
     }
 
-    /// Bounds of all vertices.
+    /// Bounds of the vertices the triangles use: a vertex no triangle uses is left out.
     pub fn bounds(&self) -> Bounds {
         self.bounds
     }
@@ -511,8 +552,13 @@ impl Mesh {
         let mut bounds = ply::BoundsBuilder::new();
         for v in 0..self.vertex_count {
             let p = self.position(v);
-            let q: [f32; 3] =
+            let mut q: [f32; 3] =
                 std::array::from_fn(|k| ((f64::from(p[k]) - origin[k]) * scale) as f32);
+            // A vertex outside the bounds is one no triangle uses: anywhere finite will do.
+            let used = (0..3).all(|k| (self.bounds.min[k]..=self.bounds.max[k]).contains(&p[k]));
+            if !used {
+                q = q.map(|c| c.clamp(-f32::MAX, f32::MAX));
+            }
             if !q.iter().all(|c| c.is_finite()) {
                 return Err(MeshError::whole(
                     &self.path,

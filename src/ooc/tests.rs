@@ -832,3 +832,36 @@ proptest! {
         open_in_memory(&bytes);
     }
 }
+
+#[test]
+fn a_damaged_cache_is_converted_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("t.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let options = OpenOptions {
+        cache_dir: Some(dir.path().join("cache")),
+        memory_budget: DEFAULT_MEMORY_BUDGET,
+    };
+    assert_eq!(
+        Mesh::open_with(&obj, &options).unwrap().source(),
+        MeshSource::Converted
+    );
+    assert_eq!(
+        Mesh::open_with(&obj, &options).unwrap().source(),
+        MeshSource::CacheHit
+    );
+    let cache = std::fs::read_dir(dir.path().join("cache"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.extension().is_some_and(|e| e == "pvmesh"))
+        .unwrap();
+    let mut bytes = std::fs::read(&cache).unwrap();
+    let path_len = u32::from_le_bytes(bytes[60..64].try_into().unwrap()) as usize;
+    // Vertex 1's x, 1.0, times 2^-64: one exponent bit.
+    bytes[64 + path_len.next_multiple_of(4) + 12 + 3] ^= 0x20;
+    std::fs::write(&cache, &bytes).unwrap();
+    let mesh = Mesh::open_with(&obj, &options).unwrap();
+    assert_eq!(mesh.source(), MeshSource::Converted);
+    assert_eq!(mesh.position(1), [1.0, 0.0, 0.0]);
+}

@@ -175,7 +175,9 @@ pub(crate) fn load(
     hash: u64,
     matrix: &mut VisibilityMatrix,
 ) -> Result<Option<u32>, SamplingError> {
-    let bytes = match std::fs::read(path) {
+    // The largest checkpoint of this matrix: every row.
+    let limit = (HEADER_BYTES + CRC_BYTES) as u64 + 8 * matrix.words().len() as u64;
+    let bytes = match crate::mapped::read_regular(path, limit, "a checkpoint of this bake") {
         Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(source) => {

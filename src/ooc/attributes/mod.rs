@@ -26,7 +26,7 @@ use std::path::PathBuf;
 
 use super::error::Fault;
 use super::{InputFormat, Mesh, MeshError, MeshSource};
-use crate::mapped::{Array, RecordWriter, open_regular};
+use crate::mapped::{Array, RecordWriter, open_regular, read_regular};
 
 /// Material id of a triangle without a material.
 pub const NO_MATERIAL: u32 = u32::MAX;
@@ -34,6 +34,8 @@ pub const NO_MATERIAL: u32 = u32::MAX;
 /// `u32` words of one output vertex record: source vertex, normal (3 × `f32` bits), texture
 /// coordinate (2 × `f32` bits), colour (RGBA bytes).
 const VERTEX_WORDS: usize = 7;
+/// The largest texture file read: 1 GiB (a 16,384² RGBA image uncompressed).
+const TEXTURE_MAX_BYTES: u64 = 1 << 30;
 
 /// Which attributes the input had.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -357,10 +359,7 @@ impl Builder {
 /// Reads a texture file named by the input (`origin` names where, for errors).
 fn texture_file(path: PathBuf, origin: &str) -> Result<Texture, Fault> {
     let fail = |what: String| Fault::new(super::MeshErrorKind::Io, None, what);
-    let (mut file, _) = open_regular(&path)
-        .map_err(|e| fail(format!("{origin}: cannot read '{}': {e}", path.display())))?;
-    let mut bytes = Vec::new();
-    std::io::Read::read_to_end(&mut file, &mut bytes)
+    let bytes = read_regular(&path, TEXTURE_MAX_BYTES, "a texture")
         .map_err(|e| fail(format!("{origin}: cannot read '{}': {e}", path.display())))?;
     Texture::new(format!("'{}' ({origin})", path.display()), bytes)
         .map_err(|e| Fault::new(super::MeshErrorKind::UnsupportedFormat, None, e))

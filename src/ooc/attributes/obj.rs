@@ -13,13 +13,15 @@ use super::super::error::{Fault, MeshErrorKind};
 use super::super::obj::resolve;
 use super::super::text::{Lines, finite_f32, tokens};
 use super::{Attributes, Builder, Material, NO_MATERIAL, Numbering, texture_file};
-use crate::mapped::{Array, RecordWriter};
+use crate::mapped::{Array, RecordWriter, read_regular};
 use crate::ooc::Mesh;
 
 /// A face corner: vertex, texture coordinate and normal indices (0-based; `u32::MAX` when
 /// absent).
 type Corner = [u32; 3];
 const ABSENT: u32 = u32::MAX;
+/// The largest material library read: 64 MiB, thousands of times a large scene's.
+const MTL_MAX_BYTES: u64 = 64 << 20;
 
 /// Reads `bytes` (the OBJ `mesh` was converted from); `dir` resolves `mtllib` files; the
 /// `map_Kd` images are read when `textures`.
@@ -214,7 +216,7 @@ fn materials(
     for library in libraries {
         let path = dir.join(library);
         let origin = format!("mtllib {library}");
-        let text = std::fs::read(&path).map_err(|e| {
+        let text = read_regular(&path, MTL_MAX_BYTES, "a material library").map_err(|e| {
             Fault::new(
                 MeshErrorKind::Io,
                 None,

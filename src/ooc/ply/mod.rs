@@ -34,7 +34,6 @@ pub(crate) struct Schema {
 pub(crate) struct InPlace {
     pub(crate) layout: super::Layout,
     pub(crate) triangle_count: u32,
-    pub(crate) bounds: Bounds,
 }
 
 /// A parsed header and the mesh's place in it.
