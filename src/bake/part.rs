@@ -233,7 +233,7 @@ impl Part {
         Ok(())
     }
 
-    /// Checks the magic and the version, the first [`HEAD_BYTES`] of a file of `len` bytes
+    /// Checks the magic and the version, the first `HEAD_BYTES` (12) of a file of `len` bytes
     /// (`head` may hold more), so that a file of another kind is refused before the rest is
     /// read.
     pub fn check_head(head: &[u8], len: u64) -> Result<(), String> {
