@@ -6,8 +6,8 @@ Without --pvis, bakes the bunny at 2000 patches with the default settings (the f
 BENCHMARKS.md's query rows: `patchvis bake assets/bunny.ply -o b2000.pvis --patches 2000`)
 into a temporary folder. The eyes are seeded, at 1.5 times the sampling distance from the
 centre, as `patchvis query --bench` places its eyes. Times `Reader.query_many` (bool and
-packed answers; the first call, which expands the file, is left out) as the median of 5
-runs, then runs `patchvis query FILE --bench N` and reads its "expanded query, random eyes"
+packed answers, each into a new array and into a reused `out=`; the first call, which
+expands the file, is left out) as the median of 5 runs, then runs `patchvis query FILE --bench N` and reads its "expanded query, random eyes"
 median: the baseline, in the same run on the same machine. Prints one line per figure and
 the ratios (target: bool answers within 3x the baseline).
 """
@@ -76,11 +76,18 @@ def main() -> None:
         t = time.perf_counter()
         reader.query_many(eyes[:1])
         print(f"{reader!r}; first query_many (expands the file): {1e3 * (time.perf_counter() - t):.1f} ms")
-        bools = median_ns_per_eye(lambda: reader.query_many(eyes), n)
-        packed = median_ns_per_eye(lambda: reader.query_many(eyes, packed=True), n)
+        bool_out = np.empty((n, reader.patch_count), dtype=np.bool_)
+        packed_out = np.empty((n, (reader.patch_count + 7) // 8), dtype=np.uint8)
+        figures = [
+            (f"bool (N, {reader.patch_count}), new array", lambda: reader.query_many(eyes)),
+            ("bool, into a reused out=", lambda: reader.query_many(eyes, out=bool_out)),
+            ("packed bits, new array", lambda: reader.query_many(eyes, packed=True)),
+            ("packed bits, into a reused out=", lambda: reader.query_many(eyes, packed=True, out=packed_out)),
+        ]
+        times = [(name, median_ns_per_eye(f, n)) for name, f in figures]
         base = baseline_ns(args.bin, pvis, n)
-        print(f"query_many, {n} eyes, bool (N, {reader.patch_count}):  {bools:7.0f} ns/eye  ({bools / base:.2f}x)")
-        print(f"query_many, {n} eyes, packed bits:       {packed:7.0f} ns/eye  ({packed / base:.2f}x)")
+        for name, ns in times:
+            print(f"query_many, {n} eyes, {name:34} {ns:7.0f} ns/eye  ({ns / base:.2f}x)")
         print(f"baseline: patchvis query --bench {n}, expanded query, random eyes: {base:.0f} ns")
 
 

@@ -54,4 +54,9 @@ class Reader:
         view_proj: Optional[Tuple[float, ...]] = None,
         zero_to_one: bool = False,
     ) -> Dict[str, Any]: ...
-    def query_many(self, eyes: npt.NDArray[np.float32], packed: bool = False) -> npt.NDArray[np.uint8]: ...
+    def query_many(
+        self,
+        eyes: npt.NDArray[np.float32],
+        packed: bool = False,
+        out: Optional[npt.NDArray[np.uint8]] = None,
+    ) -> npt.NDArray[np.uint8]: ...

@@ -19,7 +19,7 @@ use pyo3::prelude::*;
 static ALLOC: patchvis::heap::CountingAlloc = patchvis::heap::CountingAlloc;
 
 pyo3::create_exception!(
-    _native,
+    patchvis,
     FormatError,
     pyo3::exceptions::PyValueError,
     "A .pvis file the reader refuses; the message is the reader's (spec/FORMAT.md)."

@@ -220,13 +220,15 @@ impl Reader {
 
     /// The visible sets of many eyes (`(N, 3)` `float32`, C-contiguous), by the expanded
     /// reader, as `uint8`: one byte a patch (0 or 1), or with `packed` the answer's bits, 8
-    /// patches a byte, patch `p` at bit `p % 8` of byte `p / 8`. The GIL is released.
-    #[pyo3(signature = (eyes, packed=false))]
+    /// patches a byte, patch `p` at bit `p % 8` of byte `p / 8`; into `out` if given (its
+    /// shape checked here), else into a new array. The GIL is released.
+    #[pyo3(signature = (eyes, packed=false, out=None))]
     fn query_many<'py>(
         &self,
         py: Python<'py>,
         eyes: PyReadonlyArray2<'py, f32>,
         packed: bool,
+        out: Option<Bound<'py, PyArray2<u8>>>,
     ) -> PyResult<Bound<'py, PyArray2<u8>>> {
         if eyes.shape()[1] != 3 {
             return Err(PyValueError::new_err(format!(
@@ -236,14 +238,26 @@ impl Reader {
         }
         let eyes = eyes
             .as_slice()
-            .map_err(|_| PyValueError::new_err("eyes is not C-contiguous"))?;
+            .map_err(|_| PyValueError::new_err("eyes is not C-contiguous and aligned"))?;
         let patches = self.pvis().patch_count() as usize;
         let width = if packed { patches.div_ceil(8) } else { patches };
-        let out = PyArray2::<u8>::zeros(py, [eyes.len() / 3, width], false);
-        let mut rows = out.readwrite();
+        let shape = [eyes.len() / 3, width];
+        let out = match out {
+            Some(out) if out.shape() != shape => {
+                return Err(PyValueError::new_err(format!(
+                    "out has shape {:?}, expected {shape:?}",
+                    out.shape()
+                )));
+            }
+            Some(out) => out,
+            None => PyArray2::<u8>::zeros(py, shape, false),
+        };
+        let mut rows = out
+            .try_readwrite()
+            .map_err(|_| PyValueError::new_err("out is not writeable or is borrowed elsewhere"))?;
         let rows = rows
             .as_slice_mut()
-            .map_err(|_| PyValueError::new_err("output array is not contiguous"))?;
+            .map_err(|_| PyValueError::new_err("out is not C-contiguous"))?;
         py.detach(|| self.fill_many(eyes, rows, width, packed))?;
         Ok(out)
     }
@@ -276,6 +290,39 @@ const SPREAD: [u64; 256] = {
     }
     table
 };
+
+/// `bits` (bit `p % 64` of word `p / 64` is patch `p`) as bytes, 8 patches a byte, into
+/// `row` (`ceil(patches / 8)` bytes): the words' little-endian bytes.
+fn pack(bits: &[u64], row: &mut [u8]) {
+    let whole = row.len() / 8;
+    let mut chunks = row.chunks_exact_mut(8);
+    for (out, word) in (&mut chunks).zip(bits) {
+        out.copy_from_slice(&word.to_le_bytes());
+    }
+    let rest = chunks.into_remainder();
+    if let Some(word) = bits.get(whole) {
+        let n = rest.len();
+        rest.copy_from_slice(&word.to_le_bytes()[..n]);
+    }
+}
+
+/// `bits` as one byte a patch (0 or 1) into `row` (`patches` bytes), eight patches a store.
+fn spread(bits: &[u64], row: &mut [u8]) {
+    let eights = |word: u64, out: &mut [u8]| {
+        for (j, o) in out.chunks_mut(8).enumerate() {
+            let byte = (word >> (8 * j)) as u8;
+            o.copy_from_slice(&SPREAD[usize::from(byte)].to_le_bytes()[..o.len()]);
+        }
+    };
+    let whole = row.len() / 64;
+    let mut chunks = row.chunks_exact_mut(64);
+    for (out, &word) in (&mut chunks).zip(bits) {
+        eights(word, out);
+    }
+    if let Some(&word) = bits.get(whole) {
+        eights(word, chunks.into_remainder());
+    }
+}
 
 impl Reader {
     /// Parses `bytes`.
@@ -334,16 +381,9 @@ impl Reader {
                 .zip(rows.chunks_exact_mut(width.max(1)))
             {
                 let visible = expanded.query([eye[0], eye[1], eye[2]]);
-                let bytes = visible.bits().iter().flat_map(|w| w.to_le_bytes());
-                if packed {
-                    for (out, byte) in row.iter_mut().zip(bytes) {
-                        *out = byte;
-                    }
-                } else {
-                    for (out, byte) in row.chunks_mut(8).zip(bytes) {
-                        let spread = SPREAD[usize::from(byte)].to_le_bytes();
-                        out.copy_from_slice(&spread[..out.len()]);
-                    }
+                match packed {
+                    true => pack(visible.bits(), row),
+                    false => spread(visible.bits(), row),
                 }
             }
         });

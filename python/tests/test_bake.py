@@ -98,3 +98,23 @@ def test_bad_arguments(tmp_path):
     with pytest.raises(ValueError):
         patchvis.bake(tmp_path / "missing.ply", out, progress=False)
     assert not out.exists()
+
+
+def test_the_gil_is_released_while_baking(tmp_path):
+    """Another Python thread runs while a bake does."""
+    import threading
+
+    done = threading.Event()
+    ticks = 0
+
+    def run():
+        patchvis.bake(BUNNY, tmp_path / "g.pvis", progress=False, **FAST)
+        done.set()
+
+    worker = threading.Thread(target=run)
+    worker.start()
+    while not done.is_set():
+        ticks += 1
+        done.wait(0.001)
+    worker.join()
+    assert ticks > 20, ticks

@@ -55,6 +55,17 @@ def test_query_many_is_query(cli_shells):
     packed = reader.query_many(eyes, packed=True)
     assert packed.shape == (EYES, 25) and packed.dtype == np.uint8
     np.testing.assert_array_equal(packed, np.packbits(many, axis=1, bitorder="little"))
+    # Into a given array, reused.
+    out = np.ones_like(many)
+    assert reader.query_many(eyes, out=out) is out
+    np.testing.assert_array_equal(out, many)
+    out = np.zeros_like(packed)
+    reader.query_many(eyes, packed=True, out=out)
+    np.testing.assert_array_equal(out, packed)
+    with pytest.raises(ValueError, match="out has shape"):
+        reader.query_many(eyes[:10], out=many)
+    with pytest.raises(TypeError, match="dtype bool"):
+        reader.query_many(eyes, out=packed)
     # float64 eyes, lists, and no eyes at all.
     np.testing.assert_array_equal(reader.query_many(eyes.astype(np.float64)[:5].tolist()), many[:5])
     assert reader.query_many(np.zeros((0, 3))).shape == (0, 200)
