@@ -177,7 +177,8 @@ function update(force = false) {
     shown(part).visible = true;
     (state.options.colours ? part.mesh : part.colourMesh).visible = false;
   }
-  state.drawn = setDrawRanges(state.parts, draw, { geometry: (part) => shown(part).geometry });
+  const drawn = setDrawRanges(state.parts, draw, { geometry: (part) => shown(part).geometry });
+  state.drawn = drawn;
   const patchCount = state.file.patchCount;
   $("patches").textContent = `${all ? patchCount : patches.length} / ${patchCount}`;
   $("triangles").textContent = `${drawn} / ${state.triangles} (${((100 * drawn) / state.triangles).toFixed(1)} %)`;

@@ -1,6 +1,6 @@
 //! `bake`, `bake_arrays` and `read_mesh`: the library's bake recipe behind Python calls.
 //!
-//! The options arrive as a dict of the keyword arguments the user gave (`patchvis/__init__.py`
+//! The options arrive as a dict of the keyword arguments the user gave (`patchvis/_bake.py`
 //! lists and documents them); each maps to one field of [`BakeSettings`], and everything not
 //! given keeps [`BakeSettings::default`], which is `patchvis bake`'s default. The calls are the
 //! binary's (`src/cli/bake.rs`): check the settings, check every output path, open the mesh,
