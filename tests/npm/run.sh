@@ -4,7 +4,8 @@
 # tarball installed into it; then
 #   1. tests/wasm/conformance.mjs against the installed package's module and .wasm (resolved
 #      by name, `patchvis`, as an application imports it), not the source tree's;
-#   2. `tsc --noEmit` on example.ts, against the installed package's types.
+#   2. three_helper.mjs: the installed three.js helper on a stand-in model;
+#   3. `tsc --noEmit` on example.ts, against the installed package's types.
 # Used by .ci/run after tests/wasm/run.sh (which builds npm/patchvis.wasm); builds it itself
 # if it is missing. Needs Node 18+ and npm (the registry for TypeScript).
 set -euo pipefail
@@ -22,7 +23,8 @@ fi
 echo "npm pack: $(basename "$tarball"), $(wc -c < "$tarball") bytes: $got"
 app="$work/app"
 mkdir "$app"
-cp tests/npm/package.json tests/npm/package-lock.json tests/npm/tsconfig.json tests/npm/example.ts "$app/"
+cp tests/npm/package.json tests/npm/package-lock.json tests/npm/tsconfig.json tests/npm/example.ts \
+  tests/npm/three_helper.mjs "$app/"
 (cd "$app" && npm ci --no-audit --no-fund --silent && npm install --no-save --no-audit --no-fund --silent "$tarball")
 resolve() { (cd "$app" && node --input-type=module -e "console.log(new URL(import.meta.resolve('$1')).pathname)"); }
 module=$(resolve patchvis)
@@ -32,4 +34,5 @@ case "$module$helper" in
   *) echo "patchvis resolves to $module and $helper, not the installed package" >&2; exit 1 ;;
 esac
 PATCHVIS_MODULE="$module" node tests/wasm/conformance.mjs
+(cd "$app" && node three_helper.mjs)
 (cd "$app" && node_modules/.bin/tsc --noEmit -p . && echo "tsc --noEmit: example.ts type-checks against the installed package")
