@@ -39,6 +39,17 @@ def _view_proj(matrix: Any) -> Tuple[float, ...]:
     return tuple(float(x) for x in m)
 
 
+def _camera_of(view_proj: Tuple[float, ...]) -> np.ndarray:
+    """The eye of a perspective view-projection (16 numbers, column-major): the point whose
+    clip coordinates have x = y = w = 0."""
+    m = np.asarray(view_proj, dtype=np.float64).reshape(4, 4).T
+    rows = m[[0, 1, 3]]
+    try:
+        return np.linalg.solve(rows[:, :3], -rows[:, 3])
+    except np.linalg.LinAlgError:
+        raise ValueError("view_proj has no eye (an orthographic projection?): pass eye=") from None
+
+
 def _zero_to_one(depth: str) -> bool:
     try:
         return _DEPTHS[depth]
@@ -96,12 +107,18 @@ class Reader:
         ``(first, count)``, neighbouring patches merged: one draw call each."""
         return self._native.ranges(_eye(eye))
 
-    def query_frustum(self, eye: Any, view_proj: Any, depth: str = "gl") -> np.ndarray:
-        """``query(eye)`` without the patches whose bounding spheres lie wholly outside the
-        frustum of ``view_proj`` (model space to clip space; ``(4, 4)`` as ``m[row, col]``, or
-        16 numbers column-major). ``depth``: ``"gl"`` (-w <= z <= w: OpenGL, WebGL) or
-        ``"zero-to-one"`` (0 <= z <= w: Direct3D, Vulkan, Metal, WebGPU)."""
-        return self._native.query(_eye(eye), _view_proj(view_proj), _zero_to_one(depth))
+    def query_frustum(self, view_proj: Any, depth: str = "gl", eye: Optional[Any] = None) -> np.ndarray:
+        """The patches visible from the camera of ``view_proj`` and not wholly outside its
+        frustum (their bounding spheres): ascending uint32 patch ids.
+
+        ``view_proj`` maps model space to clip space: ``(4, 4)`` as ``m[row, col]``, or 16
+        numbers column-major. ``depth``: ``"gl"`` (-w <= z <= w: OpenGL, WebGL) or
+        ``"zero-to-one"`` (0 <= z <= w: Direct3D, Vulkan, Metal, WebGPU). ``eye``: the
+        camera's position; by default the one of a perspective ``view_proj`` (the point it maps
+        to x = y = w = 0), which an orthographic one has not (then pass ``eye``)."""
+        m = _view_proj(view_proj)
+        e = _eye(_camera_of(m) if eye is None else eye)
+        return self._native.query(e, m, _zero_to_one(depth))
 
     def answer(
         self, eye: Any, view_proj: Optional[Any] = None, depth: str = "gl"

@@ -99,7 +99,7 @@ def test_query_frustum_is_query_json(cli, cli_shells, depth):
     center = np.asarray(reader.info["camera"]["center"])
     eyes = seeded_eyes(reader, 40, seed=3, near=0.5, far=3.0)
     rng = np.random.default_rng(4)
-    culled = 0
+    culled = same = 0
     for eye in eyes:
         # Looking near the model, often past its edge, so the frustum cuts some patches.
         target = center + rng.normal(0, 30.0, 3)
@@ -107,15 +107,22 @@ def test_query_frustum_is_query_json(cli, cli_shells, depth):
         flat = ",".join(repr(float(x)) for x in m.T.reshape(16))
         want = json.loads(cli("query", cli_shells, "--from", point(eye), "--view-proj", flat,
                               "--depth", depth, "--json"))
-        got = reader.query_frustum(eye, m, depth=depth)
+        got = reader.query_frustum(m, depth=depth, eye=eye)
         np.testing.assert_array_equal(got, want["patches"])
         assert reader.answer(eye, m, depth) == want
         # Column-major 16 numbers are the same matrix.
-        np.testing.assert_array_equal(reader.query_frustum(eye, m.T.reshape(16), depth), got)
+        np.testing.assert_array_equal(reader.query_frustum(m.T.reshape(16), depth, eye=eye), got)
+        # The eye recovered from the matrix: within float32 rounding of the camera's.
+        from patchvis._reader import _camera_of, _view_proj
+        np.testing.assert_allclose(_camera_of(_view_proj(m)), eye, rtol=0, atol=1e-3 * np.linalg.norm(eye))
+        same += np.array_equal(reader.query_frustum(m, depth), got)
         culled += want["outside_frustum"]
     assert culled > 0, "some frustum cut a patch"
+    assert same >= 0.9 * len(eyes), "the recovered eye mostly answers as the camera's"
     with pytest.raises(ValueError, match="depth"):
-        reader.query_frustum(eyes[0], np.eye(4), depth="dx")
+        reader.query_frustum(np.eye(4), depth="dx", eye=eyes[0])
+    with pytest.raises(ValueError, match="orthographic"):
+        reader.query_frustum(np.eye(4))
 
 
 def test_refused_files_raise_format_error(shells_file, tmp_path):
