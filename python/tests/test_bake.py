@@ -118,3 +118,21 @@ def test_the_gil_is_released_while_baking(tmp_path):
         done.wait(0.001)
     worker.join()
     assert ticks > 20, ticks
+
+
+@pytest.mark.parametrize("conservative", [False, True])
+def test_default_pipeline_is_the_commands_bytes(cli, tmp_path, conservative):
+    """The default passes (probe, view supersampling, near and far shells; or the
+    conservative preset's), on a small mesh at a coarse level and resolution."""
+    ant = BUNNY.with_name("ant.ply")
+    options = dict(patches=100, level=2, resolution=64)
+    flags = cli_flags(options) + (["--conservative"] if conservative else [])
+    cli("bake", ant, "-o", tmp_path / "cli.pvis", "--quiet", *flags)
+    report = patchvis.bake(ant, tmp_path / "py.pvis", conservative=conservative, progress=False,
+                           **options)
+    assert (tmp_path / "py.pvis").read_bytes() == (tmp_path / "cli.pvis").read_bytes()
+    assert report.shells > 0
+    vertices, faces = patchvis.read_mesh(ant)
+    patchvis.bake_arrays(vertices, faces, tmp_path / "arrays.pvis", conservative=conservative,
+                         progress=False, **options)
+    assert (tmp_path / "arrays.pvis").read_bytes() == (tmp_path / "cli.pvis").read_bytes()
