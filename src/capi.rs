@@ -363,7 +363,7 @@ pub unsafe extern "C" fn patchvis_error_detail(
 
 /// The parts of the reader's message for a refused file (`runtime::MessageParts`): the
 /// template of its kind of error and the values of the template's holes, for a host that
-/// prints the message itself (the WebAssembly module: `wasm/patchvis.mjs` fills the
+/// prints the message itself (the WebAssembly module: `npm/patchvis.mjs` fills the
 /// templates, so the `.wasm` carries neither the texts nor a number formatter).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -834,7 +834,7 @@ pub const PATCHVIS_DEPTH_ZERO_TO_ONE: i32 = 1;
 ///
 /// # Safety
 /// `m` must be null or point to 16 readable floats; `out` null or valid for a write.
-// Not exported to WebAssembly: `wasm/patchvis.mjs` does not call it.
+// Not exported to WebAssembly: `npm/patchvis.mjs` does not call it.
 #[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
 pub unsafe extern "C" fn patchvis_frustum_from_view_proj(
     m: *const f32,
@@ -864,7 +864,7 @@ pub unsafe extern "C" fn patchvis_frustum_from_view_proj(
 /// # Safety
 /// As for [`patchvis_query`]; `frustum` must be null or point to a readable
 /// `PatchvisFrustum`.
-// Not exported to WebAssembly: `wasm/patchvis.mjs` does not call it.
+// Not exported to WebAssembly: `npm/patchvis.mjs` does not call it.
 #[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
 pub unsafe extern "C" fn patchvis_query_frustum(
     file: *const PatchvisFile,
@@ -911,7 +911,7 @@ pub unsafe extern "C" fn patchvis_query_frustum(
 /// As for [`patchvis_stream_query`]; `frustum` must be null or point to a readable
 /// `PatchvisFrustum`; `bits` null or valid for reads and writes of `words` words, overlapping
 /// neither the state's scratch nor the file's bytes.
-// Not exported to WebAssembly: `wasm/patchvis.mjs` does not call it.
+// Not exported to WebAssembly: `npm/patchvis.mjs` does not call it.
 #[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
 pub unsafe extern "C" fn patchvis_stream_query_frustum(
     stream: *mut PatchvisStream,

@@ -1,4 +1,4 @@
-//! The WebAssembly reader's JavaScript (`wasm/patchvis.mjs`) prints a refused file's message
+//! The WebAssembly reader's JavaScript (`npm/patchvis.mjs`) prints a refused file's message
 //! from its parts (`Error::parts`), so that the `.wasm` carries neither the texts nor a number
 //! formatter. These tests keep that copy one with the reader:
 //!
@@ -24,7 +24,7 @@ const BEGIN: &str = "// BEGIN generated from src/runtime/error.rs by tests/wasm_
 const END: &str = "// END generated\n";
 
 fn module_path() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("wasm/patchvis.mjs")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("npm/patchvis.mjs")
 }
 
 /// The generated block: the templates and rule texts as JavaScript arrays.
@@ -53,12 +53,12 @@ fn message_tables_in_patchvis_mjs_are_the_readers() {
     }
     assert!(
         text[start..end] == block,
-        "wasm/patchvis.mjs's message tables differ from src/runtime/error.rs: run \
+        "npm/patchvis.mjs's message tables differ from src/runtime/error.rs: run \
          `{REGENERATE_VAR}=1 cargo test --test wasm_js` and review the diff"
     );
 }
 
-/// Runs `script` (an ES module that can import `patchvis.mjs` as `./wasm/patchvis.mjs`) in
+/// Runs `script` (an ES module that can import `patchvis.mjs` as `./npm/patchvis.mjs`) in
 /// Node with `input` on stdin; returns its stdout lines, or `None` without Node.
 fn node(script: &str, input: &str) -> Option<Vec<String>> {
     let child = Command::new("node")
@@ -100,7 +100,7 @@ fn node(script: &str, input: &str) -> Option<Vec<String>> {
 /// Reads stdin's lines and prints `f(line)` for each.
 fn per_line(body: &str) -> String {
     format!(
-        "import {{ errorMessage, f32Text }} from './wasm/patchvis.mjs';\n\
+        "import {{ errorMessage, f32Text }} from './npm/patchvis.mjs';\n\
          let input = '';\n\
          for await (const chunk of process.stdin) input += chunk;\n\
          const out = [];\n\

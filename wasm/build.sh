@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Builds the .pvis reader for WebAssembly: wasm/patchvis.wasm (the C ABI of src/capi.rs as
-# wasm exports, no_std, no allocator), for wasm/patchvis.mjs. Needs the wasm32-unknown-unknown
+# Builds the .pvis reader for WebAssembly: npm/patchvis.wasm (the C ABI of src/capi.rs as
+# wasm exports, no_std, no allocator), for npm/patchvis.mjs: the npm package's two files
+# (npm/README.md). Needs the wasm32-unknown-unknown
 # Rust target (`rustup target add wasm32-unknown-unknown`). Then, where binaryen's wasm-opt
 # from npm is installed (web/package.json's devDependency: `npm ci --prefix web`; or WASM_OPT
 # naming one), shrinks it with `wasm-opt -Oz` (about 2 KB raw, 0.4 KB gzipped). Prints the
@@ -17,12 +18,12 @@ if [ -x "$wasm_opt" ]; then
   # which), so that wasm-opt neither refuses the code nor adds instructions beyond them.
   "$wasm_opt" -Oz --enable-bulk-memory --enable-sign-ext --enable-mutable-globals \
     --enable-nontrapping-float-to-int --enable-multivalue --enable-reference-types \
-    "$built" -o wasm/patchvis.wasm
+    "$built" -o npm/patchvis.wasm
   how="rustc + wasm-opt -Oz"
 else
-  cp "$built" wasm/patchvis.wasm
+  cp "$built" npm/patchvis.wasm
   how="rustc only: no wasm-opt at $wasm_opt"
 fi
-raw=$(wc -c < wasm/patchvis.wasm)
-gz=$(gzip -9 -c wasm/patchvis.wasm | wc -c)
-echo "wasm/patchvis.wasm: $raw bytes, $gz gzipped ($how)"
+raw=$(wc -c < npm/patchvis.wasm)
+gz=$(gzip -9 -c npm/patchvis.wasm | wc -c)
+echo "npm/patchvis.wasm: $raw bytes, $gz gzipped ($how)"

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the viewer's demo: bakes the bundled bunny (assets/bunny.ply) into web/demo/bunny.pvis
 # with its mesh as web/demo/bunny.glb (`--mesh-out`), builds the WebAssembly reader
-# (wasm/build.sh) and copies it with its module (wasm/patchvis.mjs) into web/demo/, and
+# (wasm/build.sh) and copies the npm package's files (npm/: the module, the .wasm and the
+# three.js helper) into web/demo/patchvis/, where index.html's import map finds them, and
 # installs three.js into web/node_modules (npm, from web/package-lock.json). Then serve web/:
 #
 #   python3 -m http.server -d web 8000     # and open http://localhost:8000/
@@ -20,8 +21,9 @@ fi
 # viewer culls near the model too.
 patchvis bake assets/bunny.ply -o web/demo/bunny.pvis --mesh-out web/demo/bunny.glb --quiet
 bash wasm/build.sh
-cp wasm/patchvis.wasm wasm/patchvis.mjs web/demo/
+mkdir -p web/demo/patchvis
+cp npm/patchvis.mjs npm/patchvis.wasm npm/three.mjs web/demo/patchvis/
 if [ ! -d web/node_modules/three ]; then
   npm ci --prefix web --omit=dev --no-audit --no-fund --silent
 fi
-echo "web/demo: bunny.glb, bunny.pvis, patchvis.wasm, patchvis.mjs; serve with: python3 -m http.server -d web 8000"
+echo "web/demo: bunny.glb, bunny.pvis, patchvis/ (the npm package); serve with: python3 -m http.server -d web 8000"

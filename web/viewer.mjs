@@ -1,11 +1,10 @@
 // The patchvis viewer: draws a `patchvis bake --mesh-out X.glb` mesh with only the triangle
-// ranges that the WebAssembly reader (demo/patchvis.mjs, a copy of wasm/patchvis.mjs) returns
-// for the camera, with three.js (WebGL2).
-//
-// Why it works: the .glb's triangles are in the .pvis file's patch order, so a query's
-// ranges [first, count] are index ranges of the one index buffer view; each glTF primitive (a
-// run of one material) covers triangles [first_triangle, first_triangle + triangle_count)
-// (its extras.patchvis), and a range becomes one draw group of the primitive it falls in.
+// ranges that the WebAssembly reader returns for the camera, with three.js (WebGL2). The
+// reader and its three.js helper are the npm package (npm/: `patchvis`, `patchvis/three`,
+// copied into demo/patchvis/ by build.sh and named in index.html's import map), used as an
+// application would use them: `meshParts` lists the glTF's primitives and their triangles,
+// `drawRanges` and `setDrawRanges` turn an answer into draw groups (three.mjs says why that
+// works).
 //
 // Loads demo/bunny.glb + demo/bunny.pvis (web/build.sh makes them), or a .glb and .pvis
 // dropped on the page. Test hook: window.patchvis (see the end of this file).
@@ -14,7 +13,8 @@ import * as THREE from "three";
 import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 import { FlyControls } from "three/addons/controls/FlyControls.js";
-import { Reader } from "./demo/patchvis.mjs";
+import { Reader } from "patchvis";
+import { drawRanges, meshParts, setDrawRanges } from "patchvis/three";
 
 const $ = (id) => document.getElementById(id);
 const canvas = $("view");
@@ -32,12 +32,13 @@ fly.dragToLook = true;
 fly.enabled = false;
 const clock = new THREE.Clock();
 
-const reader = await Reader.load(await fetch("./demo/patchvis.wasm"));
+const reader = await Reader.load(); // the package's patchvis.wasm, fetched beside its module
 
 /** What is loaded: the file, the drawn meshes, the last answer. */
 const state = {
   name: "",
   file: null, // the open .pvis (PvisFile)
+  model: null, // the glTF's parts (meshParts)
   root: null, // the glTF scene
   parts: [], // { mesh, colourMesh, first, count }: one per glTF primitive
   triangles: 0,
@@ -52,36 +53,24 @@ const state = {
 async function load(name, glbBytes, pvisBytes) {
   const file = reader.open(new Uint8Array(pvisBytes)); // throws PatchvisError
   const gltf = await new GLTFLoader().parseAsync(glbBytes, "./");
-  const meshDef = gltf.parser.json.meshes?.[0];
-  const extras = meshDef?.extras?.patchvis;
-  if (!extras) {
+  let model;
+  try {
+    model = meshParts(gltf, file);
+  } catch (err) {
     file.close();
-    throw new Error(`${name}: the .glb has no extras.patchvis; make it with patchvis bake --mesh-out X.glb`);
-  }
-  if (extras.triangle_count !== file.triangleCount || extras.patch_count !== file.patchCount) {
-    file.close();
-    throw new Error(
-      `${name}: the .glb has ${extras.patch_count} patches and ${extras.triangle_count} triangles, ` +
-        `the .pvis ${file.patchCount} and ${file.triangleCount}; load the pair one bake wrote`,
-    );
+    throw new Error(`${name}: ${err.message}`);
   }
   unload();
-  const parts = [];
-  gltf.scene.traverse((object) => {
-    if (!object.isMesh) return;
-    const where = gltf.parser.associations.get(object);
-    const primitive = meshDef.primitives[where?.primitives ?? 0];
-    const { first_triangle: first, triangle_count: count } = primitive.extras.patchvis;
-    object.material = [object.material];
-    object.frustumCulled = false;
-    const colourMesh = patchColourMesh(object, first, extras.patch_first_triangle);
-    object.parent.add(colourMesh);
-    parts.push({ mesh: object, colourMesh, first, count });
+  const parts = model.parts.map((part) => {
+    part.mesh.frustumCulled = false;
+    const colourMesh = patchColourMesh(part.mesh, part.first, model.patchFirstTriangle);
+    part.mesh.parent.add(colourMesh);
+    return { ...part, colourMesh };
   });
   scene.add(gltf.scene);
-  Object.assign(state, { name, file, root: gltf.scene, parts, triangles: extras.triangle_count });
+  Object.assign(state, { name, file, model, root: gltf.scene, parts, triangles: model.triangleCount });
   frame(gltf.scene);
-  $("name").textContent = `${name}: ${file.patchCount} patches, ${extras.triangle_count} triangles`;
+  $("name").textContent = `${name}: ${file.patchCount} patches, ${model.triangleCount} triangles`;
   $("error").textContent = "";
   update(true);
 }
@@ -90,7 +79,7 @@ async function load(name, glbBytes, pvisBytes) {
 function unload() {
   if (state.root) scene.remove(state.root);
   state.file?.close();
-  Object.assign(state, { file: null, root: null, parts: [], answer: null, lastEye: null });
+  Object.assign(state, { file: null, model: null, root: null, parts: [], answer: null, lastEye: null });
 }
 
 /**
@@ -166,6 +155,7 @@ function update(force = false) {
     const answer = state.file.query(eye.x, eye.y, eye.z);
     const ms = performance.now() - t0;
     state.answer = {
+      raw: answer,
       patches: Array.from(answer.patches),
       ranges: answer.ranges,
       inside: answer.insideSphere,
@@ -176,30 +166,18 @@ function update(force = false) {
     // Browsers coarsen the clock (to 0.1 ms without cross-origin isolation).
     $("time").textContent = ms > 0 ? `${ms.toFixed(3)} ms` : "< 0.1 ms";
   }
-  const { ranges, inside, patches, band, shells } = state.answer;
+  const { raw, inside, patches, band, shells } = state.answer;
   // The answer comes from the sampling shells around the camera, near the model or far from
   // it; only nearer than the innermost shell's cameras is it approximate, and everything is
-  // drawn there.
+  // drawn there (drawRanges).
   const all = !state.options.culling || inside;
-  const draw = all ? [[0, state.triangles]] : ranges;
-  let drawn = 0;
+  const draw = state.options.culling ? drawRanges(state.model, raw) : [[0, state.triangles]];
+  const shown = (part) => (state.options.colours ? part.colourMesh : part.mesh);
   for (const part of state.parts) {
-    const shown = state.options.colours ? part.colourMesh : part.mesh;
-    const hidden = state.options.colours ? part.mesh : part.colourMesh;
-    shown.visible = true;
-    hidden.visible = false;
-    const geometry = shown.geometry;
-    geometry.clearGroups();
-    const end = part.first + part.count;
-    for (const [first, count] of draw) {
-      const a = Math.max(first, part.first);
-      const b = Math.min(first + count, end);
-      if (a < b) {
-        geometry.addGroup(3 * (a - part.first), 3 * (b - a), 0);
-        drawn += b - a;
-      }
-    }
+    shown(part).visible = true;
+    (state.options.colours ? part.mesh : part.colourMesh).visible = false;
   }
+  const drawn = setDrawRanges(state.parts, draw, { geometry: (part) => shown(part).geometry });
   state.drawn = drawn;
   const patchCount = state.file.patchCount;
   $("patches").textContent = `${all ? patchCount : patches.length} / ${patchCount}`;
@@ -297,7 +275,8 @@ window.patchvis = {
    * band and the answering shells, and the triangles drawn of all.
    */
   answer() {
-    return { ...state.answer, drawn: state.drawn, triangles: state.triangles };
+    const { raw, ...answer } = state.answer;
+    return { ...answer, drawn: state.drawn, triangles: state.triangles };
   },
   /** Switches culling and patch colours. */
   setOptions({ culling, colours }) {

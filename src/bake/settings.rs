@@ -65,6 +65,11 @@ pub const CONSERVATIVE_PROBE_PIXELS: u32 = 1;
 /// engine misses 2.1 pixels a view at 2× (BENCHMARKS.md, "The probe with the cover fold").
 pub const DEFAULT_PROBE_PIXELS: u32 = 1;
 
+/// The largest `--probe PX`: occluders shrunk further than this hide nothing near an edge
+/// (the default and `--conservative` shrink by 1). The command line and the Python package
+/// refuse larger values.
+pub const MAX_PROBE_PIXELS: u32 = 16;
+
 /// Smallest `--resolution`: coarser ID buffers miss nearly every patch. Measured on the
 /// bunny in 1,000 patches at level 2: a view sees 43.8 % of the patches at 256 px, 40.9 % at
 /// 128, 34.8 % at 64, 21.9 % at 32, 7.1 % at 16, 1.8 % at 8 and 0.1 % at 1 px. 16 px is the

@@ -2,7 +2,7 @@
 //! resolved settings; nothing else reads these structs.
 
 use clap::{Parser, Subcommand};
-use patchvis::bake::Probe;
+use patchvis::bake::{MAX_PROBE_PIXELS, Probe};
 use std::path::PathBuf;
 
 /// Bake precomputed patch visibility for huge triangle meshes, and query it.
@@ -734,10 +734,6 @@ pub fn parse_size(s: &str) -> Result<u64, String> {
     }
     Ok(bytes as u64)
 }
-
-/// The largest `--probe PX`: occluders shrunk further than this hide nothing near an edge
-/// (the default and `--conservative` shrink by 1).
-const MAX_PROBE_PIXELS: u32 = 16;
 
 /// `--probe PX|off`.
 fn parse_probe(s: &str) -> Result<Probe, String> {

@@ -379,7 +379,7 @@ pub struct MessageParts {
 /// when its four bytes are printable ASCII and else as `{x}`; `{f}` an `f32` given by its
 /// bits, as `Display` writes it (shortest round-trip digits, no exponent; `NaN`, `inf`);
 /// `{r}` the text of the [`Rule`] with that index ([`RULE_TEXTS`]). The one source of every
-/// message's words: `wasm/patchvis.mjs` holds a copy generated from these by a test.
+/// message's words: `npm/patchvis.mjs` holds a copy generated from these by a test.
 pub const MESSAGE_TEMPLATES: [&str; 20] = [
     "truncated: needed {} bytes, have {}",
     "not a .pvis file: bad signature",

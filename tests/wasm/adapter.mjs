@@ -1,4 +1,4 @@
-// The WebAssembly reader (wasm/patchvis.wasm through wasm/patchvis.mjs) as a peer of
+// The WebAssembly reader (npm/patchvis.wasm through npm/patchvis.mjs) as a peer of
 // `patchvis conformance`: answers the harness's line protocol (tests/conformance/README.md,
 // "Testing another reader") on stdin and stdout.
 //
@@ -6,13 +6,10 @@
 //
 // The module has no frustum query, so the adapter does not declare `frustum`.
 import { readFileSync } from "node:fs";
-import { join, dirname } from "node:path";
-import { fileURLToPath } from "node:url";
 import { createInterface } from "node:readline";
-import { Reader } from "../../wasm/patchvis.mjs";
+import { Reader } from "../../npm/patchvis.mjs";
 
-const root = join(dirname(fileURLToPath(import.meta.url)), "..", "..");
-const reader = await Reader.load(readFileSync(join(root, "wasm", "patchvis.wasm")));
+const reader = await Reader.load(); // the package's own npm/patchvis.wasm
 const number = (s) => (s === "inf" ? Infinity : s === "-inf" ? -Infinity : Number(s));
 
 let file = null;

@@ -1,4 +1,4 @@
-// The WebAssembly reader (wasm/patchvis.wasm through wasm/patchvis.mjs) against every
+// The WebAssembly reader (npm/patchvis.wasm through npm/patchvis.mjs) against every
 // conformance vector (tests/conformance): each valid file opens with the dump's counts and
 // answers every `query` line of its dump (inside flag, band, answering shells, both shells'
 // views, the visible patches) with the triangle ranges its `patch` lines give, merged; each
@@ -6,15 +6,19 @@
 // asked, whatever its band: eyes nearer the model, at the sampling distance and beyond it
 // (version 6's far band). Dump lines this test does not know are skipped. The module is a full
 // reader (Cargo feature `wasm` includes `shells`), so the dumps' `far-query` lines, a far-only
-// reader's answers, are not its answers. Run by tests/wasm/run.sh (CI); needs Node 18+.
+// reader's answers, are not its answers. Run by tests/wasm/run.sh (CI) on the source tree's
+// module, and by tests/npm/run.sh on an installed package's: PATCHVIS_MODULE names the module
+// file to test (default npm/patchvis.mjs), which loads the patchvis.wasm beside it. Needs
+// Node 18+.
 import { readFileSync, readdirSync } from "node:fs";
 import { join, dirname } from "node:path";
-import { fileURLToPath } from "node:url";
-import { Reader, PatchvisError } from "../../wasm/patchvis.mjs";
+import { fileURLToPath, pathToFileURL } from "node:url";
 
 const root = join(dirname(fileURLToPath(import.meta.url)), "..", "..");
 const vectors = join(root, "tests", "conformance");
-const reader = await Reader.load(readFileSync(join(root, "wasm", "patchvis.wasm")));
+const modulePath = process.env.PATCHVIS_MODULE ?? join(root, "npm", "patchvis.mjs");
+const { Reader, PatchvisError } = await import(pathToFileURL(modulePath).href);
+const reader = await Reader.load(); // the module's own patchvis.wasm
 
 const number = (s) => (s === "inf" ? Infinity : s === "-inf" ? -Infinity : Number(s));
 const list = (s) => (s === "" ? [] : s.split(",").map(Number));
@@ -115,6 +119,6 @@ if (failures.length > 0) {
   process.exit(1);
 }
 console.log(
-  `wasm reader: ${queries} queries (${shellQueries} of files with sampling shells, ${farQueries} ` +
+  `wasm reader (${modulePath}): ${queries} queries (${shellQueries} of files with sampling shells, ${farQueries} ` +
     `of them beyond the sampling distance) and ${refused} refusals match the conformance vectors`,
 );

@@ -7,7 +7,7 @@
 //   node tests/web/check_gltf.mjs FILE.glb|FILE.gltf FILE.pvis
 import { createRequire } from "node:module";
 import { readFile } from "node:fs/promises";
-import { Reader } from "../../wasm/patchvis.mjs";
+import { Reader } from "../../npm/patchvis.mjs";
 
 const [path, pvisPath] = process.argv.slice(2);
 // The test's npm packages live in web/node_modules (web/package.json).
@@ -65,7 +65,7 @@ if (JSON.stringify(materials) !== JSON.stringify(expected)) fail(`materials ${JS
 
 // 3. The .pvis, through the WebAssembly reader: patch counts, and every query's ranges as
 // unions of the glTF's patch ranges.
-const reader = await Reader.load(await readFile(new URL("../../wasm/patchvis.wasm", import.meta.url)));
+const reader = await Reader.load(await readFile(new URL("../../npm/patchvis.wasm", import.meta.url)));
 const file = reader.open(await readFile(pvisPath));
 if (file.patchCount !== extras.patch_count || file.triangleCount !== extras.triangle_count) {
   fail(`${extras.patch_count} patches and ${extras.triangle_count} triangles, the .pvis ${file.patchCount} and ${file.triangleCount}`);

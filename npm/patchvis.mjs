@@ -1,11 +1,15 @@
 // patchvis.mjs: the `.pvis` reader (Rust, no_std, no allocation) compiled to WebAssembly,
 // as an ES module for pages and for Node.
 //
-//   import { Reader } from "./patchvis.mjs";
-//   const reader = await Reader.load(wasmBytes);         // bytes, a Response or a Module
+//   import { Reader } from "patchvis";                    // npm install patchvis
+//   const reader = await Reader.load();                   // the packaged patchvis.wasm
+//   const reader = await Reader.load(wasmBytes);          // or bytes, a Response, a Module
 //   const file = reader.open(pvisBytes);                  // throws PatchvisError if invalid
 //   const { ranges, insideSphere } = file.query(x, y, z); // ranges: [first, count] pairs
 //   file.close();
+//
+// This file and patchvis.wasm beside it are the npm package `patchvis` (npm/README.md; the
+// three.js helper is three.mjs, the types patchvis.d.ts and three.d.ts).
 //
 // The module is src/capi.rs's C ABI built for wasm32-unknown-unknown (wasm/build.sh): the
 // reader validates a file once in `open` and answers queries without allocating. It has no
@@ -46,9 +50,11 @@ export class Reader {
   /**
    * Instantiates the reader from `source`: the .wasm bytes (ArrayBuffer or typed array), a
    * `Response` (e.g. `fetch("patchvis.wasm")`, compiled while it streams), or a
-   * `WebAssembly.Module`.
+   * `WebAssembly.Module`; without one, the `patchvis.wasm` beside this module (read from disk
+   * in Node, fetched elsewhere).
    */
   static async load(source) {
+    if (source === undefined) source = await packagedWasm();
     let instance;
     if (source instanceof WebAssembly.Module) {
       instance = await WebAssembly.instantiate(source, {});
@@ -218,6 +224,16 @@ export class PvisFile {
   close() {
     if (this.region.open) this.reader.release(this.region);
   }
+}
+
+/** The `patchvis.wasm` beside this module: its bytes from disk in Node, else a `Response`. */
+async function packagedWasm() {
+  const url = new URL("./patchvis.wasm", import.meta.url);
+  if (url.protocol === "file:") {
+    const { readFile } = await import("node:fs/promises");
+    return readFile(url);
+  }
+  return fetch(url);
 }
 
 function align(n, to) {
