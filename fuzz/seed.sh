@@ -30,4 +30,9 @@ if [ -x "$patchvis" ]; then
         { printf '\x00'; cat "$work/p$i.ppart"; } > "corpus/part/seed-raw-$i"
     done
 fi
+# The cache target: a replacement that is empty, and patches of zeros and of 0xff bytes.
+mkdir -p corpus/cache
+printf '\x00' > corpus/cache/seed-empty
+{ printf '\x01'; head -c 96 /dev/zero; } > corpus/cache/seed-zeros
+{ printf '\x01'; head -c 96 /dev/zero | tr '\0' '\377'; } > corpus/cache/seed-ones
 ls corpus/part | wc -l
