@@ -21,8 +21,8 @@ use crate::ooc::Mesh;
 type Corner = [u32; 3];
 const ABSENT: u32 = u32::MAX;
 
-/// Reads `bytes` (the OBJ `mesh` was converted from); `dir` resolves `mtllib` files; the
-/// `map_Kd` images are read when `textures`.
+/// Reads `bytes` (the OBJ `mesh` was converted from); `dir` resolves `mtllib` files, which
+/// and whose `map_Kd` images are read when `textures` (else the materials are their names).
 pub(super) fn read(
     bytes: &[u8],
     dir: &Path,
@@ -211,6 +211,8 @@ fn materials(
     textures: bool,
 ) -> Result<Vec<Material>, Fault> {
     let mut defined: Vec<Material> = Vec::new();
+    // Without textures the output is a PLY, which keeps no material but its grouping.
+    let libraries = if textures { libraries } else { &[] };
     for library in libraries {
         let path = dir.join(library);
         let origin = format!("mtllib {library}");
