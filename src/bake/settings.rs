@@ -605,7 +605,11 @@ pub(crate) mod tests {
             ("always_visible", |s| s.always_visible = vec![0, 5]),
             ("patch_order", |s| s.patch_order = PatchOrder::Spatial),
             ("encoding", |s| s.encoding = VisibilityEncoding::Table),
-            ("min_pixels", |s| s.research.min_pixels = 2),
+            // A threshold needs the probe off (the probe adds back what it drops).
+            ("min_pixels", |s| {
+                s.research.min_pixels = 2;
+                s.research.probe = Probe::Off
+            }),
             ("dilate", |s| s.research.dilate = true),
             ("probe", |s| s.research.probe = Probe::Pixels(2)),
             ("conservative_raster", |s| {

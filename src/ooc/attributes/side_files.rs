@@ -106,7 +106,7 @@ fn textures(text: &[u8], dir: &Path) -> Vec<SideFile> {
             }
             // Options come first, the file name last (as `--mesh-out` reads it).
             Some(b"map_Kd") => {
-                if let Some(file) = words.last() {
+                if let Some(file) = words.next_back() {
                     let file = String::from_utf8_lossy(file).replace('\\', "/");
                     files.push(SideFile {
                         what: format!("texture of material '{material}' (map_Kd)"),
