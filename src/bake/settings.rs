@@ -278,7 +278,7 @@ impl RowSettings {
             return Ok(());
         }
         // Enough digits that the bound shows above 1.
-        let digits = (-(outer_ratio - 1.0).log10()).ceil().clamp(3.0, 9.0) as usize + 1;
+        let digits = ((-(outer_ratio - 1.0).log10()).ceil() + 2.0).clamp(3.0, 9.0) as usize;
         let below = format!("{outer_ratio:.digits$}");
         if min == DEFAULT_SHELL_MIN && min.is_finite() && min > 1.0 {
             // The widest field of view whose sampling sphere lies outside the default's.
