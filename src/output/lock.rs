@@ -12,7 +12,9 @@
 //! The lock file is removed when the lock is let go. A command that opened it just before
 //! could then lock a file no longer in the directory, so a lock counts only if the file
 //! locked is still the one at the path (same device and inode); otherwise it is taken again.
-//! Cost: one small file per output, created and removed once per command.
+//! On a file system that has no locks the command goes on unlocked, as before locks existed,
+//! rather than refuse every output there. Cost: one small file per output, created and
+//! removed once per command.
 
 use super::atomic::{parent_dir, resolve_target};
 use super::pending::PendingFile;
@@ -44,7 +46,7 @@ pub fn lock_path(path: &Path) -> std::io::Result<PathBuf> {
 pub(super) enum LockFailure {
     /// Another process holds it; its pid, if it had written it.
     Held(Option<u32>),
-    /// The lock file could not be created or locked.
+    /// The lock file could not be created or written.
     Io(std::io::Error),
 }
 
@@ -98,7 +100,9 @@ impl Held {
                 Err(std::fs::TryLockError::WouldBlock) => {
                     return Err(LockFailure::Held(holder_pid(&mut file)));
                 }
-                Err(std::fs::TryLockError::Error(e)) => return Err(LockFailure::Io(e)),
+                // A file system without locks (some network ones) still takes the output:
+                // the command goes on unlocked rather than refuse every output there.
+                Err(std::fs::TryLockError::Error(_)) => {}
             }
             if !same_file(&file, path) {
                 continue;
