@@ -1,8 +1,10 @@
 //! The `patchvis` command-line tool: thin glue over the library.
 //!
 //! Exit codes: 0 success, 1 bad input or failed check, 2 usage error. Every error is one
-//! line on stderr naming the file, the position and what was expected. A closed stdout pipe
-//! ends a command quietly with the code it had reached (`cli::out`).
+//! line on stderr naming the file, the position and what was expected, each cause said once.
+//! A closed stdout pipe ends a command quietly with the code it had reached (`cli::out`); a
+//! help text that cannot be written is an error like any report. SIGINT, SIGTERM and SIGHUP
+//! end a command after removing its temporary and lock files (`cli::signals`).
 
 #![deny(clippy::print_stdout)]
 
@@ -17,6 +19,7 @@ use std::process::ExitCode;
 static ALLOC: patchvis::heap::CountingAlloc = patchvis::heap::CountingAlloc;
 
 fn main() -> ExitCode {
+    cli::signals::install();
     let parsed = match Cli::try_parse() {
         Ok(parsed) => parsed,
         Err(err) => {
@@ -25,12 +28,28 @@ fn main() -> ExitCode {
                 err.kind(),
                 ErrorKind::DisplayHelp | ErrorKind::DisplayVersion
             ) {
-                let _ = err.print();
-                return ExitCode::SUCCESS;
+                // Help goes to stdout: a failed write there is a failure, a closed pipe not.
+                let printed = err.print().and_then(|()| std::io::stdout().flush());
+                return match printed {
+                    Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+                        let _ = writeln!(std::io::stderr(), "error: {}", cli::out::StdoutError(e));
+                        ExitCode::from(1)
+                    }
+                    _ => ExitCode::SUCCESS,
+                };
             }
-            // clap's first line names the problem; the rest is a hint to try --help.
+            // clap's first paragraph names the problem (with what it lists, such as the
+            // missing arguments, on the lines below it); the rest is usage and a hint.
             let text = err.to_string();
-            eprintln!("{}", text.lines().next().unwrap_or("error: bad arguments"));
+            let problem: Vec<&str> = text
+                .lines()
+                .map(str::trim)
+                .take_while(|line| !line.is_empty())
+                .collect();
+            match problem.is_empty() {
+                true => eprintln!("error: bad arguments"),
+                false => eprintln!("{}", problem.join(" ")),
+            }
             return ExitCode::from(2);
         }
     };
@@ -61,10 +80,27 @@ fn main() -> ExitCode {
             } else {
                 1
             };
-            // `{:#}` joins the context chain on one line: "FILE: what went wrong". A stderr
-            // that cannot be written either leaves nothing to tell.
-            let _ = writeln!(std::io::stderr(), "error: {err:#}");
+            // A stderr that cannot be written either leaves nothing to tell.
+            let _ = writeln!(std::io::stderr(), "error: {}", one_line(&err));
             ExitCode::from(code)
         }
     }
+}
+
+/// The error's chain of causes on one line, "FILE: what went wrong: why", each cause once: a
+/// message that already ends with its cause's text (`thiserror`'s `{source}`) is not followed
+/// by it again.
+fn one_line(err: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in err.chain() {
+        let text = cause.to_string();
+        if line.ends_with(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line
 }

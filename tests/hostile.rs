@@ -3,7 +3,9 @@
 //! silently truncated result; one clear line on stderr and the documented exit code (0 success,
 //! 1 bad input or failed check, 2 usage error).
 //!
-//! One module per side of the tool: what it writes, what it reads, and the geometry it accepts.
+//! One module per side of the tool: what it writes, what it reads, and the geometry it accepts;
+//! then commands at once and signals (`locks`), every path read against every path written
+//! (`paths`), and flags that would do nothing or blame another flag (`settings`).
 
 mod common;
 
@@ -27,3 +29,12 @@ mod bounded;
 
 #[path = "hostile/parts.rs"]
 mod parts;
+
+#[path = "hostile/locks.rs"]
+mod locks;
+
+#[path = "hostile/paths.rs"]
+mod paths;
+
+#[path = "hostile/settings.rs"]
+mod settings;

@@ -263,7 +263,11 @@ fn merge_refuses_missing_repeated_foreign_and_damaged_parts() {
         1,
         &[s(&ant), "from another mesh"],
     );
-    let other = bake3(BUNNY, "other-3.ppart", &["--min-pixels", "2"]);
+    let other = bake3(
+        BUNNY,
+        "other-3.ppart",
+        &["--min-pixels", "2", "--probe", "off"],
+    );
     refused(
         merge(&[p[0], p[1], p[2], &other], &out),
         1,

@@ -1,9 +1,10 @@
 //! What a bake refuses before any work, once the mesh is open: a `--dilate` patch graph or
 //! the probe's solids past the budget, a mesh of zero-area triangles, and a `--memory` below
-//! what the stages need whatever the budget ([`MemoryBudget::minimum`]).
+//! what the stages need whatever the budget ([`MemoryBudget::minimum`]). A tiling alone
+//! (`patchvis tile`) needs no sampling: [`check_tiling`] asks only what tiling needs.
 
 use super::{BakeError, BakeSettings, Plan};
-use crate::memory::{FixedNeeds, MemoryBudget};
+use crate::memory::{FixedNeeds, MIN_FIXED_BYTES, MemoryBudget};
 use crate::ooc::{Mesh, MeshError, MeshErrorKind};
 
 /// Checks what depends on the mesh before any work: the `--dilate` patch graph and the
@@ -34,16 +35,7 @@ pub(super) fn check_mesh(
             memory.total() >> 20
         )));
     }
-    if crate::tiling::first_with_area(mesh).is_none() {
-        return Err(BakeError::Mesh(MeshError::whole(
-            mesh.path(),
-            MeshErrorKind::Degenerate,
-            format!(
-                "all {} triangles are degenerate (zero area); nothing to bake",
-                mesh.triangle_count()
-            ),
-        )));
-    }
+    check_area(mesh)?;
     let patches = u64::from(settings.patches.min(mesh.triangle_count()));
     // Every pass's rows live until the encoding: the sampling sphere's and each shell's.
     let views = plan.sampled_view_count();
@@ -68,6 +60,38 @@ pub(super) fn check_mesh(
             views,
             patches,
             minimum >> 20
+        )));
+    }
+    Ok(())
+}
+
+/// Checks what a tiling alone needs before any work (`patchvis tile`): that some triangle
+/// has an area, and that the budget holds the fixed minimum ([`MIN_FIXED_BYTES`]); the
+/// sampler's ID buffers, views and rows are for the shards to check.
+pub(super) fn check_tiling(settings: &BakeSettings, mesh: &Mesh) -> Result<(), BakeError> {
+    check_area(mesh)?;
+    let memory = settings.memory;
+    if memory.total() < MIN_FIXED_BYTES {
+        return Err(BakeError::Settings(format!(
+            "--memory {}: below the {} MiB a tiling needs whatever its budget; use at least {} MiB",
+            size_text(memory.total()),
+            MIN_FIXED_BYTES >> 20,
+            MIN_FIXED_BYTES >> 20
+        )));
+    }
+    Ok(())
+}
+
+/// Some triangle of `mesh` must have an area.
+fn check_area(mesh: &Mesh) -> Result<(), BakeError> {
+    if crate::tiling::first_with_area(mesh).is_none() {
+        return Err(BakeError::Mesh(MeshError::whole(
+            mesh.path(),
+            MeshErrorKind::Degenerate,
+            format!(
+                "all {} triangles are degenerate (zero area); nothing to bake",
+                mesh.triangle_count()
+            ),
         )));
     }
     Ok(())

@@ -1,9 +1,12 @@
-//! The outputs of a bake, written so that they appear whole or not at all: the reordered
-//! mesh of `--mesh-out` to a temporary file first, then the `.pvis` atomically, then the mesh
-//! renamed into place; the finished bake's checkpoints are removed.
+//! The outputs of a bake, written so that they appear whole or not at all, and as a set: the
+//! reordered mesh of `--mesh-out` and the `.pvis` each to a temporary file, both synced; then
+//! the old `.pvis` removed, the mesh renamed into place and the `.pvis` last. The `.pvis` is
+//! never in place before its mesh, and a crash between the renames leaves the new mesh with
+//! no `.pvis` (the checkpoints are still there for `--resume`), never a `.pvis` beside a mesh
+//! of another bake, whose triangle ranges it would misread. Then the finished bake's
+//! checkpoints are removed.
 
 use super::{BakeError, Baked, Recipe, Stages};
-use crate::format;
 use crate::meshout::{self, MeshFormat};
 use crate::ooc::Mesh;
 use crate::ooc::attributes::Attributes;
@@ -25,7 +28,8 @@ pub struct Outputs {
 impl Outputs {
     /// Every file a bake with `recipe` writes to these outputs, named as the user knows them:
     /// the `.pvis` (`-o`), the mesh (`--mesh-out`) and the checkpoints beside the `.pvis`.
-    /// Check them with [`crate::output::check_outputs`] before the bake reads its input.
+    /// Check them with [`crate::output::check_outputs`] before the bake reads its input, and
+    /// hold the lock it returns until [`Recipe::write`] is done.
     pub fn paths(&self, recipe: &Recipe) -> Vec<NamedPath> {
         let mut paths = vec![NamedPath::flag("-o", &self.pvis)];
         if let Some(mesh) = &self.mesh {
@@ -56,9 +60,9 @@ impl Recipe {
         Ok(())
     }
 
-    /// Writes `baked` (from `mesh`) to `outputs`: the reordered mesh to a temporary file
-    /// first, then the `.pvis` atomically, then the mesh renamed into place, so that a failure
-    /// anywhere leaves no partial output behind; the finished bake's checkpoints are removed.
+    /// Writes `baked` (from `mesh`) to `outputs` as a set (see the module documentation), so
+    /// that a failure anywhere leaves no partial output behind and no `.pvis` beside another
+    /// bake's mesh; the finished bake's checkpoints are removed.
     pub fn write(
         &self,
         baked: &Baked,
@@ -72,25 +76,37 @@ impl Recipe {
             }
             None => None,
         };
-        format::write_atomic(&outputs.pvis, &baked.bytes).map_err(|source| BakeError::Write {
-            path: outputs.pvis.clone(),
-            source,
-        })?;
-        // The output is complete: its checkpoints have served their purpose.
-        self.remove_checkpoints()?;
+        let failed = |path: &Path| {
+            let path = path.to_path_buf();
+            move |source| BakeError::Write { path, source }
+        };
+        let pvis = &outputs.pvis;
+        let mut pvis_tmp = AtomicFile::create(pvis).map_err(failed(pvis))?;
+        pvis_tmp
+            .file()
+            .write_all(&baked.bytes)
+            .and_then(|()| pvis_tmp.sync())
+            .map_err(failed(pvis))?;
         if let (Some(tmp), Some(path)) = (mesh_tmp, &outputs.mesh) {
-            tmp.commit().map_err(|source| BakeError::Write {
-                path: path.clone(),
-                source,
-            })?;
+            // The old `.pvis` goes first: it does not describe the new mesh.
+            let old = crate::output::resolve_target(pvis).map_err(failed(pvis))?;
+            match std::fs::remove_file(&old) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    return Err(failed(pvis)(e));
+                }
+                _ => {}
+            }
+            tmp.commit().map_err(failed(path))?;
         }
-        Ok(())
+        pvis_tmp.commit().map_err(failed(pvis))?;
+        // The output is complete: its checkpoints have served their purpose.
+        self.remove_checkpoints()
     }
 }
 
 /// The reordered mesh of `--mesh-out` (with the input's attributes, read again from it) in
 /// its temporary file beside `path` (with the permissions of a plain create), to be committed
-/// once the `.pvis` is in place.
+/// just before the `.pvis`.
 fn write_mesh_tmp(path: &Path, mesh: &Mesh, tiling: &Tiling) -> Result<AtomicFile, BakeError> {
     let failed = |source| BakeError::Write {
         path: path.to_path_buf(),

@@ -188,6 +188,20 @@ impl Plan {
             Probe::Default if conservative => Some(CONSERVATIVE_PROBE_PIXELS),
             Probe::Default => Some(DEFAULT_PROBE_PIXELS),
         };
+        if r.min_pixels > 1 && probe.is_some() {
+            // The probe adds back what the threshold drops: the file would be the same.
+            let which = match r.probe {
+                _ if conservative => "--conservative's probe pass".to_owned(),
+                Probe::Pixels(pixels) => format!("the probe pass (--probe {pixels})"),
+                _ => "the default's probe pass".to_owned(),
+            };
+            return fail(format!(
+                "--min-pixels {}: {which} draws every patch a view did not show again and adds \
+                 it back where a camera near the view may see it, so a pixel threshold would \
+                 change nothing; add --probe off (without --conservative) to use one",
+                r.min_pixels
+            ));
+        }
         let fold_min_pixels = r.fold_min_pixels.unwrap_or(DEFAULT_FOLD_MIN_PIXELS);
         // A threshold at or below the stored views' own changes nothing.
         let threshold = fold_min_pixels > r.min_pixels.max(1);

@@ -182,6 +182,11 @@ impl Recipe {
     /// the patch count.
     pub fn tile(&self, mesh: &Mesh) -> Result<Tiling, BakeError> {
         self.check_mesh(mesh)?;
+        self.tile_checked(mesh)
+    }
+
+    /// [`Recipe::tile`] once `mesh` is checked.
+    pub(super) fn tile_checked(&self, mesh: &Mesh) -> Result<Tiling, BakeError> {
         let tiling = tiling::tile_with(mesh, self.settings.patches, &self.tiling_options())?;
         let patch_count = tiling.patches.len() as u32;
         if let Some(&bad) = self

@@ -271,6 +271,38 @@ impl BakeSettings {
 }
 
 impl RowSettings {
+    /// `--shell-min` against the sampling distance, which `--fov` sets: the innermost shell
+    /// lies between the bounding sphere and the sampling sphere. With the default
+    /// `--shell-min`, a `--fov` too wide for it is the flag to blame.
+    fn check_shell_min(&self) -> Result<(), SettingsError> {
+        let half = f64::from(self.fov_deg).to_radians() * 0.5;
+        // D / R of the sampling sphere.
+        let outer_ratio = 1.0 / half.sin();
+        let min = self.shell_min;
+        if min.is_finite() && min > 1.0 && min < outer_ratio {
+            return Ok(());
+        }
+        // Enough digits that the bound shows above 1.
+        let digits = ((-(outer_ratio - 1.0).log10()).ceil() + 2.0).clamp(3.0, 9.0) as usize;
+        let below = format!("{outer_ratio:.digits$}");
+        if min == DEFAULT_SHELL_MIN && min.is_finite() && min > 1.0 {
+            // The widest field of view whose sampling sphere lies outside the default's.
+            let widest = (2.0 * (1.0 / min).asin().to_degrees() * 10.0).floor() / 10.0;
+            return Err(SettingsError(format!(
+                "--fov {}: puts the sampling sphere {below} bounding radii from the centre, \
+                 inside the innermost sampling shell (the default --shell-min {min}); use a \
+                 --fov below {widest}, or --shells 0 (no near views), or a --shell-min above 1 \
+                 and below {below}",
+                self.fov_deg
+            )));
+        }
+        Err(SettingsError(format!(
+            "--shell-min {min}: expected the innermost shell's radius over the bounding radius, \
+             above 1 and below {below} (the sampling distance's at --fov {})",
+            self.fov_deg
+        )))
+    }
+
     /// Checks each value's own range (what the values resolve to is checked by
     /// [`Plan::new`]).
     pub(super) fn check_ranges(&self) -> Result<(), SettingsError> {
@@ -308,13 +340,8 @@ impl RowSettings {
         }
         // D / R of the sampling sphere; the radii themselves are checked with the mesh
         // (`shells::shell_distances`).
-        let outer_ratio = 1.0 / (f64::from(self.fov_deg).to_radians() * 0.5).sin();
-        if !(self.shell_min.is_finite() && self.shell_min > 1.0 && self.shell_min < outer_ratio) {
-            return fail(format!(
-                "--shell-min {}: expected the innermost shell's radius over the bounding \
-                 radius, above 1 and below {outer_ratio:.3} (the sampling distance's at --fov {})",
-                self.shell_min, self.fov_deg
-            ));
+        if self.shells > 0 {
+            self.check_shell_min()?;
         }
         let far = &self.far_shells;
         if far
@@ -583,7 +610,11 @@ pub(crate) mod tests {
             ("always_visible", |s| s.always_visible = vec![0, 5]),
             ("patch_order", |s| s.patch_order = PatchOrder::Spatial),
             ("encoding", |s| s.encoding = VisibilityEncoding::Table),
-            ("min_pixels", |s| s.research.min_pixels = 2),
+            // A threshold needs the probe off (the probe adds back what it drops).
+            ("min_pixels", |s| {
+                s.research.min_pixels = 2;
+                s.research.probe = Probe::Off
+            }),
             ("dilate", |s| s.research.dilate = true),
             ("probe", |s| s.research.probe = Probe::Pixels(2)),
             ("conservative_raster", |s| {
@@ -746,6 +777,9 @@ pub(crate) mod tests {
                 },
                 "--shell-min",
             ),
+            // Too wide a field of view for the default --shell-min blames the field of view.
+            (&|s: &mut BakeSettings| s.rows.fov_deg = 170.0, "--fov 170"),
+            (&|s: &mut BakeSettings| s.rows.fov_deg = 179.0, "--fov 179"),
             (
                 &|s: &mut BakeSettings| s.rows.shell_level = Some(MAX_LEVEL + 1),
                 "--shell-level",

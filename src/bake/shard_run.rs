@@ -37,11 +37,13 @@ pub struct ShardBaked {
 
 impl Recipe {
     /// Tiles `mesh` as [`Recipe::run`] does, in the frame it samples in: the tiling a tiling
-    /// file holds (`patchvis tile`).
+    /// file holds (`patchvis tile`). Checks only what a tiling needs (the shards check their
+    /// sampling).
     pub fn tile_framed(&self, mesh: &Mesh) -> Result<Tiling, BakeError> {
+        super::checks::check_tiling(&self.settings, mesh)?;
         match Frame::choose(mesh, self.plan.rows.fov_deg)? {
-            Some(frame) => self.tile(&frame.apply(mesh)?),
-            None => self.tile(mesh),
+            Some(frame) => self.tile_checked(&frame.apply(mesh)?),
+            None => self.tile_checked(mesh),
         }
     }
 

@@ -44,7 +44,9 @@ pub enum Command {
 pub struct BakeArgs {
     /// Input mesh: PLY, OBJ, STL or glTF 2.0 (.gltf / .glb).
     pub input: PathBuf,
-    /// Output .pvis file.
+    /// Output .pvis file. Outputs that are symbolic links are written through (the file they
+    /// point to is replaced, the link stays); each output is locked while the bake runs, and
+    /// another command naming one is refused with the bake's pid.
     #[arg(short, long, value_name = "OUT.pvis")]
     pub output: PathBuf,
     /// Number of patches to group the triangles into (at most the triangle count).
@@ -63,7 +65,8 @@ pub struct BakeArgs {
     /// Also write the mesh reordered so that each patch is one contiguous triangle range, with
     /// the input's normals, texture coordinates and materials: .glb/.gltf (glTF 2.0, patch
     /// ranges in the mesh's extras), or binary PLY for any other name (per-face patch, colour
-    /// and orig_index).
+    /// and orig_index; it reads no material library). Renamed into place just before the
+    /// .pvis, the old .pvis removed first.
     #[arg(long, value_name = "MESH.ply|.glb|.gltf")]
     pub mesh_out: Option<PathBuf>,
     /// Heap budget for the bake, e.g. 512MiB, 2GiB, 1G (default: half the available memory,
@@ -79,7 +82,8 @@ pub struct BakeArgs {
     #[arg(long, value_name = "STATS.json")]
     pub stats: Option<PathBuf>,
     /// A patch counts as seen from a view only if it covers at least K pixels there
-    /// (aggressive mode; 0 or 1: any pixel).
+    /// (aggressive mode; 0 or 1: any pixel). Above 1 it needs --probe off: the probe pass adds
+    /// back what it drops.
     #[arg(long, default_value_t = 0, value_name = "K")]
     pub min_pixels: u32,
     /// Also mark the edge neighbours of every seen patch that may face the view
@@ -231,7 +235,7 @@ pub struct BakeArgs {
     #[arg(long, value_name = "I/N|auto", conflicts_with = "mesh_out")]
     pub shard: Option<String>,
     /// With --shard: read the tiling from this file (`patchvis tile`) instead of tiling again.
-    #[arg(long, value_name = "T.ptile", requires = "shard")]
+    #[arg(long, value_name = "T.ptile")]
     pub tiling_file: Option<PathBuf>,
 }
 
@@ -326,7 +330,7 @@ pub struct GenArgs {
     /// About how many triangles (the model's own steps decide the exact count).
     #[arg(long, value_name = "N")]
     pub triangles: u64,
-    /// Output mesh (binary little-endian PLY).
+    /// Output mesh (binary little-endian PLY); a symbolic link is written through.
     #[arg(short, long, value_name = "OUT.ply")]
     pub output: PathBuf,
     /// The mesh that `subdivided-bunny` and `bunny-grid` start from.

@@ -86,11 +86,20 @@ pub fn run(args: BakeArgs) -> Result<()> {
     if let Some(shard) = &args.shard {
         return super::shard::bake(&args, shard, &recipe);
     }
+    if let Some(tiling) = &args.tiling_file {
+        return Err(UsageError(format!(
+            "--tiling-file {}: only a sharded bake reads a tiling file; add --shard I/N (or \
+             --shard auto), or leave --tiling-file out to tile here",
+            tiling.display()
+        ))
+        .into());
+    }
     let outputs = Outputs {
         pvis: args.output.clone(),
         mesh: args.mesh_out.clone(),
     };
-    check_paths(&args, &recipe, &outputs)?;
+    // Held until the outputs are written: no other command writes them meanwhile.
+    let _lock = check_paths(&args, &recipe, &outputs)?;
     let bars = Bars::new(!args.quiet);
     let start = Instant::now();
     // Before any work, so that a missing GPU fails at once.

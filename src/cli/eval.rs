@@ -20,7 +20,7 @@ use patchvis::eval::{
 };
 use patchvis::format::{PvisFile, write_atomic};
 use patchvis::ooc::{Mesh, read_regular};
-use patchvis::output::{NamedPath, check_outputs};
+use patchvis::output::NamedPath;
 use patchvis::runtime::Pvis;
 use patchvis::sampler::MAX_RESOLUTION;
 use serde_json::{Value, json};
@@ -120,14 +120,20 @@ pub fn run(args: EvalArgs) -> Result<()> {
         .file
         .clone()
         .ok_or_else(|| UsageError("expected FILE.pvis (or --sweep)".into()))?;
-    if let Some(stats) = &args.stats {
-        let inputs = [
-            NamedPath::new("the mesh", "MESH", &args.mesh),
-            NamedPath::new("the .pvis file", "FILE", &file),
-        ];
-        check_outputs(&inputs, &[NamedPath::flag("--stats", stats)])
-            .map_err(|e| UsageError(e.to_string()))?;
-    }
+    // Held until --stats is written.
+    let _lock = match &args.stats {
+        Some(stats) => {
+            let inputs = [
+                NamedPath::new("the mesh", "MESH", &args.mesh),
+                NamedPath::new("the .pvis file", "FILE", &file),
+            ];
+            Some(super::claim_outputs(
+                &inputs,
+                &[NamedPath::flag("--stats", stats)],
+            )?)
+        }
+        None => None,
+    };
     let bars = Bars::new(!args.quiet && !args.json);
     let start = Instant::now();
     let options = EvalOptions {

@@ -3,8 +3,8 @@
 //! The models live in [`patchvis::generate`]; this file resolves the flags, reads the source
 //! mesh through [`Mesh`], and writes through a temporary file that is renamed into place only
 //! when complete ([`AtomicFile`]), so an interrupted run leaves no half-written mesh behind.
-//! The output is checked before any work: not the source, a regular file or a new one, in a
-//! writable directory. Sizes past [`MAX_TRIANGLES`] are refused.
+//! The output is checked before any work, and locked: not the source (named or default,
+//! whatever the kind), a regular file or a new one, in a writable directory. Sizes past [`MAX_TRIANGLES`] are refused.
 
 use super::UsageError;
 use super::args::{GenArgs, GenKind};
@@ -17,7 +17,7 @@ use patchvis::generate::subdivide::SubdividedMesh;
 use patchvis::generate::truss::Truss;
 use patchvis::generate::{MAX_TRIANGLES, Model, write_ply};
 use patchvis::ooc::Mesh;
-use patchvis::output::{AtomicFile, NamedPath, check_outputs};
+use patchvis::output::{AtomicFile, NamedPath};
 use std::time::Instant;
 
 /// Runs `patchvis gen`.
@@ -33,14 +33,14 @@ pub fn run(args: &GenArgs) -> Result<()> {
         ))
         .into());
     }
-    let reads_source = matches!(args.kind, GenKind::SubdividedBunny | GenKind::BunnyGrid);
-    let inputs = if reads_source {
-        vec![NamedPath::new("the source mesh", "--source", &args.source)]
-    } else {
-        Vec::new()
-    };
-    check_outputs(&inputs, &[NamedPath::flag("-o", &args.output)])
-        .map_err(|e| UsageError(e.to_string()))?;
+    // The source is an input whatever the kind: a kind that does not read it still must not
+    // replace the file the user named as one.
+    let inputs = [NamedPath::new(
+        "the --source mesh",
+        "--source",
+        &args.source,
+    )];
+    let _lock = super::claim_outputs(&inputs, &[NamedPath::flag("-o", &args.output)])?;
     let start = Instant::now();
     let source;
     let model: Box<dyn Model + '_> = match args.kind {

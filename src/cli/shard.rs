@@ -12,7 +12,7 @@ use patchvis::bake::{
     Backend, BackendChoice, BakeSettings, LoadedPart, Outputs, Recipe, RowSettings, Shard, Stages,
     merge as merge_parts, mesh_hash, read_part, read_tiling_file, write_tiling_file,
 };
-use patchvis::output::{NamedPath, check_outputs};
+use patchvis::output::NamedPath;
 use std::time::Instant;
 
 /// `patchvis bake --shard`: checks, then bakes `shard` (`I/N` or `auto`) of `args` into
@@ -28,14 +28,8 @@ pub fn bake(args: &BakeArgs, shard: &str, recipe: &Recipe) -> Result<()> {
         pvis: args.output.clone(),
         mesh: None,
     };
-    check_paths(args, recipe, &outputs)?;
-    if let Some(tiling) = &args.tiling_file {
-        check_outputs(
-            &[NamedPath::flag("--tiling-file", tiling)],
-            &outputs.paths(recipe),
-        )
-        .map_err(|e| UsageError(e.to_string()))?;
-    }
+    // Held until the part is written; the tiling file is among the inputs checked.
+    let _lock = check_paths(args, recipe, &outputs)?;
     if args.backend != super::args::BackendArg::Cpu {
         return Err(UsageError(
             "--shard: sharded bakes sample on the CPU backend (bit-exact, so that the merge \
@@ -129,11 +123,10 @@ pub fn tile(args: &TileArgs) -> Result<()> {
     }
     .check()
     .map_err(|e| UsageError(e.0))?;
-    check_outputs(
+    let _lock = super::claim_outputs(
         &[NamedPath::new("the input mesh", "INPUT", &args.input)],
         &[NamedPath::flag("-o", &args.output)],
-    )
-    .map_err(|e| UsageError(e.to_string()))?;
+    )?;
     let bars = Bars::new(!args.quiet);
     let start = Instant::now();
     let mesh = bars
@@ -178,8 +171,7 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
         .iter()
         .map(|p| NamedPath::new("a part", "PART", p))
         .collect();
-    check_outputs(&inputs, &[NamedPath::flag("-o", &args.output)])
-        .map_err(|e| UsageError(e.to_string()))?;
+    let _lock = super::claim_outputs(&inputs, &[NamedPath::flag("-o", &args.output)])?;
     let start = Instant::now();
     let parts = args
         .parts

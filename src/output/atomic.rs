@@ -9,10 +9,14 @@
 //! power loss) leaves at most that one file, and the next run writing the same output removes
 //! it: here, or before any work in [`check_outputs`](super::check_outputs).
 //!
-//! A new file gets the permissions a plain `File::create` gives (0o666 less the umask); a
-//! file that is replaced keeps its mode. Cost: one `fsync` of the file and one of its
-//! directory.
+//! An output that is a symbolic link is written through: the file it points to (followed to
+//! the end of a chain, [`resolve_target`]) is replaced, with its temporary file beside it, and
+//! the link stays. A new file gets the permissions a plain `File::create` gives (0o666 less
+//! the umask); a file that is replaced keeps its mode. While a temporary file exists it is
+//! pending (`pending.rs`): a signal that ends the process removes it. Cost: one `fsync` of
+//! the file and one of its directory.
 
+use super::pending::PendingFile;
 use std::ffi::OsString;
 use std::fs::File;
 use std::io::Write;
@@ -26,9 +30,11 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     file.commit()
 }
 
-/// The temporary file that [`AtomicFile`] writes `path` through: `.NAME.patchvis-tmp` in
-/// `path`'s directory. Fails (`InvalidInput`) for a path with no file name, such as `..`.
+/// The temporary file that [`AtomicFile`] writes `path` through: `.NAME.patchvis-tmp` in the
+/// directory of the file written (`path`, or the file a symbolic link `path` points to).
+/// Fails (`InvalidInput`) for a path with no file name, such as `..`.
 pub fn temp_path(path: &Path) -> std::io::Result<PathBuf> {
+    let path = &resolve_target(path)?;
     let name = path.file_name().ok_or_else(|| {
         std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
@@ -39,6 +45,28 @@ pub fn temp_path(path: &Path) -> std::io::Result<PathBuf> {
     tmp.push(name);
     tmp.push(".patchvis-tmp");
     Ok(parent_dir(path).join(tmp))
+}
+
+/// Most symbolic links followed in a chain, as Linux's `MAXSYMLINKS`.
+const MAX_LINKS: usize = 40;
+
+/// The file an output `path` writes: `path` itself, or, if it is a symbolic link, the path it
+/// points to, followed to the end of a chain (the target need not exist yet). Links in the
+/// directories above are left as they are: the rename goes through them.
+pub fn resolve_target(path: &Path) -> std::io::Result<PathBuf> {
+    let mut target = path.to_path_buf();
+    for _ in 0..MAX_LINKS {
+        match std::fs::symlink_metadata(&target) {
+            Ok(meta) if meta.file_type().is_symlink() => {
+                let link = std::fs::read_link(&target)?;
+                target = parent_dir(&target).join(link);
+            }
+            _ => return Ok(target),
+        }
+    }
+    Err(std::io::Error::other(format!(
+        "more than {MAX_LINKS} symbolic links in a chain"
+    )))
 }
 
 /// The directory `path` is in: its parent, or `.` for a bare file name.
@@ -65,26 +93,29 @@ pub(super) fn create_fresh(tmp: &Path) -> std::io::Result<File> {
 #[derive(Debug)]
 pub struct AtomicFile {
     file: File,
-    tmp: PathBuf,
+    /// The temporary file.
+    tmp: PendingFile,
+    /// The file written: the destination, symbolic links followed.
     dest: PathBuf,
-    committed: bool,
 }
 
 impl AtomicFile {
-    /// Starts writing `dest`: creates its temporary file (removing a stale one), with the mode
-    /// of `dest` if that is an existing regular file.
+    /// Starts writing `dest` (through a symbolic link to the file it points to): creates its
+    /// temporary file (removing a stale one), with the mode of `dest` if that is an existing
+    /// regular file. The caller holds the output's lock
+    /// ([`check_outputs`](super::check_outputs)), so no other command writes through it.
     pub fn create(dest: &Path) -> std::io::Result<AtomicFile> {
-        let tmp = temp_path(dest)?;
+        let dest = resolve_target(dest)?;
+        let tmp = temp_path(&dest)?;
         let file = create_fresh(&tmp)?;
         let file = AtomicFile {
             file,
-            tmp,
-            dest: dest.to_path_buf(),
-            committed: false,
+            tmp: PendingFile::new(tmp),
+            dest,
         };
         // A replaced file keeps its mode, as it would if written in place.
         #[cfg(unix)]
-        if let Ok(meta) = std::fs::metadata(dest)
+        if let Ok(meta) = std::fs::metadata(&file.dest)
             && meta.is_file()
         {
             file.file.set_permissions(meta.permissions())?;
@@ -99,20 +130,36 @@ impl AtomicFile {
 
     /// Syncs the temporary file and renames it over the destination, durably.
     pub fn commit(mut self) -> std::io::Result<()> {
-        self.file.sync_all()?;
-        std::fs::rename(&self.tmp, &self.dest)?;
-        self.committed = true;
+        self.sync()?;
+        self.rename()?;
         // Make the rename itself durable. Directories cannot be opened for this on Windows.
         #[cfg(unix)]
         File::open(parent_dir(&self.dest))?.sync_all()?;
         Ok(())
     }
+
+    /// Syncs the temporary file: what [`AtomicFile::commit`] does before its rename, for
+    /// callers that commit several files as a set and want every one synced first.
+    pub fn sync(&mut self) -> std::io::Result<()> {
+        self.file.sync_all()
+    }
+
+    /// Renames the temporary file over the destination, with no signal clean-up in between.
+    fn rename(&mut self) -> std::io::Result<()> {
+        let dest = &self.dest;
+        self.tmp.settle(|tmp| {
+            let renamed = std::fs::rename(tmp, dest);
+            if renamed.is_err() {
+                let _ = std::fs::remove_file(tmp);
+            }
+            renamed
+        })
+    }
 }
 
 impl Drop for AtomicFile {
+    /// Removes the temporary file of an uncommitted write (a committed one is gone).
     fn drop(&mut self) {
-        if !self.committed {
-            let _ = std::fs::remove_file(&self.tmp);
-        }
+        self.tmp.remove();
     }
 }

@@ -1,16 +1,21 @@
 //! A command's output paths, checked before any work, so that no output destroys an input,
-//! another output, or a device node, and an unwritable directory is found in a second rather
-//! than after hours of baking.
+//! another output, or a device node, an unwritable directory is found in a second rather
+//! than after hours of baking, and no other command writes them meanwhile.
 //!
 //! Paths are compared by file identity, not by spelling: an existing file by device and inode
 //! on Unix (so `./b.ply`, a symlink to it and a hard link of it are all `b.ply`), a file that
-//! does not exist yet by its canonical directory and name. Every output is written through a
-//! temporary file ([`temp_path`]) that is renamed over it, so that path counts as written too,
-//! and an existing output must be a regular file: the rename would replace a device node, a
-//! FIFO or a directory. Writability is probed by creating and removing that very temporary
-//! file, which also clears one that a killed run left behind.
+//! does not exist yet by its canonical directory and name. An output that is a symbolic link
+//! is the file it points to (it is written through, `atomic.rs`). Every output is written
+//! through a temporary file ([`temp_path`]) that is renamed over it and locked through a lock
+//! file ([`lock_path`]), so those paths count as written too, and an existing output must be a
+//! regular file: the rename would replace a device node, a FIFO or a directory. Then every
+//! output is locked (`lock.rs`): one that another command is writing is refused, naming its
+//! pid. Writability is probed last, by creating and removing the output's temporary file,
+//! which also clears one that a killed run left behind (never a live one: its writer would
+//! hold the lock).
 
-use super::atomic::{create_fresh, parent_dir, temp_path};
+use super::atomic::{create_fresh, parent_dir, resolve_target, temp_path};
+use super::lock::{LockFailure, OutputLock, lock_path};
 use std::path::{Path, PathBuf};
 
 /// A file a command reads or writes, and what the user calls it.
@@ -98,6 +103,14 @@ pub enum OutputError {
         /// Its directory.
         dir: PathBuf,
     },
+    /// Another process is writing an output (it holds its lock).
+    #[error("{}", busy(output, *pid))]
+    Busy {
+        /// The output.
+        output: Box<NamedPath>,
+        /// The process holding it, if it could be read.
+        pid: Option<u32>,
+    },
     /// An output's directory does not take a new file.
     #[error(
         "{}: cannot create files in {} ({source}): give {} a path in a writable directory",
@@ -129,14 +142,33 @@ fn not_regular(output: &NamedPath, kind: &str) -> String {
     }
 }
 
+/// The message of [`OutputError::Busy`].
+fn busy(output: &NamedPath, pid: Option<u32>) -> String {
+    let holder = match pid {
+        Some(pid) => format!("another patchvis command (pid {pid})"),
+        None => "another patchvis command".to_owned(),
+    };
+    format!(
+        "{}: {} is being written by {holder}; wait for it to end, or give {} another path",
+        output.path.display(),
+        output.what,
+        output.flag
+    )
+}
+
 /// [`file_kind`] of a directory.
 const DIRECTORY: &str = "a directory";
 
-/// Checks `outputs` before a command reads or writes anything: each is a regular file or
-/// does not exist yet, in an existing directory where its temporary file can be created; no
-/// output (nor its temporary file) is one of `inputs`, and no two outputs are the same file.
-/// Stale temporary files of the outputs are removed on the way.
-pub fn check_outputs(inputs: &[NamedPath], outputs: &[NamedPath]) -> Result<(), OutputError> {
+/// Checks `outputs` before a command reads or writes anything, and locks them: each is a
+/// regular file or does not exist yet, in an existing directory where its temporary file can
+/// be created; no output (nor its temporary or lock file) is one of `inputs`, no two outputs
+/// are the same file, and no other command is writing one. Stale temporary files of the
+/// outputs are removed on the way. The outputs stay locked while the returned lock is held:
+/// keep it until they are written.
+pub fn check_outputs(
+    inputs: &[NamedPath],
+    outputs: &[NamedPath],
+) -> Result<OutputLock, OutputError> {
     for output in outputs {
         check_kind(output)?;
     }
@@ -144,13 +176,17 @@ pub fn check_outputs(inputs: &[NamedPath], outputs: &[NamedPath]) -> Result<(), 
         .iter()
         .filter_map(|input| Some((input, FileKey::of_existing(&input.path)?)))
         .collect();
-    // Each output's path and its temporary file's, as keys.
-    let written: Vec<[Option<FileKey>; 2]> = outputs
+    // Each output's file (symbolic links followed), its temporary file and its lock file, as
+    // keys.
+    let written: Vec<[Option<FileKey>; 3]> = outputs
         .iter()
         .map(|output| {
             [
-                FileKey::of(&output.path),
+                resolve_target(&output.path)
+                    .ok()
+                    .and_then(|t| FileKey::of(&t)),
                 temp_path(&output.path).ok().and_then(|t| FileKey::of(&t)),
+                lock_path(&output.path).ok().and_then(|t| FileKey::of(&t)),
             ]
         })
         .collect();
@@ -160,7 +196,7 @@ pub fn check_outputs(inputs: &[NamedPath], outputs: &[NamedPath]) -> Result<(), 
                 return Err(OutputError::IsInput {
                     output: Box::new(output.clone()),
                     input: Box::new((*input).clone()),
-                    through_temporary: at == 1,
+                    through_temporary: at > 0,
                 });
             }
         }
@@ -179,10 +215,31 @@ pub fn check_outputs(inputs: &[NamedPath], outputs: &[NamedPath]) -> Result<(), 
             }
         }
     }
+    let mut lock = OutputLock::default();
+    for output in outputs {
+        take_lock(&mut lock, output)?;
+    }
     for output in outputs {
         probe(output)?;
     }
-    Ok(())
+    Ok(lock)
+}
+
+/// Locks `output` into `lock`: refused if another command holds it.
+fn take_lock(lock: &mut OutputLock, output: &NamedPath) -> Result<(), OutputError> {
+    let failed = |source| OutputError::NotWritable {
+        output: Box::new(output.clone()),
+        dir: parent_dir(&output.path).to_path_buf(),
+        source,
+    };
+    let path = lock_path(&output.path).map_err(failed)?;
+    lock.take(&path).map_err(|e| match e {
+        LockFailure::Held(pid) => OutputError::Busy {
+            output: Box::new(output.clone()),
+            pid,
+        },
+        LockFailure::Io(source) => failed(source),
+    })
 }
 
 /// An existing output must be a regular file, in an existing directory.
@@ -196,7 +253,8 @@ fn check_kind(output: &NamedPath) -> Result<(), OutputError> {
             });
         }
     }
-    let dir = parent_dir(&output.path);
+    let target = resolve_target(&output.path).unwrap_or_else(|_| output.path.clone());
+    let dir = parent_dir(&target);
     if !dir.is_dir() {
         return Err(OutputError::NoDirectory {
             output: Box::new(output.clone()),
@@ -235,7 +293,8 @@ fn file_kind(t: &std::fs::FileType) -> Option<&'static str> {
 
 /// Creates and removes the output's temporary file, as the write will.
 fn probe(output: &NamedPath) -> Result<(), OutputError> {
-    let dir = parent_dir(&output.path).to_path_buf();
+    let target = resolve_target(&output.path).unwrap_or_else(|_| output.path.clone());
+    let dir = parent_dir(&target).to_path_buf();
     let failed = |source| OutputError::NotWritable {
         output: Box::new(output.clone()),
         dir: dir.clone(),
@@ -295,7 +354,9 @@ mod tests {
         std::fs::hard_link(&input, &link).unwrap();
         let dotted = dir.path().join(".").join("b.ply");
         let inputs = [NamedPath::new("the input mesh", "INPUT", &input)];
-        for spelling in [&input, &link, &dotted] {
+        let symlink = dir.path().join("sym.ply");
+        std::os::unix::fs::symlink("b.ply", &symlink).unwrap();
+        for spelling in [&input, &link, &dotted, &symlink] {
             let err = check_outputs(&inputs, &[NamedPath::flag("-o", spelling)]).unwrap_err();
             assert!(matches!(err, OutputError::IsInput { .. }), "{err}");
         }
@@ -309,8 +370,8 @@ mod tests {
         )
         .unwrap_err();
         assert!(matches!(err, OutputError::SameOutput { .. }), "{err}");
-        // Distinct files pass, and the probe leaves nothing behind.
-        check_outputs(
+        // Distinct files pass, and the probe and the lock leave nothing behind.
+        let lock = check_outputs(
             &inputs,
             &[
                 NamedPath::flag("-o", &a),
@@ -318,6 +379,16 @@ mod tests {
             ],
         )
         .unwrap();
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 3);
+        assert_eq!(lock.paths().len(), 2);
+        // Locked: a second check of an output is refused with this process's pid.
+        let err = check_outputs(
+            &[],
+            &[NamedPath::flag("--stats", dir.path().join("s.json"))],
+        )
+        .unwrap_err();
+        let pid = std::process::id().to_string();
+        assert!(matches!(err, OutputError::Busy { .. }) && err.to_string().contains(&pid));
+        drop(lock);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 4);
     }
 }

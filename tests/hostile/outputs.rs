@@ -500,7 +500,7 @@ fn damaged_and_foreign_checkpoints_are_refused() {
     }
     // Foreign: written for other settings.
     std::fs::write(&ckpt, &good).unwrap();
-    let out = run_owned(args(&["--resume", "--min-pixels", "2"]));
+    let out = run_owned(args(&["--resume", "--probe", "off"]));
     assert_refused(
         &out,
         1,

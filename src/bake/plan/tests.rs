@@ -170,6 +170,7 @@ fn the_probe_decides_the_fold() {
     // A threshold at or below --min-pixels changes nothing: no extra plain pass.
     let c = plan(|s| {
         s.research.min_pixels = 4;
+        s.research.probe = Probe::Off;
         s.research.fold_min_pixels = Some(4)
     })
     .unwrap();
@@ -377,4 +378,29 @@ fn the_spheres_lie_at_the_shells_and_answer_their_bands() {
     let last = spheres.last().unwrap().probe_band;
     assert_eq!(last, Some([far[0], far[1]]));
     assert_eq!(spheres[3].probe_band, Some([d, far[1]]));
+}
+
+#[test]
+fn min_pixels_under_a_probe_pass_is_refused() {
+    for probe in [Probe::Default, Probe::Pixels(2)] {
+        let err = plan(|s| {
+            s.research.min_pixels = 2;
+            s.research.probe = probe
+        })
+        .unwrap_err();
+        assert!(
+            err.0.starts_with("--min-pixels 2:") && err.0.contains("--probe off"),
+            "{}",
+            err.0
+        );
+    }
+    // 0 and 1 mean any pixel: no threshold to defeat.
+    assert!(plan(|s| s.research.min_pixels = 1).is_ok());
+    assert!(
+        plan(|s| {
+            s.research.min_pixels = 2;
+            s.research.probe = Probe::Off
+        })
+        .is_ok()
+    );
 }

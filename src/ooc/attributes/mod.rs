@@ -21,6 +21,9 @@
 mod gltf;
 mod obj;
 mod ply;
+mod side_files;
+
+pub use side_files::{SideFile, side_files};
 
 use std::path::PathBuf;
 
@@ -139,8 +142,10 @@ pub struct Attributes {
 }
 
 impl Attributes {
-    /// Reads `mesh`'s attributes from its source file, with the materials' texture images
-    /// when `textures` (a PLY output has no use for them). A mesh built in memory has none.
+    /// Reads `mesh`'s attributes from its source file, with the material libraries of an OBJ
+    /// and every material's texture images when `textures` (a PLY output has no use for them,
+    /// so it reads neither and fails for neither; its triangles are still grouped by the
+    /// OBJ's `usemtl` names). A mesh built in memory has none.
     pub fn read(mesh: &Mesh, textures: bool) -> Result<Attributes, MeshError> {
         let none = Attributes::none(mesh);
         if mesh.source() == MeshSource::Memory {

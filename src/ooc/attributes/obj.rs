@@ -23,8 +23,8 @@ const ABSENT: u32 = u32::MAX;
 /// The largest material library read: 64 MiB, thousands of times a large scene's.
 const MTL_MAX_BYTES: u64 = 64 << 20;
 
-/// Reads `bytes` (the OBJ `mesh` was converted from); `dir` resolves `mtllib` files; the
-/// `map_Kd` images are read when `textures`.
+/// Reads `bytes` (the OBJ `mesh` was converted from); `dir` resolves `mtllib` files, which
+/// and whose `map_Kd` images are read when `textures` (else the materials are their names).
 pub(super) fn read(
     bytes: &[u8],
     dir: &Path,
@@ -213,6 +213,8 @@ fn materials(
     textures: bool,
 ) -> Result<Vec<Material>, Fault> {
     let mut defined: Vec<Material> = Vec::new();
+    // Without textures the output is a PLY, which keeps no material but its grouping.
+    let libraries = if textures { libraries } else { &[] };
     for library in libraries {
         let path = dir.join(library);
         let origin = format!("mtllib {library}");
