@@ -180,6 +180,13 @@ pub(crate) fn load(
     let bytes = match crate::mapped::read_regular(path, limit, "a checkpoint of this bake") {
         Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        // Larger than any checkpoint of this bake: another bake's (a split pass's, say).
+        Err(e) if e.kind() == std::io::ErrorKind::FileTooLarge => {
+            return Err(SamplingError::Checkpoint {
+                path: path.to_path_buf(),
+                reason: format!("{e}; {DELETE_IT}"),
+            });
+        }
         Err(source) => {
             return Err(SamplingError::Io {
                 path: path.to_path_buf(),
