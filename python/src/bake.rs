@@ -20,7 +20,7 @@ use patchvis::bake::{
 };
 use patchvis::format::VisibilityEncoding;
 use patchvis::ooc::Mesh;
-use patchvis::output::{NamedPath, check_outputs};
+use patchvis::output::{NamedPath, OutputLock, check_outputs};
 use patchvis::progress::Progress;
 use pyo3::exceptions::{PyOSError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -127,6 +127,9 @@ struct Job {
     outputs: Outputs,
     /// The mesh's path, or [`ARRAYS`].
     input: String,
+    /// The outputs' locks, held until the job is dropped: another bake naming them is
+    /// refused meanwhile, as `patchvis bake` is.
+    _lock: OutputLock,
 }
 
 /// What a finished bake hands back to Python: the report's parts.
@@ -162,7 +165,7 @@ impl Job {
             .iter()
             .map(|p| NamedPath::new("the input mesh", "mesh_path", p))
             .collect();
-        check_outputs(&inputs, &outputs.paths(&recipe))
+        let lock = check_outputs(&inputs, &outputs.paths(&recipe))
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
         let input = match &input {
             Some(path) => path.display().to_string(),
@@ -172,6 +175,7 @@ impl Job {
             recipe,
             outputs,
             input,
+            _lock: lock,
         })
     }
 
