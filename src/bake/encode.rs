@@ -57,16 +57,8 @@ pub(crate) fn encode(
     visibility: &VisibilityMatrix,
     shells: &[ShellRows],
 ) -> Vec<u8> {
-    format::encode_with(
-        &BakeContents {
-            sampling: params,
-            triangle_count: u64::from(triangle_count),
-            patches,
-            visibility,
-            shells,
-        },
-        encoding,
-    )
+    try_encode(encoding, params, triangle_count, patches, visibility, shells)
+        .unwrap_or_else(|e| panic!("the bake's own records break the format: {e}"))
 }
 
 /// [`encode`] of records read from parts: the reader's error where they break the format.
