@@ -57,8 +57,15 @@ pub(crate) fn encode(
     visibility: &VisibilityMatrix,
     shells: &[ShellRows],
 ) -> Vec<u8> {
-    try_encode(encoding, params, triangle_count, patches, visibility, shells)
-        .unwrap_or_else(|e| panic!("the bake's own records break the format: {e}"))
+    try_encode(
+        encoding,
+        params,
+        triangle_count,
+        patches,
+        visibility,
+        shells,
+    )
+    .unwrap_or_else(|e| panic!("the bake's own records break the format: {e}"))
 }
 
 /// [`encode`] of records read from parts: the reader's error where they break the format.
