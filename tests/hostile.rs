@@ -4,8 +4,9 @@
 //! 1 bad input or failed check, 2 usage error).
 //!
 //! One module per side of the tool: what it writes, what it reads, and the geometry it accepts;
-//! then commands at once and signals (`locks`), every path read against every path written
-//! (`paths`), and flags that would do nothing or blame another flag (`settings`).
+//! then commands at once and signals (`locks`), an input truncated under a running bake
+//! (`faults`), every path read against every path written (`paths`), and flags that would do
+//! nothing or blame another flag (`settings`).
 
 mod common;
 
@@ -32,6 +33,9 @@ mod parts;
 
 #[path = "hostile/locks.rs"]
 mod locks;
+
+#[path = "hostile/faults.rs"]
+mod faults;
 
 #[path = "hostile/paths.rs"]
 mod paths;

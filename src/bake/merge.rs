@@ -18,7 +18,7 @@ use super::rows::SphereRows;
 use super::wire::{PATCH_BYTES, Put};
 use super::{BakeError, encode};
 use crate::format::ShellRows;
-use crate::mapped::{FileBytes, open_regular};
+use crate::mapped::{Backing, FileBytes, open_regular};
 use crate::runtime::Pvis;
 use crate::sphere::view_count;
 use crate::tiling::renumbered_patches;
@@ -84,7 +84,7 @@ pub fn read_part(path: &Path) -> Result<LoadedPart, MergeError> {
     let mut head = Vec::with_capacity(HEAD_BYTES);
     std::io::Read::read_to_end(&mut (&file).take(HEAD_BYTES as u64), &mut head).map_err(cannot)?;
     Part::check_head(&head, metadata.len()).map_err(refused)?;
-    let bytes = FileBytes::open(&file, metadata.len()).map_err(cannot)?;
+    let bytes = FileBytes::open(&file, metadata.len(), Backing::Input(path)).map_err(cannot)?;
     let part = Part::decode(&bytes).map_err(refused)?;
     Ok(LoadedPart {
         path: path.to_path_buf(),

@@ -12,7 +12,7 @@ use std::io::{self, Read};
 use std::ops::Deref;
 use std::path::Path;
 
-use crate::mapped::{FileBytes, open_regular};
+use crate::mapped::{Backing, FileBytes, open_regular};
 use crate::runtime::{self, consts::MAGIC};
 
 /// The bytes of a `.pvis` file whose signature has been checked; parse them with
@@ -47,7 +47,7 @@ impl PvisFile {
         }
         let bytes = match metadata.len() {
             0 => None,
-            len => Some(FileBytes::open(&file, len)?),
+            len => Some(FileBytes::open(&file, len, Backing::Input(path))?),
         };
         Ok(PvisFile { bytes })
     }

@@ -6,6 +6,10 @@
 //! (already unlinked) temporary file mapped read-write: the kernel pages them in and out, the
 //! heap holds nothing per record. Callers see `&[T]` / `&mut [T]` through `Deref` either way.
 //!
+//! The zeroed file is sparse: a write into the map is where its disk blocks are taken, so a
+//! full disk shows there, as `SIGBUS`. Every map is registered with the fault handler
+//! (`fault.rs`), which turns that into an error line naming the temporary directory.
+//!
 //! One `unsafe` call: `MmapMut::map_mut` of a temporary file (a zeroed one, or one that
 //! `RecordWriter` filled); the bytes are viewed as records by `bytemuck`. Cost: O(1) to create (the
 //! file is sparse until written); access is a plain slice access after a match on the storage kind.
@@ -16,6 +20,8 @@ use std::ops::{Deref, DerefMut};
 use bytemuck::Pod;
 use memmap2::MmapMut;
 
+use super::fault::{Backing, Covered};
+
 /// Records of type `T` on the heap or in a mapped temporary file.
 pub(crate) struct Array<T> {
     storage: Storage<T>,
@@ -24,8 +30,12 @@ pub(crate) struct Array<T> {
 enum Storage<T> {
     Heap(Vec<T>),
     /// Exactly the records' bytes; the file behind the map is unlinked, so this process holds
-    /// the only handle to it.
-    Mapped(MmapMut),
+    /// the only handle to it. The map's registration with the fault handler is held for its
+    /// drop, declared first so that it is unregistered before the map goes.
+    Mapped {
+        _covered: Covered,
+        map: MmapMut,
+    },
 }
 
 impl<T: Pod> Array<T> {
@@ -67,13 +77,16 @@ impl<T: Pod> Array<T> {
         // the file, so dropping `file` afterwards does not invalidate it.
         let map = unsafe { MmapMut::map_mut(file)? };
         Ok(Array {
-            storage: Storage::Mapped(map),
+            storage: Storage::Mapped {
+                _covered: Covered::new(&map, Backing::Temporary),
+                map,
+            },
         })
     }
 
     /// True when the records live in a mapped file rather than on the heap.
     pub(crate) fn is_mapped(&self) -> bool {
-        matches!(self.storage, Storage::Mapped(_))
+        matches!(self.storage, Storage::Mapped { .. })
     }
 }
 
@@ -84,7 +97,7 @@ impl<T: Pod> Deref for Array<T> {
         match &self.storage {
             Storage::Heap(v) => v,
             // A map starts on a page boundary and holds whole records: the cast cannot fail.
-            Storage::Mapped(map) => bytemuck::cast_slice(map),
+            Storage::Mapped { map, .. } => bytemuck::cast_slice(map),
         }
     }
 }
@@ -94,7 +107,7 @@ impl<T: Pod> DerefMut for Array<T> {
     fn deref_mut(&mut self) -> &mut [T] {
         match &mut self.storage {
             Storage::Heap(v) => v,
-            Storage::Mapped(map) => bytemuck::cast_slice_mut(map),
+            Storage::Mapped { map, .. } => bytemuck::cast_slice_mut(map),
         }
     }
 }
@@ -118,7 +131,7 @@ impl<T> std::fmt::Debug for Array<T> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let (len, mapped) = match &self.storage {
             Storage::Heap(v) => (v.len(), false),
-            Storage::Mapped(map) => (map.len() / size_of::<T>().max(1), true),
+            Storage::Mapped { map, .. } => (map.len() / size_of::<T>().max(1), true),
         };
         f.debug_struct("Array")
             .field("len", &len)

@@ -18,9 +18,10 @@
 //! Records are `bytemuck::Pod` types (no padding, every bit pattern valid), so viewing mapped
 //! bytes as records is `bytemuck::cast_slice`, which checks length and alignment and needs no
 //! `unsafe` (a map starts on a page boundary, so the alignment check always passes). The
-//! only `unsafe` left is the two calls that create maps of files (`Mmap::map` of an input,
+//! `unsafe` left is the two calls that create maps of files (`Mmap::map` of an input,
 //! `MmapMut::map_mut` of a temporary file), each with a `// SAFETY:` comment; ripgrep's
-//! `searcher/mmap.rs` is the model.
+//! `searcher/mmap.rs` is the model; and the `SIGBUS` handler of `fault.rs`, which every file
+//! map registers with, so that a fault in one ends the process with a line saying why.
 //!
 //! # Safety
 //!
@@ -28,14 +29,18 @@
 //! condition the type system cannot check. The temporary files are unlinked as soon as they
 //! are created (`tempfile::tempfile`), so this process holds their only handle. An input file
 //! is the user's: the pipeline opens it read-only and never writes it, and the documentation
-//! asks users not to edit a mesh during a bake (see [`FileBytes::open`]).
+//! asks users not to edit a mesh during a bake (see [`FileBytes::open`]). Should another
+//! program truncate it all the same, or a disk fill under a temporary file, the read or write
+//! that finds no page raises `SIGBUS`, and `fault.rs` ends the process with an error line.
 
 mod array;
+mod fault;
 mod file_bytes;
 mod input;
 mod records;
 
 pub(crate) use array::Array;
+pub(crate) use fault::{Backing, RemovedOnFault};
 pub(crate) use file_bytes::FileBytes;
 pub use input::{open_regular, read_regular};
 pub(crate) use records::RecordWriter;

@@ -32,7 +32,7 @@ use super::Bounds;
 use super::cache::CacheWriter;
 use super::error::{Fault, MeshErrorKind, snippet};
 use super::ply::BoundsBuilder;
-use crate::mapped::{FileBytes, open_regular};
+use crate::mapped::{Backing, FileBytes, open_regular};
 
 /// `glTF`, the first four bytes of a GLB file.
 const GLB_MAGIC: &[u8; 4] = b"glTF";
@@ -300,7 +300,8 @@ pub(crate) fn load_buffers<'a>(
                 if metadata.len() == 0 {
                     BufferBytes::Owned(Vec::new())
                 } else {
-                    BufferBytes::Mapped(FileBytes::open(&file, metadata.len()).map_err(io_error)?)
+                    let bytes = FileBytes::open(&file, metadata.len(), Backing::Input(&path));
+                    BufferBytes::Mapped(bytes.map_err(io_error)?)
                 }
             }
         };

@@ -42,7 +42,7 @@ use cache::{CacheKey, CacheSource, CacheWriter};
 use error::Fault;
 pub use error::{ErrorPosition, MeshError, MeshErrorKind};
 
-use crate::mapped::FileBytes;
+use crate::mapped::{Backing, FileBytes};
 pub use crate::mapped::{open_regular, read_regular};
 
 /// Axis-aligned bounds of a mesh's vertices: of those its triangles use ([`Mesh::bounds`]).
@@ -188,7 +188,8 @@ impl Mesh {
             )
             .in_file(path));
         }
-        let bytes = FileBytes::open(&file, metadata.len()).map_err(|e| MeshError::io(path, &e))?;
+        let bytes = FileBytes::open(&file, metadata.len(), Backing::Input(path))
+            .map_err(|e| MeshError::io(path, &e))?;
         // Without a canonical path the cache cannot be named: convert.
         let source = CacheSource::of(path, metadata.len()).ok();
         let cache_dir = options.cache_dir.as_deref().filter(|_| source.is_some());
@@ -257,7 +258,7 @@ impl Mesh {
         if let (Some(dir), Some(key)) = (cache_dir, &key) {
             let cached = dir.join(key.file_name());
             if let Ok((file, metadata)) = open_regular(&cached) {
-                let hit = FileBytes::open(&file, metadata.len())
+                let hit = FileBytes::open(&file, metadata.len(), Backing::Input(&cached))
                     .ok()
                     .and_then(|map| Mesh::from_cache(&path, map, Some(key), MeshSource::CacheHit));
                 if let Some(mesh) = hit {
@@ -282,7 +283,7 @@ impl Mesh {
         drop(bytes);
         let file = sink.finish(bounds).map_err(cache_error)?;
         let len = file.metadata().map_err(cache_error)?.len();
-        let map = FileBytes::open(&file, len).map_err(cache_error)?;
+        let map = FileBytes::open(&file, len, Backing::CacheOf(&path)).map_err(cache_error)?;
         let mesh = Mesh::from_cache(&path, map, None, MeshSource::Converted).ok_or_else(|| {
             let err = std::io::Error::other("the cache file just written does not read back");
             Fault::cache(err).in_file(&path)
@@ -576,7 +577,7 @@ impl Mesh {
         }
         let file = sink.finish(bounds.finish()).map_err(failed)?;
         let len = file.metadata().map_err(failed)?.len();
-        let map = FileBytes::open(&file, len).map_err(failed)?;
+        let map = FileBytes::open(&file, len, Backing::CacheOf(&self.path)).map_err(failed)?;
         let mesh =
             Mesh::from_cache(&self.path, map, None, MeshSource::Converted).ok_or_else(|| {
                 failed(std::io::Error::other(

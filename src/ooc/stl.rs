@@ -38,7 +38,7 @@ use super::cache::CacheWriter;
 use super::error::{Fault, MeshErrorKind, snippet};
 use super::ply::BoundsBuilder;
 use super::text::{Lines, finite_f32, tokens};
-use crate::mapped::FileBytes;
+use crate::mapped::{Backing, FileBytes};
 
 /// Binary STL: an 80-byte free-text header, then a `u32` triangle count.
 const BINARY_HEADER_BYTES: usize = 84;
@@ -309,7 +309,7 @@ fn partition(bits: [u32; 3], partitions: u64) -> usize {
 /// Steps 2 and 3 of the module documentation.
 fn weld(spill: &File, corners: u64, sink: &mut CacheWriter, memory_budget: u64) -> io::Result<()> {
     let len = corners * 12;
-    let map = FileBytes::open(spill, len)?;
+    let map = FileBytes::open(spill, len, Backing::Temporary)?;
     let table_budget = (memory_budget / 2).max(TABLE_ENTRY_BYTES);
     let per_partition = (table_budget / TABLE_ENTRY_BYTES).max(1);
     let partitions = corners.div_ceil(per_partition).max(1);

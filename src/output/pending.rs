@@ -7,9 +7,16 @@
 //! signal handler calls [`remove_pending`] before it exits: nothing of the command is left
 //! in the output directories but the sampling checkpoints, which are kept on purpose for
 //! `--resume`.
+//!
+//! A fault in a mapped file (`SIGBUS`: an input truncated by another program, a full disk)
+//! ends the process from a signal handler that may not lock this table or allocate, so each
+//! pending file is also listed there as a C string ([`RemovedOnFault`]), and that handler
+//! unlinks those.
 
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
+
+use crate::mapped::RemovedOnFault;
 
 /// Every pending file of the process, by path.
 static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
@@ -25,13 +32,20 @@ pub(super) struct PendingFile {
     path: PathBuf,
     /// Whether it is still in the table.
     listed: bool,
+    /// Its listing for the fault handler, while it is in the table.
+    on_fault: Option<RemovedOnFault>,
 }
 
 impl PendingFile {
     /// Lists `path` (a file just created) as pending.
     pub(super) fn new(path: PathBuf) -> PendingFile {
         table().push(path.clone());
-        PendingFile { path, listed: true }
+        let on_fault = Some(RemovedOnFault::new(&path));
+        PendingFile {
+            path,
+            listed: true,
+            on_fault,
+        }
     }
 
     /// The file.
@@ -51,6 +65,7 @@ impl PendingFile {
             table.swap_remove(at);
         }
         self.listed = false;
+        self.on_fault = None;
         result
     }
 

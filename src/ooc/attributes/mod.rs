@@ -29,7 +29,7 @@ use std::path::PathBuf;
 
 use super::error::Fault;
 use super::{InputFormat, Mesh, MeshError, MeshSource};
-use crate::mapped::{Array, RecordWriter, open_regular, read_regular};
+use crate::mapped::{Array, Backing, RecordWriter, open_regular, read_regular};
 
 /// Material id of a triangle without a material.
 pub const NO_MATERIAL: u32 = u32::MAX;
@@ -154,7 +154,7 @@ impl Attributes {
         let path = mesh.path();
         let format = InputFormat::of(path).map_err(|f| f.in_file(path))?;
         let (file, metadata) = open_regular(path).map_err(|e| MeshError::io(path, &e))?;
-        let bytes = crate::mapped::FileBytes::open(&file, metadata.len())
+        let bytes = crate::mapped::FileBytes::open(&file, metadata.len(), Backing::Input(path))
             .map_err(|e| MeshError::io(path, &e))?;
         let dir = path.parent().unwrap_or(std::path::Path::new("."));
         let read = match format {

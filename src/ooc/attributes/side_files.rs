@@ -12,7 +12,7 @@
 use super::super::gltf_mesh::{external_path, parse};
 use super::super::text::Lines;
 use super::super::{InputFormat, MeshError};
-use crate::mapped::open_regular;
+use crate::mapped::{Backing, open_regular};
 use std::path::{Path, PathBuf};
 
 /// A file a mesh names beside itself.
@@ -46,7 +46,7 @@ pub fn side_files(path: &Path) -> Result<Vec<SideFile>, MeshError> {
         return Ok(Vec::new());
     }
     let (file, metadata) = open_regular(path).map_err(|e| MeshError::io(path, &e))?;
-    let bytes = crate::mapped::FileBytes::open(&file, metadata.len())
+    let bytes = crate::mapped::FileBytes::open(&file, metadata.len(), Backing::Input(path))
         .map_err(|e| MeshError::io(path, &e))?;
     let dir = path.parent().unwrap_or(Path::new("."));
     match format {
