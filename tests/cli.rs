@@ -851,3 +851,53 @@ fn bake_help_fits_a_screen_and_help_all_adds_the_research_options() {
         );
     }
 }
+
+/// `gen` does not depend on the working directory: the kinds that start from a mesh need
+/// `--source` and say so (exit 2, nothing written); the others, and those given a source, run
+/// anywhere.
+#[test]
+fn gen_runs_outside_the_repository() {
+    let dir = tempfile::tempdir().unwrap();
+    let gen_in = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_patchvis"))
+            .arg("gen")
+            .args(args)
+            .current_dir(dir.path())
+            .output()
+            .unwrap()
+    };
+    for kind in ["subdivided-bunny", "bunny-grid"] {
+        let out = gen_in(&["--kind", kind, "--triangles", "1000", "-o", "m.ply", "-q"]);
+        assert_eq!(out.status.code(), Some(2), "{kind}: {}", stderr(&out));
+        let err = stderr(&out);
+        assert!(
+            err.contains(&format!("--kind {kind} needs --source MESH.ply")),
+            "{err}"
+        );
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(!dir.path().join("m.ply").exists());
+    }
+    let out = gen_in(&[
+        "--kind",
+        "truss",
+        "--triangles",
+        "2000",
+        "-o",
+        "t.ply",
+        "-q",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out = gen_in(&[
+        "--kind",
+        "bunny-grid",
+        "--triangles",
+        "1000",
+        "--source",
+        BUNNY,
+        "-o",
+        "g.ply",
+        "-q",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(dir.path().join("t.ply").exists() && dir.path().join("g.ply").exists());
+}

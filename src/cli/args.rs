@@ -373,9 +373,10 @@ pub struct GenArgs {
     /// Output mesh (binary little-endian PLY); a symbolic link is written through.
     #[arg(short, long, value_name = "OUT.ply")]
     pub output: PathBuf,
-    /// The mesh that `subdivided-bunny` and `bunny-grid` start from.
-    #[arg(long, value_name = "MESH.ply", default_value = "assets/bunny.ply")]
-    pub source: PathBuf,
+    /// The mesh that `subdivided-bunny` and `bunny-grid` start from (required for those
+    /// kinds), such as the Stanford bunny, assets/bunny.ply in the patchvis repository.
+    #[arg(long, value_name = "MESH.ply")]
+    pub source: Option<PathBuf>,
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
