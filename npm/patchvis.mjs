@@ -391,6 +391,18 @@ const RULE_TEXTS = [
   "SHEL shell_count must be in 1..=8",
   "SHEL reserved field must be 0",
   "SHEL distance must be finite, below the previous shell's (CAMR distance for the first before version 6), not CAMR distance and >= CAMR radius",
-  "SHEL shell level"
+  "SHEL shell level",
+  "SHEL payload reserved field must be 0",
+  "SHEL payload probability must be in 1..4096",
+  "SHEL payload tree node count must be in 1..=1024",
+  "SHEL payload tree leaf must hold a probability in 1..4096",
+  "SHEL payload tree node must test a feature below 23",
+  "SHEL payload tree node's children must follow it inside the tree",
+  "SHEL payload tree depth",
+  "SHEL payload checkpoint must be the offset of its view's record",
+  "SHEL payload record length must be a LEB128 of at most 4 bytes inside the payload",
+  "SHEL payload record length must be a minimal LEB128",
+  "SHEL payload code length",
+  "SHEL payload code must not end in a zero byte"
 ];
 // END generated

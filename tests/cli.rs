@@ -757,3 +757,147 @@ fn bad_shell_flags_are_usage_errors() {
     let out = patchvis(&["bake", BUNNY, "-o", "x.pvis", "--shells", "-1"]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
 }
+
+/// `bake --help` (and `-h`) fits a screen: the everyday options, then a last line pointing to
+/// `--help-all` and docs/bake.md. `--help-all` adds the research options under their own
+/// heading, and docs/bake.md documents every one of them.
+#[test]
+fn bake_help_fits_a_screen_and_help_all_adds_the_research_options() {
+    let help = patchvis(&["bake", "--help"]);
+    assert_eq!(help.status.code(), Some(0), "{}", stderr(&help));
+    let text = common::stdout(&help);
+    let lines = text.lines().count();
+    assert!(lines <= 80, "bake --help has {lines} lines:\n{text}");
+    assert_eq!(common::stdout(&patchvis(&["bake", "-h"])), text);
+    for everyday in [
+        "--output",
+        "--patches",
+        "--level",
+        "--resolution",
+        "--conservative",
+        "--mesh-out",
+        "--memory",
+        "--backend",
+        "--stats",
+        "--resume",
+        "--shard",
+        "--shells",
+        "--far-shells",
+        "--help-all",
+    ] {
+        assert!(
+            text.contains(everyday),
+            "bake --help lacks {everyday}:\n{text}"
+        );
+    }
+    let last = text.trim_end().lines().last().unwrap();
+    assert!(
+        last.contains("--help-all") && last.contains("docs/bake.md"),
+        "last line: {last}"
+    );
+    let research = [
+        "--fold-corners",
+        "--finer-views",
+        "--fold-min-pixels",
+        "--sampled-rows",
+        "--probe",
+        "--conservative-raster",
+        "--view-supersample",
+        "--shell-min",
+        "--shell-level",
+        "--shell-resolution",
+        "--min-pixels",
+        "--patch-order",
+        "--encoding",
+        "--dilate",
+    ];
+    for option in research {
+        assert!(
+            !text.contains(option),
+            "bake --help shows {option}:\n{text}"
+        );
+    }
+
+    let all = patchvis(&["bake", "--help-all"]);
+    assert_eq!(all.status.code(), Some(0), "{}", stderr(&all));
+    let all = common::stdout(&all);
+    let heading = all.find("Research options:").expect("a research heading");
+    let docs =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/bake.md")).unwrap();
+    let (_, research_part) = all.split_at(heading);
+    for option in research {
+        let listed = research_part
+            .lines()
+            .any(|line| line.trim_start().split(' ').next() == Some(option));
+        assert!(listed, "{option} is not under the research heading:\n{all}");
+    }
+    // Every option --help-all lists is documented in docs/bake.md.
+    for line in all.lines() {
+        // Option lines are indented by 2 or 6 spaces, their help by 10.
+        let words = line.trim_start();
+        if line.len() - words.len() >= 10 || !words.starts_with('-') {
+            continue;
+        }
+        let flag = words
+            .split([' ', ','])
+            .find(|w| w.starts_with("--"))
+            .unwrap();
+        let documented = [" ", "`"]
+            .iter()
+            .any(|end| docs.contains(&format!("{flag}{end}")));
+        assert!(
+            documented || flag.starts_with("--help"),
+            "docs/bake.md lacks {flag}"
+        );
+    }
+}
+
+/// `gen` does not depend on the working directory: the kinds that start from a mesh need
+/// `--source` and say so (exit 2, nothing written); the others, and those given a source, run
+/// anywhere.
+#[test]
+fn gen_runs_outside_the_repository() {
+    let dir = tempfile::tempdir().unwrap();
+    let gen_in = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_patchvis"))
+            .arg("gen")
+            .args(args)
+            .current_dir(dir.path())
+            .output()
+            .unwrap()
+    };
+    for kind in ["subdivided-bunny", "bunny-grid"] {
+        let out = gen_in(&["--kind", kind, "--triangles", "1000", "-o", "m.ply", "-q"]);
+        assert_eq!(out.status.code(), Some(2), "{kind}: {}", stderr(&out));
+        let err = stderr(&out);
+        assert!(
+            err.contains(&format!("--kind {kind} needs --source MESH.ply")),
+            "{err}"
+        );
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(!dir.path().join("m.ply").exists());
+    }
+    let out = gen_in(&[
+        "--kind",
+        "truss",
+        "--triangles",
+        "2000",
+        "-o",
+        "t.ply",
+        "-q",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out = gen_in(&[
+        "--kind",
+        "bunny-grid",
+        "--triangles",
+        "1000",
+        "--source",
+        BUNNY,
+        "-o",
+        "g.ply",
+        "-q",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(dir.path().join("t.ply").exists() && dir.path().join("g.ply").exists());
+}

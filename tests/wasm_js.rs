@@ -193,6 +193,8 @@ fn javascript_messages_are_the_readers() {
         Rule::RecordAxis,
         Rule::TreeDepth,
         Rule::CodeEnd,
+        Rule::ShelRecordLength,
+        Rule::ShelCodeEnd,
     ];
     let mut errors = vec![Error::BadMagic];
     for round in 0..40 {

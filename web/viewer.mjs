@@ -119,16 +119,55 @@ function upperBound(values, x) {
   return lo;
 }
 
-/** Puts the camera in front of the model, outside the sampling sphere. */
+/**
+ * The first view: the model upright and from the front in glTF's axes (+Y up, the front
+ * facing +Z), a little from above and to the side, far enough out that its bounding sphere
+ * fits the part of the canvas beside the overlay (frameBesideOverlay), and outside the
+ * sampling sphere (2.61 radii at the bake's default field of view).
+ */
 function frame(object) {
   const box = new THREE.Box3().setFromObject(object);
   const sphere = box.getBoundingSphere(new THREE.Sphere());
   state.bounds = sphere;
-  camera.position.copy(sphere.center).add(new THREE.Vector3(0, 0.3, 1).multiplyScalar(3.2 * sphere.radius));
+  const free = freeRegion();
+  // The distance at which the sphere fits the free region's height and width.
+  const halfHeight = THREE.MathUtils.degToRad(camera.fov / 2);
+  const halfWidth = Math.atan(Math.tan(halfHeight) * (free.width / free.height));
+  const fit = sphere.radius / Math.sin(Math.min(halfHeight, halfWidth));
+  const direction = new THREE.Vector3(0.45, 0.3, 1).normalize();
+  camera.up.set(0, 1, 0);
+  camera.position.copy(sphere.center).addScaledVector(direction, Math.max(3.2 * sphere.radius, fit));
   orbit.target.copy(sphere.center);
   fly.movementSpeed = sphere.radius;
   camera.lookAt(sphere.center);
+  frameBesideOverlay();
   clip();
+}
+
+/**
+ * The part of the canvas the overlay leaves free, in CSS pixels: right of it when that leaves
+ * at least 40 % of the width, else below it when that leaves 40 % of the height, else all.
+ */
+function freeRegion() {
+  const { clientWidth: w, clientHeight: h } = canvas;
+  const panel = $("overlay").getBoundingClientRect();
+  if (w - panel.right >= 0.4 * w) return { x: panel.right, y: 0, width: w - panel.right, height: h };
+  if (h - panel.bottom >= 0.4 * h) return { x: 0, y: panel.bottom, width: w, height: h - panel.bottom };
+  return { x: 0, y: 0, width: w, height: h };
+}
+
+/**
+ * Shifts the image so that the point the camera looks at (the orbit's target) shows at the
+ * centre of the free region rather than under the overlay; the eye, and so the answer, stay
+ * as they are.
+ */
+function frameBesideOverlay() {
+  const { clientWidth: w, clientHeight: h } = canvas;
+  if (w === 0 || h === 0) return;
+  const free = freeRegion();
+  const dx = free.x + free.width / 2 - w / 2;
+  const dy = free.y + free.height / 2 - h / 2;
+  camera.setViewOffset(w, h, -dx, -dy, w, h);
 }
 
 /** Near and far planes that hold the model from wherever the camera is, near or far. */
@@ -196,8 +235,7 @@ function resize() {
   const { clientWidth: w, clientHeight: h } = canvas;
   if (canvas.width !== Math.floor(w * renderer.getPixelRatio()) || canvas.height !== Math.floor(h * renderer.getPixelRatio())) {
     renderer.setSize(w, h, false);
-    camera.aspect = w / h;
-    camera.updateProjectionMatrix();
+    frameBesideOverlay();
   }
 }
 
@@ -293,6 +331,31 @@ window.patchvis = {
       seen.set(m.name, [m.name, !!m.map]);
     }
     return [...seen.values()].sort();
+  },
+  /**
+   * Where the model shows, in CSS pixels: the bounds of its projected vertices, the overlay's
+   * rectangle, the canvas size and the camera's up vector.
+   */
+  framing() {
+    const model = { left: Infinity, top: Infinity, right: -Infinity, bottom: -Infinity };
+    const { clientWidth: width, clientHeight: height } = canvas;
+    const p = new THREE.Vector3();
+    camera.updateMatrixWorld();
+    for (const { mesh } of state.parts) {
+      const positions = mesh.geometry.attributes.position;
+      for (let i = 0; i < positions.count; i++) {
+        p.fromBufferAttribute(positions, i).applyMatrix4(mesh.matrixWorld).project(camera);
+        const [x, y] = [((p.x + 1) / 2) * width, ((1 - p.y) / 2) * height];
+        Object.assign(model, {
+          left: Math.min(model.left, x),
+          top: Math.min(model.top, y),
+          right: Math.max(model.right, x),
+          bottom: Math.max(model.bottom, y),
+        });
+      }
+    }
+    const { left, top, right, bottom } = $("overlay").getBoundingClientRect();
+    return { model, overlay: { left, top, right, bottom }, width, height, up: camera.up.toArray() };
   },
   /** Loads a .glb and .pvis pair from URLs (what a drop does with files). */
   async load(glbUrl, pvisUrl) {

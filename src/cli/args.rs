@@ -39,21 +39,35 @@ pub enum Command {
     Conformance(ConformanceArgs),
 }
 
-/// `patchvis bake`.
+/// The heading of `bake`'s research options: tuning of the sampling, the fold, the probe pass,
+/// the shells and the encoding. `bake --help` leaves them out; `bake --help-all` shows them.
+const RESEARCH: &str = "Research options";
+
+/// `patchvis bake`. `-h` and `--help` print the everyday options, one line each;
+/// `--help-all` prints every option in full, the research options under their own heading.
 #[derive(Debug, clap::Args)]
+#[command(
+    disable_help_flag = true,
+    after_help = "Research options (sampling, fold, probe, shells, encoding): \
+                  `patchvis bake --help-all`; every option's measured effect: docs/bake.md.",
+    after_long_help = "Every option with its measured effect: docs/bake.md."
+)]
 pub struct BakeArgs {
     /// Input mesh: PLY, OBJ, STL or glTF 2.0 (.gltf / .glb).
     pub input: PathBuf,
-    /// Output .pvis file. Outputs that are symbolic links are written through (the file they
-    /// point to is replaced, the link stays); each output is locked while the bake runs, and
-    /// another command naming one is refused with the bake's pid.
+    /// Output .pvis file.
+    ///
+    /// Outputs that are symbolic links are written through (the file they point to is
+    /// replaced, the link stays); each output is locked while the bake runs, and another
+    /// command naming one is refused with the bake's pid.
     #[arg(short, long, value_name = "OUT.pvis")]
     pub output: PathBuf,
     /// Number of patches to group the triangles into (at most the triangle count).
     #[arg(long, default_value_t = 1000, value_name = "N")]
     pub patches: u32,
-    /// Sphere subdivision level: 0..=7 gives 6, 18, 66, 258, 1026, 4098, 16386, 65538 views.
-    /// [default: 4; 5 with --conservative]
+    /// Sphere level of the stored views, 0..=7 [default: 4; 5 with --conservative].
+    ///
+    /// Levels 0 to 7 store 6, 18, 66, 258, 1026, 4098, 16386 and 65538 views.
     #[arg(long, value_name = "L")]
     pub level: Option<u32>,
     /// ID-buffer width and height in pixels.
@@ -62,55 +76,25 @@ pub struct BakeArgs {
     /// Field of view of the sampling cameras, degrees.
     #[arg(long, default_value_t = 45.0, value_name = "DEG")]
     pub fov: f32,
-    /// Also write the mesh reordered so that each patch is one contiguous triangle range, with
-    /// the input's normals, texture coordinates and materials: .glb/.gltf (glTF 2.0, patch
-    /// ranges in the mesh's extras), or binary PLY for any other name (per-face patch, colour
-    /// and orig_index; it reads no material library). Renamed into place just before the
-    /// .pvis, the old .pvis removed first.
-    #[arg(long, value_name = "MESH.ply|.glb|.gltf")]
-    pub mesh_out: Option<PathBuf>,
-    /// Heap budget for the bake, e.g. 512MiB, 2GiB, 1G (default: half the available memory,
-    /// at least 256 MiB). Split between the stages in one place (src/memory.rs) and reported
-    /// in --stats; the memory-mapped mesh and the page cache are not counted.
-    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
-    pub memory: Option<u64>,
-    /// Tiling algorithm: the seed algorithm in memory, the chunked out-of-core one, or
-    /// whichever the memory budget allows (auto).
-    #[arg(long, value_enum, default_value_t = TilingArg::Auto, value_name = "MODE")]
-    pub tiling: TilingArg,
-    /// Write timings, peak heap and counts per stage as JSON.
-    #[arg(long, value_name = "STATS.json")]
-    pub stats: Option<PathBuf>,
-    /// A patch counts as seen from a view only if it covers at least K pixels there
-    /// (aggressive mode; 0 or 1: any pixel). Above 1 it needs --probe off: the probe pass adds
-    /// back what it drops.
-    #[arg(long, default_value_t = 0, value_name = "K")]
-    pub min_pixels: u32,
-    /// Also mark the edge neighbours of every seen patch that may face the view
-    /// (hole filling).
-    #[arg(long)]
-    pub dilate: bool,
-    /// Patches seen from every view: comma-separated ids, or a file of ids separated by
-    /// whitespace or commas (`#` starts a comment; a regular file of at most 64 MiB). Ids are
-    /// the tiling's (spatial) numbering, which a bake with `--patch-order spatial --mesh-out
-    /// M.ply` shows.
-    #[arg(long, value_name = "IDS|FILE")]
-    pub always_visible: Option<String>,
-    /// Conservative mode: stored level 5 (unless --level), the stored faces' centroids for
-    /// the finer views (unless --finer-views), the probe pass at 1 pixel with the split fold,
-    /// on any mesh --memory holds; shells at level 4 at most (unless --shell-level).
-    /// After each sampled view (the stored level's and the centroids), every patch the view
-    /// did not show is drawn again with conservative rasterization (any part of a pixel, not
-    /// only its centre) against the view's depths shrunk by 1 pixel, and added if a fragment
-    /// lies in front. Only triangles whose visible side may face a camera of the sphere faces
-    /// around the view are drawn: the outside of their solid, or its inside through an
-    /// opening.
+    /// The never-miss preset: ≥ 99 % of views pixel-identical on the model zoo, for about 3×
+    /// the bake time.
+    ///
+    /// Stored level 5 (unless --level), the stored faces' centroids for the finer views
+    /// (unless --finer-views), the probe pass at 1 pixel with the split fold, on any mesh
+    /// --memory holds; shells at level 4 at most (unless --shell-level). After each sampled
+    /// view (the stored level's and the centroids), every patch the view did not show is
+    /// drawn again with conservative rasterization (any part of a pixel, not only its centre)
+    /// against the view's depths shrunk by 1 pixel, and added if a fragment lies in front.
+    /// Only triangles whose visible side may face a camera of the sphere faces around the
+    /// view are drawn: the outside of their solid, or its inside through an opening.
+    ///
     /// What it guarantees: every patch that touches a pixel of a sampled view, or lies within
     /// 1 pixel of coming out from behind an occluder's edge there, is in the answer for every
     /// direction of the sphere faces around that view, at the sampling distance (and, with
     /// shells, nearer). What it does not: a part that comes out by more than 1 pixel between
-    /// sampled views, and, with --far-shells none, rim that only cameras farther than
-    /// the sampling distance see.
+    /// sampled views, and, with --far-shells none, rim that only cameras farther than the
+    /// sampling distance see.
+    ///
     /// Measured residual (300 random views at the sampling distance, at --resolution and
     /// twice it): ≥ 99 % of views pixel-identical on every model of the zoo, culling within
     /// 10 points of the ideal (7.6–9.8 below); BENCHMARKS.md, "Quality on the model zoo".
@@ -118,6 +102,96 @@ pub struct BakeArgs {
     /// zoo; CPU backend only, and about 60 bytes a triangle of heap while sampling.
     #[arg(long)]
     pub conservative: bool,
+    /// Spheres of near views inside the sampling distance, for cameras near the model.
+    ///
+    /// N nested spheres of near views between the sampling
+    /// sphere (distance D = R / sin(fov/2), R the bounding radius) and F·R (--shell-min), at
+    /// D·(F·R/D)^(s/N) for s = 1..N. Each near view records every patch visible from its eye
+    /// in any direction, so a query nearer than D is answered from the two shells around it
+    /// instead of drawing everything; inside the innermost shell the answer is flagged
+    /// inside_sphere. Cost: each shell is one more sampling pass of the stored level (its
+    /// views render several frustums each) and one more visibility matrix in the file. 0: no
+    /// near shells (with --far-shells none, a version-4 file).
+    #[arg(long, default_value_t = patchvis::bake::DEFAULT_SHELLS, value_name = "N")]
+    pub shells: u32,
+    /// Spheres of far views at these multiples of the sampling distance, for cameras farther
+    /// out (`none`: no far band).
+    ///
+    /// The far band, for cameras farther than the sampling distance D: shells of views at
+    /// these multiples of D (increasing, above 1), each view framing the bounding sphere from
+    /// its eye; a camera between two spheres of views is answered from both, and one beyond
+    /// the outermost from it alone. `none`: no far band (cameras beyond D get the sampling
+    /// sphere's rows, which miss rim they see past).
+    #[arg(long, value_name = "LIST|none", value_parser = parse_far_shells,
+          default_value = "2,256")]
+    pub far_shells: FarShells,
+    /// Also write the mesh reordered so that each patch is one contiguous triangle range.
+    ///
+    /// .glb/.gltf (glTF 2.0, patch ranges in the mesh's extras, with the input's normals,
+    /// texture coordinates and materials), or binary PLY for any other name (per-face patch,
+    /// colour and orig_index; it reads no material library). Renamed into place just before
+    /// the .pvis, the .pvis already there removed first.
+    #[arg(long, value_name = "MESH.ply|.glb|.gltf")]
+    pub mesh_out: Option<PathBuf>,
+    /// Patches never culled: comma-separated ids, or a file of ids.
+    ///
+    /// A file holds ids separated by whitespace or commas (`#` starts a comment; a regular
+    /// file of at most 64 MiB). Ids are the tiling's (spatial) numbering, which a bake with
+    /// `--patch-order spatial --mesh-out M.ply` shows.
+    #[arg(long, value_name = "IDS|FILE")]
+    pub always_visible: Option<String>,
+    /// Heap budget, e.g. 512MiB, 2GiB, 1G [default: half the available memory, at least 256 MiB].
+    ///
+    /// Split between the stages and reported in --stats; the memory-mapped mesh and the page
+    /// cache are not counted.
+    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    pub memory: Option<u64>,
+    /// Where to render the ID buffers.
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu, value_name = "BACKEND")]
+    pub backend: BackendArg,
+    /// Write timings, peak heap and counts per stage as JSON.
+    #[arg(long, value_name = "STATS.json")]
+    pub stats: Option<PathBuf>,
+    /// Continue an interrupted bake from its checkpoints (OUT.pvis.*ckpt).
+    ///
+    /// A checkpoint is written after every sphere level; one of other inputs or settings is
+    /// refused.
+    #[arg(long)]
+    pub resume: bool,
+    /// Bake only shard I of N of the views into a part file, for `patchvis merge`.
+    ///
+    /// I runs from 0 to N - 1; `auto` takes I and N from a Slurm job array or a Kubernetes
+    /// Indexed Job (JOB_COMPLETION_INDEX with PATCHVIS_SHARD_COUNT). Every shard needs the
+    /// same input and flags.
+    #[arg(long, value_name = "I/N|auto", conflicts_with = "mesh_out")]
+    pub shard: Option<String>,
+    /// With --shard: read the tiling from this file (`patchvis tile`) instead of tiling again.
+    #[arg(long, value_name = "T.ptile")]
+    pub tiling_file: Option<PathBuf>,
+    /// Print nothing but errors; no progress bars.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Print help: the everyday options.
+    #[arg(short, long, action = clap::ArgAction::HelpShort)]
+    pub help: Option<bool>,
+    /// Print help with every option, the research options too.
+    #[arg(long, action = clap::ArgAction::HelpLong)]
+    pub help_all: Option<bool>,
+    /// Tiling algorithm: the seed algorithm in memory, the chunked out-of-core one, or
+    /// whichever the memory budget allows (auto).
+    #[arg(long, value_enum, default_value_t = TilingArg::Auto, value_name = "MODE",
+          hide_short_help = true, help_heading = RESEARCH)]
+    pub tiling: TilingArg,
+    /// A patch counts as seen from a view only if it covers at least K pixels there
+    /// (aggressive mode; 0 or 1: any pixel). Above 1 it needs --probe off: the probe pass adds
+    /// back what it drops.
+    #[arg(long, default_value_t = 0, value_name = "K",
+          hide_short_help = true, help_heading = RESEARCH)]
+    pub min_pixels: u32,
+    /// Also mark the edge neighbours of every seen patch that may face the view
+    /// (hole filling).
+    #[arg(long, hide_short_help = true, help_heading = RESEARCH)]
+    pub dilate: bool,
     /// The probe pass: after each view, every patch it did not show is drawn again with
     /// conservative rasterization against its occluders shrunk by PX pixels, and added where
     /// a camera near the view may see it; then each patch a finer view holds goes to one stored
@@ -130,30 +204,31 @@ pub struct BakeArgs {
     /// camera between a sphere of views and the next (with shells: 1.8–3.4 points less
     /// culling on the bunny); `--probe off` turns it off.
     /// [default: 1, within those bounds]
-    #[arg(long, value_name = "PX|off", value_parser = parse_probe, conflicts_with = "conservative")]
+    #[arg(long, value_name = "PX|off", value_parser = parse_probe, conflicts_with = "conservative",
+          hide_short_help = true, help_heading = RESEARCH)]
     pub probe: Option<Probe>,
     /// Conservative rasterization: a triangle marks every pixel square it touches, at its
     /// nearest depth there (one winner per pixel). Measured no better than point sampling.
-    #[arg(long)]
+    #[arg(long, hide_short_help = true, help_heading = RESEARCH)]
     pub conservative_raster: bool,
     /// Store each view's row as sampled (and folded). By default a bake also sets, in each
     /// view's row, every patch that all the sphere faces around the view already answer
     /// through their corners: no query's answer changes and the file is smaller (the default
     /// bake's 4–45 % on the model zoo). Rows as sampled are for tools that read the rows one
     /// by one (`patchvis_view_row`) as what each view saw.
-    #[arg(long)]
+    #[arg(long, hide_short_help = true, help_heading = RESEARCH)]
     pub sampled_rows: bool,
     /// View supersampling: sample K sphere levels finer (about 4^K times the views) and fold
     /// every finer view's patches into the stored views around it, so that queries from inside
     /// a sphere face see what its finer samples saw; the file keeps level L's size (0: off; 1
     /// or 2). Its checkpoint is OUT.pvis.vsK.ckpt. [default: 1; 0 at --level 7]
-    #[arg(long, value_name = "K")]
+    #[arg(long, value_name = "K", hide_short_help = true, help_heading = RESEARCH)]
     pub view_supersample: Option<u32>,
     /// With view supersampling: a finer view's patch is folded into the stored views only if
     /// it covers at least T pixels there (the stored views themselves keep every pixel, at the
     /// cost of sampling the stored level once more); trades a few small misses for culling
     /// (0 or 1: every pixel). [default: 0]
-    #[arg(long, value_name = "T")]
+    #[arg(long, value_name = "T", hide_short_help = true, help_heading = RESEARCH)]
     pub fold_min_pixels: Option<u32>,
     /// With view supersampling: a finer view's patches go to all the stored views around it
     /// that every sphere face holding it shares (all), or to just one of them (one: still
@@ -162,7 +237,7 @@ pub struct BakeArgs {
     /// to one (split), or to one per sphere face holding it, chosen over the whole sphere
     /// (cover). [default: cover with the probe pass (the default's, --probe); split with
     /// --conservative; all with --probe off]
-    #[arg(long, value_enum, value_name = "WHICH")]
+    #[arg(long, value_enum, value_name = "WHICH", hide_short_help = true, help_heading = RESEARCH)]
     pub fold_corners: Option<FoldCornersArg>,
     /// With one level of view supersampling: where the finer views lie. midpoints: the finer
     /// sphere level's vertices, the midpoints of the stored edges (12·4^L views at --level
@@ -171,54 +246,27 @@ pub struct BakeArgs {
     /// third of an edge of a view, and the probe's cells grow to match. The sampling sphere
     /// only (shells sample their vertices); the CPU sampler only.
     /// [default: midpoints; centroids with --conservative]
-    #[arg(long, value_enum, value_name = "WHERE")]
+    #[arg(long, value_enum, value_name = "WHERE", hide_short_help = true, help_heading = RESEARCH)]
     pub finer_views: Option<FinerViewsArg>,
-    /// Sampling shells for near cameras: N nested spheres of near views between the sampling
-    /// sphere (distance D = R / sin(fov/2), R the bounding radius) and F·R (--shell-min), at
-    /// D·(F·R/D)^(s/N) for s = 1..N. Each near view records every patch visible from its eye
-    /// in any direction, so a query nearer than D is answered from the two shells around it
-    /// instead of drawing everything; inside the innermost shell the answer is flagged
-    /// inside_sphere. Cost: each shell is one more sampling pass of the stored level (its
-    /// views render several frustums each) and one more visibility matrix in the file. 0: no
-    /// near shells (with --far-shells none, a version-4 file).
-    #[arg(long, default_value_t = patchvis::bake::DEFAULT_SHELLS, value_name = "N")]
-    pub shells: u32,
     /// The innermost shell's radius over the bounding radius: above 1 and below D/R (2.61 at
     /// --fov 45).
-    #[arg(long, default_value_t = patchvis::bake::DEFAULT_SHELL_MIN, value_name = "F")]
+    #[arg(long, default_value_t = patchvis::bake::DEFAULT_SHELL_MIN, value_name = "F",
+          hide_short_help = true, help_heading = RESEARCH)]
     pub shell_min: f64,
     /// Sphere level of the shells' views (0..=7), supersampled and folded as the stored level
     /// is. [default: --level; with --conservative, --level but at most 4]
-    #[arg(long, value_name = "L")]
+    #[arg(long, value_name = "L", hide_short_help = true, help_heading = RESEARCH)]
     pub shell_level: Option<u32>,
     /// ID-buffer side of the shells' views in pixels, at most --resolution: a near eye sees
     /// the model larger, so each patch covers more pixels. [default: --resolution]
-    #[arg(long, value_name = "PX")]
+    #[arg(long, value_name = "PX", hide_short_help = true, help_heading = RESEARCH)]
     pub shell_resolution: Option<u32>,
-    /// The far band, for cameras farther than the sampling distance D: shells of views at
-    /// these multiples of D (increasing, above 1), each view framing the bounding sphere from
-    /// its eye; a camera between two spheres of views is answered from both, and one beyond
-    /// the outermost from it alone. `none`: no far band (cameras beyond D get the sampling
-    /// sphere's rows, which miss rim they see past).
-    #[arg(long, value_name = "LIST|none", value_parser = parse_far_shells,
-          default_value = "2,256")]
-    pub far_shells: FarShells,
-    /// Continue an interrupted bake from its checkpoint (OUT.pvis.ckpt, written after every
-    /// sphere level); a checkpoint of other inputs or settings is refused.
-    #[arg(long)]
-    pub resume: bool,
-    /// Print nothing but errors; no progress bars.
-    #[arg(short, long)]
-    pub quiet: bool,
-    /// Where to render the ID buffers: cpu (exact, reproducible), gpu (wgpu; fails without an
-    /// adapter), auto (a hardware GPU if there is one, else the CPU).
-    #[arg(long, value_enum, default_value_t = BackendArg::Cpu, value_name = "BACKEND")]
-    pub backend: BackendArg,
     /// How the file numbers its patches: covisibility (patches seen from the same views get
     /// neighbouring ids, which the visibility coder turns into a smaller file) or spatial (the
     /// tiling's Z-order numbering, the same for every bake of a mesh at a patch count; the
     /// numbering --always-visible ids refer to).
-    #[arg(long, value_enum, default_value_t = PatchOrderArg::Covisibility, value_name = "ORDER")]
+    #[arg(long, value_enum, default_value_t = PatchOrderArg::Covisibility, value_name = "ORDER",
+          hide_short_help = true, help_heading = RESEARCH)]
     pub patch_order: PatchOrderArg,
     /// How the file stores the visibility rows (spec/FORMAT.md § VISB): tree (encoding 2, the
     /// smallest), table (encoding 1) or raw (encoding 0, one bit per view and patch, no
@@ -226,17 +274,9 @@ pub struct BakeArgs {
     /// near shells and far band) is version 6 (5 without the far band) with the compact patch
     /// table, whatever the encoding. Only with --shells 0 --far-shells none does tree write
     /// version 4 and table or raw version 2, for readers that predate versions 3 to 6.
-    #[arg(long, value_enum, default_value_t = EncodingArg::Tree, value_name = "ENCODING")]
+    #[arg(long, value_enum, default_value_t = EncodingArg::Tree, value_name = "ENCODING",
+          hide_short_help = true, help_heading = RESEARCH)]
     pub encoding: EncodingArg,
-    /// Bake only shard I of N (I from 0 to N - 1) of the views into a part file (-o), for
-    /// `patchvis merge`; `auto` takes I and N from a Slurm job array or a Kubernetes Indexed
-    /// Job (JOB_COMPLETION_INDEX with PATCHVIS_SHARD_COUNT). Every shard needs the same
-    /// input and flags.
-    #[arg(long, value_name = "I/N|auto", conflicts_with = "mesh_out")]
-    pub shard: Option<String>,
-    /// With --shard: read the tiling from this file (`patchvis tile`) instead of tiling again.
-    #[arg(long, value_name = "T.ptile")]
-    pub tiling_file: Option<PathBuf>,
 }
 
 /// `--encoding`.
@@ -253,7 +293,7 @@ pub enum EncodingArg {
 /// `--patch-order`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum PatchOrderArg {
-    /// A greedy tour of the patches' visibility signatures (`format::covisibility_order`).
+    /// A greedy tour of the patches' visibility signatures.
     Covisibility,
     /// The tiling's numbering along a Z-order curve.
     Spatial,
@@ -333,9 +373,10 @@ pub struct GenArgs {
     /// Output mesh (binary little-endian PLY); a symbolic link is written through.
     #[arg(short, long, value_name = "OUT.ply")]
     pub output: PathBuf,
-    /// The mesh that `subdivided-bunny` and `bunny-grid` start from.
-    #[arg(long, value_name = "MESH.ply", default_value = "assets/bunny.ply")]
-    pub source: PathBuf,
+    /// The mesh that `subdivided-bunny` and `bunny-grid` start from (required for those
+    /// kinds), such as the Stanford bunny, assets/bunny.ply in the patchvis repository.
+    #[arg(long, value_name = "MESH.ply")]
+    pub source: Option<PathBuf>,
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,

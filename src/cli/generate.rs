@@ -3,8 +3,10 @@
 //! The models live in [`patchvis::generate`]; this file resolves the flags, reads the source
 //! mesh through [`Mesh`], and writes through a temporary file that is renamed into place only
 //! when complete ([`AtomicFile`]), so an interrupted run leaves no half-written mesh behind.
-//! The output is checked before any work, and locked: not the source (named or default,
-//! whatever the kind), a regular file or a new one, in a writable directory. Sizes past [`MAX_TRIANGLES`] are refused.
+//! The kinds that start from a mesh need `--source`; there is no default, so that the command
+//! does not depend on the working directory. The output is checked before any work, and
+//! locked: not the source (whatever the kind), a regular file or a new one, in a writable
+//! directory. Sizes past [`MAX_TRIANGLES`] are refused.
 
 use super::UsageError;
 use super::args::{GenArgs, GenKind};
@@ -33,19 +35,26 @@ pub fn run(args: &GenArgs) -> Result<()> {
         ))
         .into());
     }
+    let reads_source = matches!(args.kind, GenKind::SubdividedBunny | GenKind::BunnyGrid);
+    if reads_source && args.source.is_none() {
+        return Err(no_source(args.kind));
+    }
     // The source is an input whatever the kind: a kind that does not read it still must not
     // replace the file the user named as one.
-    let inputs = [NamedPath::new(
-        "the --source mesh",
-        "--source",
-        &args.source,
-    )];
+    let inputs: Vec<NamedPath> = args
+        .source
+        .iter()
+        .map(|path| NamedPath::new("the --source mesh", "--source", path))
+        .collect();
     let _lock = super::claim_outputs(&inputs, &[NamedPath::flag("-o", &args.output)])?;
     let start = Instant::now();
     let source;
     let model: Box<dyn Model + '_> = match args.kind {
         GenKind::SubdividedBunny | GenKind::BunnyGrid => {
-            source = Mesh::open(&args.source)?;
+            let Some(path) = &args.source else {
+                return Err(no_source(args.kind));
+            };
+            source = Mesh::open(path)?;
             if args.kind == GenKind::SubdividedBunny {
                 let k = SubdividedMesh::factor_for(&source, args.triangles);
                 Box::new(SubdividedMesh::new(&source, k))
@@ -78,4 +87,14 @@ pub fn run(args: &GenArgs) -> Result<()> {
         )?;
     }
     Ok(())
+}
+
+/// The usage error of a kind that starts from a mesh, run without `--source`.
+fn no_source(kind: GenKind) -> anyhow::Error {
+    UsageError(format!(
+        "--kind {} needs --source MESH.ply, the mesh it starts from (such as assets/bunny.ply \
+         in the patchvis repository)",
+        kind.name()
+    ))
+    .into()
 }

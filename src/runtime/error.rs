@@ -278,6 +278,30 @@ pub enum Rule {
     ShellDistance,
     /// `SHEL shell level`
     ShellLevel,
+    /// `SHEL payload reserved field must be 0`: [`Rule::VisbReserved`] in a shell's payload.
+    ShelPayloadReserved,
+    /// `SHEL payload probability must be in 1..4096`
+    ShelProbability,
+    /// `SHEL payload tree node count must be in 1..=1024`
+    ShelTreeNodeCount,
+    /// `SHEL payload tree leaf must hold a probability in 1..4096`
+    ShelTreeLeaf,
+    /// `SHEL payload tree node must test a feature below 23`
+    ShelTreeFeature,
+    /// `SHEL payload tree node's children must follow it inside the tree`
+    ShelTreeChildren,
+    /// `SHEL payload tree depth`
+    ShelTreeDepth,
+    /// `SHEL payload checkpoint must be the offset of its view's record`
+    ShelCheckpoint,
+    /// `SHEL payload record length must be a LEB128 of at most 4 bytes inside the payload`
+    ShelRecordLength,
+    /// `SHEL payload record length must be a minimal LEB128`
+    ShelRecordLengthMinimal,
+    /// `SHEL payload code length`
+    ShelCodeLength,
+    /// `SHEL payload code must not end in a zero byte`
+    ShelCodeEnd,
 }
 
 impl Rule {
@@ -285,11 +309,42 @@ impl Rule {
     pub fn text(self) -> &'static str {
         RULE_TEXTS.get(self as usize).copied().unwrap_or("")
     }
+
+    /// The rule as a shell's payload breaks it: [`Error::in_shell_payload`].
+    fn in_shell_payload(self) -> Rule {
+        match self {
+            Rule::VisbReserved => Rule::ShelPayloadReserved,
+            Rule::VisbProbability => Rule::ShelProbability,
+            Rule::TreeNodeCount => Rule::ShelTreeNodeCount,
+            Rule::TreeLeaf => Rule::ShelTreeLeaf,
+            Rule::TreeFeature => Rule::ShelTreeFeature,
+            Rule::TreeChildren => Rule::ShelTreeChildren,
+            Rule::TreeDepth => Rule::ShelTreeDepth,
+            Rule::Checkpoint => Rule::ShelCheckpoint,
+            Rule::RecordLength => Rule::ShelRecordLength,
+            Rule::RecordLengthMinimal => Rule::ShelRecordLengthMinimal,
+            Rule::CodeLength => Rule::ShelCodeLength,
+            Rule::CodeEnd => Rule::ShelCodeEnd,
+            other => other,
+        }
+    }
+}
+
+impl Error {
+    /// Names SHEL in the error of a shell's payload. A payload follows the rules of VISB (spec
+    /// § SHEL), and its faults name SHEL, where its bytes lie, as the section's other faults
+    /// do.
+    pub(crate) fn in_shell_payload(mut self) -> Error {
+        if let Error::Invalid { what, .. } | Error::LimitExceeded { what, .. } = &mut self {
+            *what = what.in_shell_payload();
+        }
+        self
+    }
 }
 
 /// What each [`Rule`] prints, in declaration order (`RULE_TEXTS[rule as usize]`): the `{r}`
 /// of [`MESSAGE_TEMPLATES`].
-pub const RULE_TEXTS: [&str; 50] = [
+pub const RULE_TEXTS: [&str; 62] = [
     "header section_count must be at least 1",
     "section_count",
     "header reserved field must be 0",
@@ -341,6 +396,18 @@ pub const RULE_TEXTS: [&str; 50] = [
     "SHEL distance must be finite, below the previous shell's \
      (CAMR distance for the first before version 6), not CAMR distance and >= CAMR radius",
     "SHEL shell level",
+    "SHEL payload reserved field must be 0",
+    "SHEL payload probability must be in 1..4096",
+    "SHEL payload tree node count must be in 1..=1024",
+    "SHEL payload tree leaf must hold a probability in 1..4096",
+    "SHEL payload tree node must test a feature below 23",
+    "SHEL payload tree node's children must follow it inside the tree",
+    "SHEL payload tree depth",
+    "SHEL payload checkpoint must be the offset of its view's record",
+    "SHEL payload record length must be a LEB128 of at most 4 bytes inside the payload",
+    "SHEL payload record length must be a minimal LEB128",
+    "SHEL payload code length",
+    "SHEL payload code must not end in a zero byte",
 ];
 
 impl fmt::Display for Rule {

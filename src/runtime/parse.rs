@@ -332,7 +332,8 @@ fn parse_shel<'a>(
             shell,
             patch_count,
             patches,
-        )?;
+        )
+        .map_err(Error::in_shell_payload)?;
         shells.max_level = shells.max_level.max(level);
         shells.tree |= matches!(
             visb,

@@ -461,6 +461,8 @@ fn a_memory_budget_below_the_minimum_is_refused_and_the_minimum_is_kept() {
         "gen",
         "--kind",
         "subdivided-bunny",
+        "--source",
+        BUNNY,
         "--triangles",
         "400000",
         "-o",

@@ -6,9 +6,9 @@
 #      independent readers (tests/web/check_gltf.mjs);
 #   2. drives web/ in headless Chromium (tests/web/viewer.mjs): 33 camera positions over every
 #      band of the bunny's shells, near the model and up to 1000 sampling distances out,
-#      against `patchvis query`, a dropped .glb + .pvis
-#      pair, no console errors; the screenshot goes to tests/web/out/viewer.png (docs/viewer.png
-#      is one).
+#      against `patchvis query`, a dropped .glb + .pvis pair, no console errors, the first
+#      view clear of the overlay; the screenshot goes to tests/web/out/viewer.png
+#      (docs/viewer.png is one).
 # Used by .ci/run; needs Node 18 or newer, npm and Chromium (CHROMIUM, default
 # /usr/bin/chromium: Debian's `chromium` package).
 set -euo pipefail

@@ -6,7 +6,8 @@
 // compares the page's visible patches, ranges, inside flag, band and answering shells with the
 // command's, and the triangles the page draws with the ranges' sum (everything only inside the
 // innermost shell). Fails on any console error, page error or failed request, on fewer than 24
-// eyes, or if a band has no eye. Writes a screenshot. Used by tests/web/run.sh.
+// eyes, if a band has no eye, or if the first view puts the model under the overlay, off the
+// canvas or not upright. Writes a screenshot of the first view. Used by tests/web/run.sh.
 //
 //   node tests/web/viewer.mjs PATCHVIS_BINARY SCREENSHOT.png
 import { createServer } from "node:http";
@@ -150,24 +151,19 @@ try {
   console.log("the dropped globe.glb + globe.pvis agree with patchvis query; materials and texture loaded");
   await page.evaluate(() => window.patchvis.load("./demo/bunny.glb", "./demo/bunny.pvis"));
 
-  // Culling off draws everything; patch colours on, then the screenshot.
+  // Culling off draws everything.
   await page.evaluate(() => window.patchvis.setOptions({ culling: false }));
   const all = await page.evaluate(() => window.patchvis.answer());
   if (all.drawn !== all.triangles) problems.push(`culling off draws ${all.drawn} of ${all.triangles} triangles`);
-  // The screenshot: patch colours, culling on, the model right of the overlay (the camera
-  // looks at a point to the model's left).
-  const c = camera.center;
-  const d = camera.distance * 1.05;
-  const eye = [c[0] + 0.55 * d, c[1] + 0.25 * d, c[2] + 0.8 * d];
-  const right = [0.8, 0, -0.55].map((x) => x / Math.hypot(0.8, 0.55));
-  const target = c.map((x, k) => x - 0.3 * camera.radius * right[k]);
-  await page.evaluate(
-    ([eye, target]) => {
-      window.patchvis.setOptions({ culling: true, colours: true });
-      window.patchvis.setCamera(eye, target);
-    },
-    [eye, target],
-  );
+  // The first view (the bunny reloaded above): the whole model on the canvas and clear of the
+  // overlay, upright (+Y up). Then the screenshot, with patch colours and culling on.
+  const { model, overlay, width, height, up } = await page.evaluate(() => window.patchvis.framing());
+  const clear = model.left >= overlay.right || model.top >= overlay.bottom;
+  const inside = model.left >= 0 && model.top >= 0 && model.right <= width && model.bottom <= height;
+  if (!clear || !inside || up.join() !== "0,1,0") {
+    problems.push(`first view: model ${JSON.stringify(model)} in ${width}×${height}, overlay ${JSON.stringify(overlay)}, up ${up}`);
+  }
+  await page.evaluate(() => window.patchvis.setOptions({ culling: true, colours: true }));
   await page.waitForTimeout(300);
   await page.screenshot({ path: screenshot });
   console.log(`${eyes.length} camera positions agree with patchvis query; screenshot: ${screenshot}`);

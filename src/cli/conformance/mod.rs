@@ -42,7 +42,7 @@ pub fn run(args: &ConformanceArgs) -> Result<ExitCode> {
     let command = args.reader.as_deref().context("--reader CMD is required")?;
     let vectors = Vectors::load(&args.vectors)?;
     let scratch = tempfile::tempdir().context("a temporary folder for truncated vectors")?;
-    let mut session = Session {
+    let mut harness = Harness {
         command,
         timeout: Duration::from_secs_f64(args.timeout),
         peer: None,
@@ -51,7 +51,7 @@ pub fn run(args: &ConformanceArgs) -> Result<ExitCode> {
         counts: Counts::default(),
     };
     // A reader that cannot even greet is not worth a line per vector.
-    session
+    harness
         .peer()
         .map_err(|e| anyhow::anyhow!("--reader {command}: {e}"))?;
     let (mut passed, mut failed) = (0, 0);
@@ -66,14 +66,14 @@ pub fn run(args: &ConformanceArgs) -> Result<ExitCode> {
         }
     };
     for valid in &vectors.valid {
-        let verdict = session.check_valid(valid);
+        let verdict = harness.check_valid(valid);
         report(&valid.name, verdict)?;
     }
     for invalid in &vectors.invalid {
-        let verdict = session.check_invalid(invalid);
+        let verdict = harness.check_invalid(invalid);
         report(&invalid.name, verdict)?;
     }
-    let c = &session.counts;
+    let c = &harness.counts;
     outln!(
         "{passed} of {} vectors pass ({} queries, {} frustum queries, {} truncated files; \
          reader: {})",
@@ -81,7 +81,7 @@ pub fn run(args: &ConformanceArgs) -> Result<ExitCode> {
         c.queries,
         c.frusta,
         c.truncations,
-        session.features
+        harness.features
     )?;
     Ok(if failed == 0 {
         ExitCode::SUCCESS
@@ -117,7 +117,7 @@ struct Counts {
 }
 
 /// The reader, started on demand and again after it failed.
-struct Session<'a> {
+struct Harness<'a> {
     command: &'a str,
     timeout: Duration,
     peer: Option<Peer>,
@@ -126,7 +126,7 @@ struct Session<'a> {
     counts: Counts,
 }
 
-impl Session<'_> {
+impl Harness<'_> {
     /// The running reader, started and greeted if need be.
     fn peer(&mut self) -> Result<&mut Peer, String> {
         if self.peer.is_none() {
