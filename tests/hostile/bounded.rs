@@ -218,7 +218,8 @@ fn the_encoding_help_says_which_version_is_written() {
         version(&["--shells", "0", "--far-shells", "none"], "plain.pvis"),
         2
     );
-    let help: String = stdout(&run(&["bake", "--help"]))
+    // A research option: in `--help-all`.
+    let help: String = stdout(&run(&["bake", "--help-all"]))
         .split_whitespace()
         .collect::<Vec<_>>()
         .join(" ");

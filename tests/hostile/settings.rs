@@ -75,7 +75,12 @@ fn tile_needs_only_the_memory_a_tiling_needs() {
 fn help_that_cannot_be_written_is_a_failure() {
     let dir = TempDir::new().unwrap();
     let err_path = dir.path().join("stderr");
-    for args in [&["--help"][..], &["bake", "--help"], &["--version"]] {
+    for args in [
+        &["--help"][..],
+        &["bake", "--help"],
+        &["bake", "--help-all"],
+        &["--version"],
+    ] {
         let mut child = Command::new(env!("CARGO_BIN_EXE_patchvis"))
             .args(args)
             .stdin(Stdio::null())
