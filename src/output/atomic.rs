@@ -16,7 +16,7 @@
 //! pending (`pending.rs`): a signal that ends the process removes it. Cost: one `fsync` of
 //! the file and one of its directory.
 
-use super::pending::PendingFile;
+use super::pending::{Listing, PendingFile};
 use std::ffi::OsString;
 use std::fs::File;
 use std::io::Write;
@@ -107,12 +107,11 @@ impl AtomicFile {
     pub fn create(dest: &Path) -> std::io::Result<AtomicFile> {
         let dest = resolve_target(dest)?;
         let tmp = temp_path(&dest)?;
+        let mut listing = Listing::hold();
         let file = create_fresh(&tmp)?;
-        let file = AtomicFile {
-            file,
-            tmp: PendingFile::new(tmp),
-            dest,
-        };
+        let tmp = listing.list(tmp);
+        drop(listing);
+        let file = AtomicFile { file, tmp, dest };
         // A replaced file keeps its mode, as it would if written in place.
         #[cfg(unix)]
         if let Ok(meta) = std::fs::metadata(&file.dest)

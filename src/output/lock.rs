@@ -17,7 +17,7 @@
 //! removed once per command.
 
 use super::atomic::{parent_dir, resolve_target};
-use super::pending::PendingFile;
+use super::pending::{Listing, PendingFile};
 use std::ffi::OsString;
 use std::fs::File;
 use std::io::{Read, Seek, Write};
@@ -88,6 +88,8 @@ impl Held {
         // Each retry follows a holder that removed the file between our open and our lock;
         // a few are plenty, as each needs a whole command to start and end in between.
         for _ in 0..64 {
+            // Held from before the file is made until it is listed (or found not ours).
+            let mut listing = Listing::hold();
             let mut file = File::options()
                 .read(true)
                 .write(true)
@@ -107,7 +109,8 @@ impl Held {
             if !same_file(&file, path) {
                 continue;
             }
-            let pending = PendingFile::new(path.to_path_buf());
+            let pending = listing.list(path.to_path_buf());
+            drop(listing);
             file.set_len(0)
                 .and_then(|()| writeln!(file, "{}", std::process::id()))
                 .map_err(LockFailure::Io)?;

@@ -16,6 +16,7 @@
 
 use super::atomic::{create_fresh, parent_dir, resolve_target, temp_path};
 use super::lock::{LockFailure, OutputLock, lock_path};
+use super::pending::Listing;
 use std::path::{Path, PathBuf};
 
 /// A file a command reads or writes, and what the user calls it.
@@ -301,8 +302,14 @@ fn probe(output: &NamedPath) -> Result<(), OutputError> {
         source,
     };
     let tmp = temp_path(&output.path).map_err(failed)?;
+    // Listed while it exists, so that a signal now does not leave it behind.
+    let mut listing = Listing::hold();
     drop(create_fresh(&tmp).map_err(failed)?);
-    std::fs::remove_file(&tmp).map_err(failed)
+    let mut pending = listing.list(tmp);
+    drop(listing);
+    pending
+        .settle(|tmp| std::fs::remove_file(tmp))
+        .map_err(failed)
 }
 
 /// Which file a path names: an existing file's identity, or else its canonical directory and

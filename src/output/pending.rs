@@ -36,10 +36,21 @@ pub(super) struct PendingFile {
     on_fault: Option<RemovedOnFault>,
 }
 
-impl PendingFile {
-    /// Lists `path` (a file just created) as pending.
-    pub(super) fn new(path: PathBuf) -> PendingFile {
-        table().push(path.clone());
+/// The table held, to make a file and list it in one step: a signal's clean-up
+/// ([`remove_pending`], which then holds the table until the process ends) runs wholly before,
+/// and no file is made, or wholly after, and it removes the file. Making the file first and
+/// listing it after would leave one made in between.
+pub(super) struct Listing(std::sync::MutexGuard<'static, Vec<PathBuf>>);
+
+impl Listing {
+    /// Holds the table (waits for it: forever once a signal's clean-up has run).
+    pub(super) fn hold() -> Listing {
+        Listing(table())
+    }
+
+    /// Lists `path`, a file made while this was held, as pending.
+    pub(super) fn list(&mut self, path: PathBuf) -> PendingFile {
+        self.0.push(path.clone());
         let on_fault = Some(RemovedOnFault::new(&path));
         PendingFile {
             path,
@@ -47,7 +58,9 @@ impl PendingFile {
             on_fault,
         }
     }
+}
 
+impl PendingFile {
     /// The file.
     pub(super) fn path(&self) -> &Path {
         &self.path
