@@ -125,7 +125,9 @@ fn reader_allocates_nothing(bytes: &[u8]) {
         let eye = [r * a.cos(), 0.3, r * a.sin()];
         let s = streaming.query(eye);
         seen += s.count();
+        let shared = expanded.query_shared(eye, &mut row).count();
         let e = expanded.query(eye);
+        assert_eq!(e.count(), shared);
         seen += e.count();
         triangles += 2 * e.count();
         assert!(e.patches().all(|p| !pvis.backfacing(p, eye) || p < 100));

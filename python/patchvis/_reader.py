@@ -137,7 +137,8 @@ class Reader:
         (``numpy.unpackbits(out, axis=1, count=patch_count, bitorder="little")`` unpacks it):
         an eighth of the memory, and faster. ``out``: a C-contiguous array of that shape and
         dtype to fill instead of a new one (reusing it saves the new memory's page faults,
-        most of the time of a large call). The GIL is released while it runs."""
+        most of the time of a large call). The GIL is released while it runs, and past a few
+        thousand eyes they are shared out over the machine's cores."""
         e = np.require(eyes, dtype=np.float32, requirements=["C", "A"])
         if e.ndim != 2 or e.shape[1] != 3:
             raise ValueError(f"eyes has shape {e.shape}, expected (N, 3)")

@@ -275,6 +275,10 @@ impl Reader {
     }
 }
 
+/// `query_many` answers fewer eyes than this on the calling thread alone: starting a thread
+/// costs about as much as answering a few thousand.
+const MIN_EYES_PER_THREAD: usize = 4096;
+
 /// Byte `k` of `SPREAD[b]` is bit `k` of `b`: eight patches' bits as eight 0/1 bytes, in one
 /// store.
 const SPREAD: [u64; 256] = {
@@ -375,17 +379,35 @@ impl Reader {
         let Some(cell) = slot.as_mut() else {
             return Ok(());
         };
-        cell.with_dependent_mut(|_, expanded| {
-            for (eye, row) in eyes
-                .chunks_exact(3)
-                .zip(rows.chunks_exact_mut(width.max(1)))
-            {
-                let visible = expanded.query([eye[0], eye[1], eye[2]]);
-                match packed {
-                    true => pack(visible.bits(), row),
-                    false => spread(visible.bits(), row),
+        let width = width.max(1);
+        let words = self.pvis().row_words();
+        cell.with_dependent(|_, expanded| {
+            let answer = |eyes: &[f32], rows: &mut [u8]| {
+                let mut scratch = vec![0u64; words];
+                for (eye, row) in eyes.chunks_exact(3).zip(rows.chunks_exact_mut(width)) {
+                    let visible = expanded.query_shared([eye[0], eye[1], eye[2]], &mut scratch);
+                    match packed {
+                        true => pack(visible.bits(), row),
+                        false => spread(visible.bits(), row),
+                    }
                 }
+            };
+            // A share of the eyes per core, each thread with a scratch row of its own; few
+            // eyes stay on this thread.
+            let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+            let per_thread = (eyes.len() / 3).div_ceil(threads).max(MIN_EYES_PER_THREAD);
+            if eyes.len() / 3 <= per_thread {
+                return answer(eyes, rows);
             }
+            let answer = &answer;
+            std::thread::scope(|scope| {
+                for (eyes, rows) in eyes
+                    .chunks(3 * per_thread)
+                    .zip(rows.chunks_mut(width * per_thread))
+                {
+                    scope.spawn(move || answer(eyes, rows));
+                }
+            });
         });
         Ok(())
     }

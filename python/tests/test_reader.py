@@ -71,6 +71,20 @@ def test_query_many_is_query(cli_shells):
     assert reader.query_many(np.zeros((0, 3))).shape == (0, 200)
 
 
+def test_query_many_splits_many_eyes_over_threads_and_answers_alike(cli_shells):
+    """Past one thread's share (4,096 eyes) the eyes are answered on several threads: each
+    row is still its own eye's answer, in order."""
+    reader = patchvis.Reader(cli_shells)
+    eyes = seeded_eyes(reader, 12_345, seed=3)
+    many = reader.query_many(eyes)
+    assert many.shape == (12_345, 200)
+    for i in range(0, 12_345, 97):
+        np.testing.assert_array_equal(np.flatnonzero(many[i]), reader.query(eyes[i]))
+    packed = reader.query_many(eyes, packed=True)
+    np.testing.assert_array_equal(packed, np.packbits(many, axis=1, bitorder="little"))
+    np.testing.assert_array_equal(reader.query_many(eyes[::-1]), many[::-1])
+
+
 def look_at(eye, target, fov_deg=45.0, near=1.0, far=1000.0, zero_to_one=False) -> np.ndarray:
     """A perspective view-projection (m[row, col], world up +Y)."""
     eye, target = np.asarray(eye, np.float64), np.asarray(target, np.float64)

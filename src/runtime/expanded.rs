@@ -246,20 +246,21 @@ impl<'a, 't> Expanded<'a, 't> {
 
     /// The patches visible from `eye` (spec § Query): the same answer as [`Pvis::query`].
     pub fn query(&mut self, eye: [f32; 3]) -> Visible<'_> {
-        let pvis = self.pvis;
-        let words = pvis.row_words();
-        let Eye::Direction(d, band) = classify(&pvis, eye) else {
-            return everything(&pvis, &mut self.table[..words], origin_leaf(&pvis));
-        };
+        let words = self.pvis.row_words();
         let (row, t) = self.table[..self.at.end].split_at_mut(words);
-        let (place, [a, b]) = locate(&self.at, t, words, d, band, pvis.shell_count());
-        if b.is_empty() {
-            return visible(&pvis, place, a);
-        }
-        for (w, (x, y)) in row.iter_mut().zip(a.iter().zip(b)) {
-            *w = x | y;
-        }
-        visible(&pvis, place, row)
+        answer(&self.pvis, &self.at, t, row, eye)
+    }
+
+    /// [`Expanded::query`] through a shared table: the answer is the leaf's row in the table,
+    /// or is written to `scratch` (an eye between two shells, or one that gets every patch).
+    /// Several threads can query one expanded file this way, each with a scratch of its own.
+    ///
+    /// # Panics
+    /// If `scratch.len() < pvis.row_words()`.
+    pub fn query_shared<'s>(&'s self, eye: [f32; 3], scratch: &'s mut [u64]) -> Visible<'s> {
+        let words = self.pvis.row_words();
+        let t = &self.table[words..self.at.end];
+        answer(&self.pvis, &self.at, t, &mut scratch[..words], eye)
     }
 
     /// [`Expanded::query`]'s answer without the patches `frustum` drops (spec § Frustum
@@ -304,6 +305,30 @@ impl<'a, 't> Expanded<'a, 't> {
 /// one shell answers), in the table `t` less its first `words` (the answer row). One walk, to
 /// the finer of the two shells' levels: a coarser shell's leaf is that leaf's ancestor.
 #[inline(always)]
+/// The answer to `eye` (spec § Query) from the expanded table `t` (the table after its first
+/// row): a leaf's row of `t`, or the OR of two written to `row` (`row_words` words), as is
+/// every patch for an eye that gets them all.
+fn answer<'x>(
+    pvis: &Pvis<'_>,
+    at: &Layout,
+    t: &'x [u64],
+    row: &'x mut [u64],
+    eye: [f32; 3],
+) -> Visible<'x> {
+    let words = pvis.row_words();
+    let Eye::Direction(d, band) = classify(pvis, eye) else {
+        return everything(pvis, row, origin_leaf(pvis));
+    };
+    let (place, [a, b]) = locate(at, t, words, d, band, pvis.shell_count());
+    if b.is_empty() {
+        return visible(pvis, place, a);
+    }
+    for (w, (x, y)) in row.iter_mut().zip(a.iter().zip(b)) {
+        *w = x | y;
+    }
+    visible(pvis, place, row)
+}
+
 fn locate<'t>(
     at: &Layout,
     t: &'t [u64],

@@ -353,6 +353,9 @@ fn check_file(f: &Synthetic, center: [f32; 3], rng: &mut Rng, case: &str) -> Vec
         let all = expanded.query(eye);
         check(&all, "expanded");
         assert_eq!(all.place(), place, "{case} expanded {eye:?}");
+        let shared = expanded.query_shared(eye, &mut out);
+        check(&shared, "shared");
+        assert_eq!(shared.place(), place, "{case} shared {eye:?}");
         // The frustum variants: the answer less what `Frustum::cull` drops.
         let mut cut = expected.bits.clone();
         frustum.cull(&pvis, &mut cut);

@@ -151,7 +151,9 @@ pub fn sample_near(
             .for_each_init(
                 || (IdBuffer::new(params.resolution), Rasterizer::new()),
                 |(buffer, rasterizer), (view, row)| {
-                    for camera in near_cameras(params, view as u32, distance).iter() {
+                    for camera in
+                        near_cameras(params, crate::sphere::direction(view as u32), distance).iter()
+                    {
                         buffer.clear();
                         rasterizer.render(mesh, patch_of, camera, buffer);
                         mark_visible(buffer.ids(), row);

@@ -58,17 +58,14 @@ pub fn near_camera_count(params: &SamplingParams, distance: f32) -> usize {
     }
 }
 
-/// The cameras of near view `view` of a shell at `distance` from `params.center`.
+/// The cameras of the near view whose eye lies in `direction` (from `params.center`; a sphere
+/// vertex's, `sphere::direction`, or a finer view's, `finer.rs`) on a shell at `distance`.
 ///
 /// Panics (caller contract) unless `distance` is finite and at least `params.radius`, and
 /// `params.radius` is positive and finite.
-pub fn near_cameras(
-    params: &SamplingParams,
-    view: crate::sphere::ViewIndex,
-    distance: f32,
-) -> NearCameras {
+pub fn near_cameras(params: &SamplingParams, direction: [f32; 3], distance: f32) -> NearCameras {
     let theta = half_angle(params, distance);
-    let d = super::camera::normalize(widen(crate::sphere::direction(view)));
+    let d = super::camera::normalize(widen(direction));
     let center = widen(params.center);
     let r = f64::from(distance);
     let eye = [
@@ -159,7 +156,7 @@ mod tests {
             let r = p.radius * factor;
             assert_eq!(near_camera_count(&p, r), count, "{factor}");
             for view in 0..crate::sphere::view_count(p.level) {
-                let cameras = near_cameras(&p, view, r);
+                let cameras = near_cameras(&p, crate::sphere::direction(view), r);
                 assert_eq!(cameras.len(), count);
                 let eye = cameras[0].eye();
                 let to_center: [f64; 3] = std::array::from_fn(|k| f64::from(p.center[k]) - eye[k]);
@@ -209,7 +206,7 @@ mod tests {
     #[test]
     fn the_cube_faces_tile_without_overlap() {
         let p = params();
-        let cameras = near_cameras(&p, 7, p.radius * 1.1);
+        let cameras = near_cameras(&p, crate::sphere::direction(7), p.radius * 1.1);
         let mut seen = 0;
         for i in 0..2000 {
             let dir = unit(i as f64 * 0.913, (i as f64 * 0.29).sin() * 1.55);
@@ -224,6 +221,6 @@ mod tests {
     #[test]
     #[should_panic(expected = "at least the bounding radius")]
     fn a_shell_inside_the_bounding_sphere_is_a_caller_error() {
-        near_cameras(&params(), 0, 1.9);
+        near_cameras(&params(), crate::sphere::direction(0), 1.9);
     }
 }

@@ -129,7 +129,7 @@ pub struct SamplingOptions {
     /// Where the views of the pass's finest level lie ([`FinerViews`]): with
     /// [`FinerViews::Centroids`], the views of `params.level` beyond level `params.level − 1`'s
     /// are the centroids of that level's leaf faces, each seeded by its face's corners
-    /// (`finer.rs`). Not for near passes ([`SamplingOptions::shell`]): caller contract.
+    /// (`finer.rs`); a near pass ([`SamplingOptions::shell`]) puts its cameras there too.
     pub finer: FinerViews,
 }
 
@@ -212,10 +212,6 @@ fn sample_rows(
         // Checks the shell's distance (caller contract).
         near_camera_count(params, distance);
     }
-    assert!(
-        options.shell.is_none() || options.finer == FinerViews::Midpoints,
-        "a near pass renders sphere vertices only"
-    );
     let views = view_count(params.level);
     let pass = PassViews::pass(params.level, options.finer);
     // Words of one row of the patches: the rows' prefix of the matrix's rows.
@@ -660,7 +656,7 @@ impl ViewContext<'_> {
             self.render_camera(&camera, cell.as_ref(), hint, known, scratch, row, seen);
             return;
         };
-        let cameras = near_cameras(self.params, index, distance);
+        let cameras = near_cameras(self.params, direction, distance);
         let cell = self.probe.as_ref().map(|p| p.cell(d, cameras[0].eye()));
         let mut part = std::mem::take(&mut scratch.camera_row);
         row.fill(0);

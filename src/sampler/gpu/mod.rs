@@ -162,7 +162,7 @@ impl GpuSampler {
                 .map(|v| Camera::sampling_view(params, v))
                 .collect(),
             Some(distance) => (0..views)
-                .flat_map(|v| near_cameras(params, v, distance).to_vec())
+                .flat_map(|v| near_cameras(params, crate::sphere::direction(v), distance).to_vec())
                 .collect(),
         };
         let per_view = cameras.len() / views as usize;

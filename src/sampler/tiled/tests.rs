@@ -560,7 +560,7 @@ fn a_near_view_sees_every_way_from_its_eye() {
     );
     let front_only: Vec<u32> = (0..6)
         .map(|v| {
-            let camera = near_cameras(&p, v, p.radius * 1.05)[0];
+            let camera = near_cameras(&p, crate::sphere::direction(v), p.radius * 1.05)[0];
             reference_row(&mesh, &tiling.patch_of, &camera, false, 0, 8)
                 .iter()
                 .filter(|&&b| b)
@@ -940,6 +940,48 @@ fn centroid_views_render_each_face_centre_exactly_whatever_the_threads_or_shards
         }
         assert_eq!(rendered_view_count(&pass, &[u]), needed.len() as u32);
     }
+}
+
+#[test]
+fn a_near_pass_puts_its_cameras_at_the_centroids_too() {
+    // A shell's centroid views: each row is the OR of brute-force renders of the near cameras
+    // looking out from its face's centre (a cube map at 1.1 radii), not from the sphere vertex
+    // its slot would name in a vertex pass.
+    let (mesh, tiling, p) = small_bunny(2);
+    let options = near(
+        &p,
+        1.1,
+        SamplingOptions {
+            finer: FinerViews::Centroids,
+            ..SamplingOptions::default()
+        },
+    );
+    let rows = tiled(&mesh, &tiling, &p, &options);
+    let pass = PassViews::pass(2, FinerViews::Centroids);
+    let patches = tiling.patches.len() as u32;
+    let vertices = sample_near(
+        &mesh,
+        &tiling.patch_of,
+        patches,
+        &p,
+        p.radius * 1.1,
+        &NoProgress,
+    );
+    let mut differs = false;
+    for u in pass.finer_range() {
+        let mut expected = vec![false; patches as usize];
+        for camera in near_cameras(&p, pass.direction(u), p.radius * 1.1).iter() {
+            let row = reference_row(&mesh, &tiling.patch_of, camera, false, 0, patches);
+            expected.iter_mut().zip(row).for_each(|(e, r)| *e |= r);
+        }
+        let got: Vec<bool> = (0..patches).map(|q| rows.get(u, q)).collect();
+        assert_eq!(got, expected, "centroid view {u}");
+        differs |= rows.row(u) != vertices.row(u);
+    }
+    assert!(
+        differs,
+        "the centroids saw what the vertices of their slots see"
+    );
 }
 
 #[test]
