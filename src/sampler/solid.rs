@@ -108,15 +108,18 @@ fn widen(p: [f32; 3]) -> [f64; 3] {
     p.map(f64::from)
 }
 
-/// The cameras whose queries may use a view's row, for the facing tests: every point within
-/// `radius` of the segment between `ends` (a ball when they coincide). The segment runs along
-/// the view's direction over the camera distances the row answers (`SamplingOptions::band`).
+/// The cameras whose queries may use a view's row, for the facing tests: the convex hull of
+/// a ball around each of `ends` (one ball when they coincide). Along a band of camera
+/// distances (`SamplingOptions::band`) the ends lie on the view's direction at the band's
+/// nearest and farthest distance, each ball's radius the cell's angle times its distance: a
+/// truncated cone holding every camera within that angle of the direction, at any distance
+/// of the band.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Cell {
-    /// The segment's ends.
+    /// The balls' centres.
     pub(crate) ends: [[f64; 3]; 2],
-    /// Distance from the segment.
-    pub(crate) radius: f64,
+    /// The balls' radii.
+    pub(crate) radii: [f64; 2],
 }
 
 impl Cell {
@@ -124,18 +127,19 @@ impl Cell {
     pub(crate) fn ball(eye: [f64; 3], radius: f64) -> Cell {
         Cell {
             ends: [eye, eye],
-            radius,
+            radii: [radius; 2],
         }
     }
 
-    /// The distinct ends. A half-space holds the cell when it holds the balls around its
-    /// ends, since the cell is their convex hull, so every facing test runs on them.
-    fn balls(&self) -> &[[f64; 3]] {
-        if self.ends[0] == self.ends[1] {
-            &self.ends[..1]
+    /// The distinct balls, as (centre, radius). A half-space holds the cell when it holds
+    /// them, since the cell is their convex hull, so every facing test runs on them.
+    fn balls(&self) -> impl Iterator<Item = ([f64; 3], f64)> + '_ {
+        let count = if self.ends[0] == self.ends[1] && self.radii[0] == self.radii[1] {
+            1
         } else {
-            &self.ends
-        }
+            2
+        };
+        self.ends.iter().copied().zip(self.radii).take(count)
     }
 }
 
@@ -148,8 +152,7 @@ pub(crate) fn may_face(point: [f64; 3], normal: [f64; 3], cell: &Cell) -> bool {
         || len == 0.0
         || cell
             .balls()
-            .iter()
-            .any(|&eye| dot(normal, sub(eye, point)) >= -cell.radius * len)
+            .any(|(eye, r)| dot(normal, sub(eye, point)) >= -r * len)
 }
 
 fn find(parent: &mut [u32], mut x: u32) -> u32 {
@@ -594,9 +597,9 @@ impl Solids {
         // (for each ball, and so for the cell, their convex hull).
         let sign = f64::from(self.orientation_of_component(c));
         let axis = axis.map(|x| f64::from(x) * sign);
-        cell.balls().iter().all(|&eye| {
+        cell.balls().all(|(eye, r)| {
             let d = sub(center.map(f64::from), eye);
-            let rho = f64::from(radius) + cell.radius;
+            let rho = f64::from(radius) + r;
             let len = dot(d, d).sqrt();
             if len.is_nan() || len <= rho {
                 return false;
@@ -916,6 +919,48 @@ fn weld_by_position(mesh: &Mesh) -> Vec<u32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_band_reaching_far_out_is_a_cone_not_a_cylinder() {
+        // The cameras within 0.03 rad of +z, from 1 to 256 units out: a plane at the origin
+        // facing -z is seen from none of them, nor one turned 3° past the side; one turned 1°
+        // towards them is.
+        let phi = 0.03;
+        let band = [1.0, 256.0];
+        let cone = Cell {
+            ends: band.map(|t| [0.0, 0.0, t]),
+            radii: band.map(|t| phi * t),
+        };
+        let (back, side) = ([0.0, 0.0, -1.0], [1.0, 0.0, 0.02f64.sin()]);
+        assert!(!may_face([0.0; 3], back, &cone));
+        assert!(may_face([0.0; 3], side, &cone));
+        assert!(!may_face([0.0; 3], [1.0, 0.0, -0.05f64.sin()], &cone));
+        // A cylinder of the far end's radius wraps around the origin: everything faces it.
+        let cylinder = Cell {
+            radii: [phi * 256.0; 2],
+            ..cone
+        };
+        assert!(may_face([0.0; 3], back, &cylinder));
+        // Conservative: any plane some camera of the band sees from its front (cameras on
+        // the cone's rim and axis, at distances across the band) faces the cell.
+        let mut rng = crate::test_kit::rng::Rng::new(7);
+        for _ in 0..2000 {
+            let n = [0; 3].map(|_| rng.unit() * 2.0 - 1.0);
+            let p = [0; 3].map(|_| rng.unit() * 0.5 - 0.25);
+            let seen = [1.0, 1.5, 3.0, 40.0, 256.0].iter().any(|&t| {
+                (0..16).any(|k| {
+                    let a = k as f64 * std::f64::consts::TAU / 16.0;
+                    let eye = [
+                        t * phi.sin() * a.cos(),
+                        t * phi.sin() * a.sin(),
+                        t * phi.cos(),
+                    ];
+                    dot(n, sub(eye, p)) > 0.0
+                })
+            });
+            assert!(!seen || may_face(p, n, &cone), "{n:?} {p:?}");
+        }
+    }
 
     /// Corners of the unit cube.
     fn corner(i: u32) -> [f32; 3] {

@@ -21,11 +21,14 @@
 //! [`CELL_PER_EDGE`] `· edge` of the view's, `edge` the largest angle between a view of the
 //! pass and a view seeding it (an edge of the sampled level; with centroid finer views, a
 //! corner's distance from its face's centroid, `finer.rs`), at the pass's distance, or, with
-//! `SamplingOptions::band = [near, far]`, at any distance from `near` to `far`. It is taken as
-//! the points within `CELL_PER_EDGE · edge · far` of the segment from `center + d · near` to
-//! `center + d · far` along the view's direction `d` (a point at angle `φ` and distance `t` lies
-//! within `2 t sin(φ / 2) <= t φ` of `center + d · t`); without a band, the ball of
-//! `CELL_PER_EDGE · edge · distance` around the eye. Every camera of a near view's cube map is
+//! `SamplingOptions::band = [near, far]`, at any distance from `near` to `far`. With `φ =
+//! CELL_PER_EDGE · edge`, it is taken as the convex hull of the ball of radius `φ · near` around
+//! `center + d · near` and that of radius `φ · far` around `center + d · far`, `d` the view's
+//! direction: a truncated cone holding the ball of radius `φ · t` around `center + d · t` for
+//! every `t` between, and so every camera at angle at most `φ` and distance `t` (which lies
+//! within `2 t sin(φ / 2) <= t φ` of `center + d · t`). A cylinder of the far ball's radius
+//! would wrap around the model when the band reaches far beyond it (a far shell's), and let
+//! every back face show. Without a band, the ball of radius `φ · distance` around the eye. Every camera of a near view's cube map is
 //! probed, each against its own shrunk occluders.
 
 use super::{FEW_TRIANGLES, ViewContext, WorkerScratch, hidden, project_up_to, valid_bits};
@@ -45,9 +48,11 @@ use crate::visibility::SamplingParams;
 pub(super) struct Probe {
     /// Pixels the occluders are shrunk by.
     radius: usize,
-    /// Radius of the cell (see the module documentation) in world units.
-    cell: f64,
-    /// The band's camera distances `[near, far]`, if the pass has one.
+    /// The cell's angle (see the module documentation), in radians.
+    cell_angle: f64,
+    /// The pass's camera distance.
+    distance: f64,
+    /// The band's camera distances `[near, far]` (holding `distance`), if the pass has one.
     band: Option<[f64; 2]>,
     /// The sampling centre.
     center: [f64; 3],
@@ -96,12 +101,14 @@ impl Probe {
     ) -> Probe {
         let solids = Solids::new(mesh);
         let patch_component = solids.patch_components(tiling);
-        let distance = options.shell.unwrap_or_else(|| params.distance());
-        let far = options.band.map_or(distance, |[_, far]| far.max(distance));
+        let distance = f64::from(options.shell.unwrap_or_else(|| params.distance()));
         Probe {
             radius: radius as usize,
-            cell: CELL_PER_EDGE * f64::from(far) * pass.max_seed_angle(),
-            band: options.band.map(|b| b.map(f64::from)),
+            cell_angle: CELL_PER_EDGE * pass.max_seed_angle(),
+            distance,
+            band: options
+                .band
+                .map(|[near, far]| [f64::from(near).min(distance), f64::from(far).max(distance)]),
             center: params.center.map(f64::from),
             solids,
             patch_component,
@@ -111,10 +118,10 @@ impl Probe {
     /// The cell of the view with unit direction `d` (binary64) and eye `eye`.
     pub(super) fn cell(&self, d: [f64; 3], eye: [f64; 3]) -> Cell {
         match self.band {
-            None => Cell::ball(eye, self.cell),
+            None => Cell::ball(eye, self.cell_angle * self.distance),
             Some(band) => Cell {
                 ends: band.map(|t| std::array::from_fn(|k| self.center[k] + d[k] * t)),
-                radius: self.cell,
+                radii: band.map(|t| self.cell_angle * t),
             },
         }
     }
