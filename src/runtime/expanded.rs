@@ -301,13 +301,10 @@ impl<'a, 't> Expanded<'a, 't> {
     }
 }
 
-/// The leaves of `d` on the shells of `band` and their stored answers (the second empty where
-/// one shell answers), in the table `t` less its first `words` (the answer row). One walk, to
-/// the finer of the two shells' levels: a coarser shell's leaf is that leaf's ancestor.
-#[inline(always)]
 /// The answer to `eye` (spec § Query) from the expanded table `t` (the table after its first
 /// row): a leaf's row of `t`, or the OR of two written to `row` (`row_words` words), as is
 /// every patch for an eye that gets them all.
+#[inline(always)]
 fn answer<'x>(
     pvis: &Pvis<'_>,
     at: &Layout,
@@ -329,6 +326,10 @@ fn answer<'x>(
     visible(pvis, place, row)
 }
 
+/// The leaves of `d` on the shells of `band` and their stored answers (the second empty where
+/// one shell answers), in the table `t` less its first `words` (the answer row). One walk, to
+/// the finer of the two shells' levels: a coarser shell's leaf is that leaf's ancestor.
+#[inline(always)]
 fn locate<'t>(
     at: &Layout,
     t: &'t [u64],

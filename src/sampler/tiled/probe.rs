@@ -28,8 +28,8 @@
 //! every `t` between, and so every camera at angle at most `φ` and distance `t` (which lies
 //! within `2 t sin(φ / 2) <= t φ` of `center + d · t`). A cylinder of the far ball's radius
 //! would wrap around the model when the band reaches far beyond it (a far shell's), and let
-//! every back face show. Without a band, the ball of radius `φ · distance` around the eye. Every camera of a near view's cube map is
-//! probed, each against its own shrunk occluders.
+//! every back face show. Without a band, the ball of radius `φ · distance` around the eye.
+//! Every camera of a near view's cube map is probed, each against its own shrunk occluders.
 
 use super::{FEW_TRIANGLES, ViewContext, WorkerScratch, hidden, project_up_to, valid_bits};
 use crate::runtime::Patches;
@@ -48,8 +48,8 @@ use crate::visibility::SamplingParams;
 pub(super) struct Probe {
     /// Pixels the occluders are shrunk by.
     radius: usize,
-    /// The cell's angle (see the module documentation), in radians.
-    cell_angle: f64,
+    /// `edge` of the module documentation, in radians: the cell's angle over [`CELL_PER_EDGE`].
+    edge: f64,
     /// The pass's camera distance.
     distance: f64,
     /// The band's camera distances `[near, far]` (holding `distance`), if the pass has one.
@@ -104,7 +104,7 @@ impl Probe {
         let distance = f64::from(options.shell.unwrap_or_else(|| params.distance()));
         Probe {
             radius: radius as usize,
-            cell_angle: CELL_PER_EDGE * pass.max_seed_angle(),
+            edge: pass.max_seed_angle(),
             distance,
             band: options
                 .band
@@ -115,13 +115,18 @@ impl Probe {
         }
     }
 
+    /// The cell's radius at camera distance `t`.
+    fn radius_at(&self, t: f64) -> f64 {
+        CELL_PER_EDGE * t * self.edge
+    }
+
     /// The cell of the view with unit direction `d` (binary64) and eye `eye`.
     pub(super) fn cell(&self, d: [f64; 3], eye: [f64; 3]) -> Cell {
         match self.band {
-            None => Cell::ball(eye, self.cell_angle * self.distance),
+            None => Cell::ball(eye, self.radius_at(self.distance)),
             Some(band) => Cell {
                 ends: band.map(|t| std::array::from_fn(|k| self.center[k] + d[k] * t)),
-                radii: band.map(|t| self.cell_angle * t),
+                radii: band.map(|t| self.radius_at(t)),
             },
         }
     }
