@@ -3,10 +3,8 @@
 //! hardware GPU when there is one and says why it did not otherwise.
 
 use super::{BakeError, BakeSettings};
-use crate::ooc::Mesh;
 use crate::progress::Progress;
-use crate::sampler::{self, SamplingOptions};
-use crate::tiling::Tiling;
+use crate::sampler::{self, SamplingOptions, Scene};
 use crate::visibility::{SamplingParams, VisibilityMatrix};
 
 /// Which backend to open (`--backend`).
@@ -110,23 +108,21 @@ impl Backend {
         matches!(self, Backend::Cpu)
     }
 
-    /// Samples every view of `params` for the patches of `tiling` (a tiling of `mesh`): the
-    /// sampling sphere's, or a shell's near views (`options.shell`), on either backend.
+    /// Samples every view of `params` for the patches of the scene's tiling: the sampling
+    /// sphere's, or a shell's views (`options.shell`), on either backend. The CPU sampler
+    /// builds its set-up in `scene` on the first pass and reuses it on the next.
     pub fn sample(
         &self,
-        mesh: &Mesh,
-        tiling: &Tiling,
+        scene: &Scene,
         params: &SamplingParams,
         options: &SamplingOptions,
         progress: &dyn Progress,
     ) -> Result<VisibilityMatrix, BakeError> {
         match self {
-            Backend::Cpu => Ok(sampler::sample_tiled(
-                mesh, tiling, params, options, progress,
-            )?),
+            Backend::Cpu => Ok(sampler::sample_scene(scene, params, options, progress)?),
             #[cfg(feature = "gpu")]
             Backend::Gpu(gpu) => gpu
-                .sample(mesh, tiling, params, options, progress)
+                .sample(scene.mesh(), scene.tiling(), params, options, progress)
                 .map_err(|e| BakeError::Backend(format!("GPU sampling failed: {e}"))),
         }
     }
@@ -136,15 +132,14 @@ impl Backend {
     /// the probe pass is: [`Backend::open`] refuses `--conservative` on the GPU.
     pub fn sample_split(
         &self,
-        mesh: &Mesh,
-        tiling: &Tiling,
+        scene: &Scene,
         params: &SamplingParams,
         options: &SamplingOptions,
         progress: &dyn Progress,
     ) -> Result<(VisibilityMatrix, VisibilityMatrix), BakeError> {
         match self {
-            Backend::Cpu => Ok(sampler::sample_tiled_split(
-                mesh, tiling, params, options, progress,
+            Backend::Cpu => Ok(sampler::sample_scene_split(
+                scene, params, options, progress,
             )?),
             #[cfg(feature = "gpu")]
             Backend::Gpu(_) => Err(BakeError::Backend(

@@ -12,6 +12,7 @@ use crate::memory::MemoryBudget;
 use crate::ooc::{Mesh, OpenOptions, default_cache_dir};
 use crate::progress::Progress;
 use crate::runtime::Pvis;
+use crate::sampler::Scene;
 use crate::tiling::{self, Tiling, TilingOptions};
 use crate::visibility::{SamplingParams, VisibilityMatrix};
 use std::path::{Path, PathBuf};
@@ -238,10 +239,12 @@ impl Recipe {
             plan: &self.plan,
             settings: &self.settings,
         };
+        // One scene for every sphere: the CPU sampler's set-up is built once.
+        let scene = Scene::new(mesh, tiling);
         let mut sampled = Vec::with_capacity(spheres.len());
         for sphere in &spheres {
             let start = Instant::now();
-            let rows = run.sphere(mesh, tiling, backend, progress, sphere, shard)?;
+            let rows = run.sphere(&scene, backend, progress, sphere, shard)?;
             sampled.push(SampledSphere {
                 kind: sphere.kind,
                 shell: sphere.shell,

@@ -9,10 +9,8 @@
 use super::plan::{Plan, Sphere};
 use super::rows::SphereRows;
 use super::{Backend, BakeError, BakeSettings, Shard};
-use crate::ooc::Mesh;
 use crate::progress::Progress;
-use crate::sampler::{FoldCorners, SamplingOptions};
-use crate::tiling::Tiling;
+use crate::sampler::{FoldCorners, SamplingOptions, Scene};
 use crate::visibility::SamplingParams;
 use std::path::PathBuf;
 
@@ -27,8 +25,7 @@ impl Run<'_> {
     /// Samples one sphere of views, the views `shard` owns or every view.
     pub(super) fn sphere(
         &self,
-        mesh: &Mesh,
-        tiling: &Tiling,
+        scene: &Scene,
         backend: &Backend,
         progress: &dyn Progress,
         sphere: &Sphere,
@@ -54,12 +51,12 @@ impl Run<'_> {
         let checkpoints = &sphere.checkpoints;
         let (plain, fine) = if supersample.fold_min_pixels > 0 {
             let coarse_options = options(min_pixels, &checkpoints.coarse, params.level);
-            let plain = backend.sample(mesh, tiling, &params, &coarse_options, progress)?;
+            let plain = backend.sample(scene, &params, &coarse_options, progress)?;
             let fine_options = SamplingOptions {
                 finer,
                 ..options(supersample.fold_min_pixels, &checkpoints.fine, fine.level)
             };
-            let rows = backend.sample(mesh, tiling, &fine, &fine_options, progress)?;
+            let rows = backend.sample(scene, &fine, &fine_options, progress)?;
             (plain, Some(rows))
         } else {
             let mut options = SamplingOptions {
@@ -77,13 +74,10 @@ impl Run<'_> {
                 options.folds_into = Some(params.level);
             }
             if supersample.splits(params.level) {
-                let (rows, seen) = backend.sample_split(mesh, tiling, &fine, &options, progress)?;
+                let (rows, seen) = backend.sample_split(scene, &fine, &options, progress)?;
                 (rows, Some(seen))
             } else {
-                (
-                    backend.sample(mesh, tiling, &fine, &options, progress)?,
-                    None,
-                )
+                (backend.sample(scene, &fine, &options, progress)?, None)
             }
         };
         Ok(SphereRows {

@@ -30,6 +30,7 @@ mod patch_graph;
 mod patch_mesh;
 mod raster;
 mod saturate;
+mod scene;
 mod solid;
 mod supersample;
 #[cfg(test)]
@@ -45,12 +46,14 @@ pub use id_buffer::{IdBuffer, NO_PATCH};
 pub use near::{MAX_NEAR_CAMERAS, NearCameras, near_camera_count, near_cameras};
 pub use raster::{Rasterizer, SUBPIXEL_BITS, render_ids, render_ids_filtered};
 pub use saturate::saturate;
+pub use scene::Scene;
 pub use supersample::{
     FoldCorners, FoldTargets, MAX_VIEW_SUPERSAMPLE, cover_fold, fold_into, fold_into_with,
     fold_targets, fold_views, split_fold, split_fold_views, supersample_rows,
 };
 pub use tiled::{
-    SamplingError, SamplingOptions, rendered_view_count, sample_tiled, sample_tiled_split,
+    SamplingError, SamplingOptions, rendered_view_count, sample_scene, sample_scene_split,
+    sample_tiled, sample_tiled_split,
 };
 
 mod bounding;

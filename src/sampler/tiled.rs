@@ -57,13 +57,14 @@ use super::finer::{FinerViews, PassViews};
 use super::key_buffer::{KeyBuffer, Pixel, low_half, patch_slot};
 use super::marks::Marks;
 use super::near::{near_camera_count, near_cameras};
-use super::patch_box::{PatchBox, patch_boxes};
+use super::patch_box::PatchBox;
 use super::patch_graph::faces_away;
 use super::patch_mesh::{PatchMesh, Section, Storage};
 use super::raster::{
     ProjectedVertex, ScreenBatch, ScreenVertex, draw_triangle, prefetch, project, signed_area,
     sphere_needs_no_clip, view_planes,
 };
+use super::scene::Scene;
 use super::solid::Cell;
 use super::{SamplingParams, VisibilityMatrix};
 use crate::ooc::Mesh;
@@ -172,7 +173,18 @@ pub fn sample_tiled(
     options: &SamplingOptions,
     progress: &dyn Progress,
 ) -> Result<VisibilityMatrix, SamplingError> {
-    Ok(sample_rows(mesh, tiling, params, options, false, progress)?.0)
+    sample_scene(&Scene::new(mesh, tiling), params, options, progress)
+}
+
+/// [`sample_tiled`] of the scene's mesh and tiling, with the set-up `scene` shares between
+/// the passes that sample it (the passes of one bake: `scene.rs`).
+pub fn sample_scene(
+    scene: &Scene,
+    params: &SamplingParams,
+    options: &SamplingOptions,
+    progress: &dyn Progress,
+) -> Result<VisibilityMatrix, SamplingError> {
+    Ok(sample_rows(scene, params, options, false, progress)?.0)
 }
 
 /// [`sample_tiled`], also returning each view's row as it was before the probe pass added
@@ -186,7 +198,17 @@ pub fn sample_tiled_split(
     options: &SamplingOptions,
     progress: &dyn Progress,
 ) -> Result<(VisibilityMatrix, VisibilityMatrix), SamplingError> {
-    let (rows, seen) = sample_rows(mesh, tiling, params, options, true, progress)?;
+    sample_scene_split(&Scene::new(mesh, tiling), params, options, progress)
+}
+
+/// [`sample_tiled_split`] with the set-up `scene` shares (see [`sample_scene`]).
+pub fn sample_scene_split(
+    scene: &Scene,
+    params: &SamplingParams,
+    options: &SamplingOptions,
+    progress: &dyn Progress,
+) -> Result<(VisibilityMatrix, VisibilityMatrix), SamplingError> {
+    let (rows, seen) = sample_rows(scene, params, options, true, progress)?;
     Ok((rows, seen.expect("sampled with the seen rows")))
 }
 
@@ -195,13 +217,13 @@ pub fn sample_tiled_split(
 /// words (`W` words a row of the patches), so that checkpoints and the levels' parallel loop
 /// handle one matrix; it is cut in two at the end.
 fn sample_rows(
-    mesh: &Mesh,
-    tiling: &Tiling,
+    scene: &Scene,
     params: &SamplingParams,
     options: &SamplingOptions,
     split: bool,
     progress: &dyn Progress,
 ) -> Result<(VisibilityMatrix, Option<VisibilityMatrix>), SamplingError> {
+    let (mesh, tiling) = (scene.mesh(), scene.tiling());
     let patch_count = u32::try_from(tiling.patches.len()).expect("more than 2^32 patches");
     assert!(
         params.radius > 0.0 && params.radius.is_finite(),
@@ -256,19 +278,19 @@ fn sample_rows(
         options.memory,
         other_needs,
     );
-    let patch_mesh = PatchMesh::new(mesh, tiling, storage).map_err(SamplingError::TempFile)?;
+    let setup = scene.setup(storage).map_err(SamplingError::TempFile)?;
     let context = ViewContext {
-        boxes: patch_boxes(&patch_mesh, tiling),
-        mesh: patch_mesh,
+        mesh: &setup.mesh,
+        boxes: &setup.boxes,
         tiling,
         params,
         options,
         marks,
-        back_winding: back_winding(mesh),
-        patch_ball: patch_ball(tiling),
+        back_winding: setup.back_winding,
+        patch_ball: setup.patch_ball,
         probe: options
             .probe
-            .map(|radius| probe::Probe::new(radius, params, &pass, options, mesh, tiling)),
+            .map(|radius| probe::Probe::new(radius, params, &pass, options, scene.solids())),
     };
     let words_per_row = matrix.words_per_row();
     for level in first_level..=params.level {
@@ -393,19 +415,19 @@ const CANDIDATE_BATCH: usize = 256;
 
 /// Everything every view shares.
 struct ViewContext<'a> {
-    mesh: PatchMesh,
+    mesh: &'a PatchMesh,
     tiling: &'a Tiling,
     params: &'a SamplingParams,
     options: &'a SamplingOptions,
     /// The dilation and always-visible marks.
     marks: Marks,
     /// Every patch's oriented bounding box, the tight bound of the occlusion test.
-    boxes: Vec<PatchBox>,
-    /// [`back_winding`] of the mesh.
+    boxes: &'a [PatchBox],
+    /// The screen winding of back faces (`scene.rs`).
     back_winding: i64,
     /// The probe pass, if any.
-    probe: Option<probe::Probe>,
-    /// A ball holding every patch's bounding ball ([`patch_ball`]).
+    probe: Option<probe::Probe<'a>>,
+    /// A ball holding every patch's bounding ball (`scene.rs`).
     patch_ball: ([f32; 3], f32),
 }
 
@@ -484,63 +506,9 @@ enum Pass {
     Tested,
 }
 
-/// The screen winding of the triangles that face away from the eye on a consistently wound
-/// closed mesh: with outward normals `(b − a) × (c − a)` (positive signed volume) a front
-/// face winds counter-clockwise seen from the eye, which the y-down pixel frame turns into a
-/// negative signed area, so back faces are positive. Only steers which triangles are drawn
-/// first; any answer is correct, a wrong one only slower.
-fn back_winding(mesh: &Mesh) -> i64 {
-    let volume: f64 = (0..mesh.triangle_count())
-        .into_par_iter()
-        .map(|t| {
-            let p = crate::tiling::corners(mesh, t);
-            let (n, a) = (crate::tiling::cross_normal(p), p[0].map(f64::from));
-            n[0] * a[0] + n[1] * a[1] + n[2] * a[2]
-        })
-        .sum();
-    if volume < 0.0 { -1 } else { 1 }
-}
-
 /// Patches of at most this many triangles skip the test of their oriented box, whose eight
 /// projections cost more than the test of their vertices' extent that follows it.
 const FEW_TRIANGLES: u32 = 4;
-
-/// A ball (centre, radius) holding every patch's bounding ball: a camera for which it needs
-/// no clipping ([`sphere_needs_no_clip`], every sampling view's camera) needs none for any
-/// patch, which is then tested once per camera instead of once per patch drawn.
-fn patch_ball(tiling: &Tiling) -> ([f32; 3], f32) {
-    let Some(first) = tiling.patches.first() else {
-        return ([0.0; 3], 0.0);
-    };
-    let (mut lo, mut hi) = (first.center, first.center);
-    for p in &tiling.patches {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p.center[k]);
-            hi[k] = hi[k].max(p.center[k]);
-        }
-    }
-    let center: [f32; 3] = std::array::from_fn(|k| lo[k] + (hi[k] - lo[k]) * 0.5);
-    let radius = tiling
-        .patches
-        .iter()
-        .map(|p| {
-            let d: f64 = (0..3)
-                .map(|k| (f64::from(p.center[k]) - f64::from(center[k])).powi(2))
-                .sum();
-            d.sqrt() + f64::from(p.radius)
-        })
-        .fold(0.0, f64::max);
-    // Rounded up to the next `f32`: the ball still holds every patch's.
-    let r = radius as f32;
-    (
-        center,
-        if f64::from(r) < radius {
-            r.next_up()
-        } else {
-            r
-        },
-    )
-}
 
 /// Whether contents within `bounds` provably change no pixel of `keys` (by its tiles).
 fn hidden<P: Pixel>(bounds: SphereBounds, keys: &KeyBuffer<P>) -> bool {

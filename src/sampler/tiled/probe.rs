@@ -41,11 +41,12 @@ use crate::sampler::key_buffer::DepthBuffer;
 use crate::sampler::raster::{
     ScreenVertex, draw_triangle, project, sphere_needs_no_clip, view_planes,
 };
+use crate::sampler::scene::SceneSolids;
 use crate::sampler::solid::{Cell, Openings, Side, Solids};
 use crate::visibility::SamplingParams;
 
 /// How the probe pass runs.
-pub(super) struct Probe {
+pub(super) struct Probe<'a> {
     /// Pixels the occluders are shrunk by.
     radius: usize,
     /// `edge` of the module documentation, in radians: the cell's angle over [`CELL_PER_EDGE`].
@@ -57,9 +58,9 @@ pub(super) struct Probe {
     /// The sampling centre.
     center: [f64; 3],
     /// The mesh's solids, for the facing test.
-    solids: Solids,
+    solids: &'a Solids,
     /// Per patch: [`crate::sampler::solid::Solids::patch_components`].
-    patch_component: Vec<u32>,
+    patch_component: &'a [u32],
 }
 
 /// One worker's probe buffers.
@@ -88,19 +89,16 @@ impl ProbeScratch {
 /// leaves a margin.
 const CELL_PER_EDGE: f64 = 0.6;
 
-impl Probe {
+impl<'a> Probe<'a> {
     /// The probe of a pass sampling `params` (its views laid out as `pass`) with `options` (its
-    /// shell and band), occluders shrunk by `radius` pixels.
+    /// shell and band), occluders shrunk by `radius` pixels, over the mesh's `solids`.
     pub(super) fn new(
         radius: u32,
         params: &SamplingParams,
         pass: &PassViews,
         options: &SamplingOptions,
-        mesh: &crate::ooc::Mesh,
-        tiling: &crate::tiling::Tiling,
-    ) -> Probe {
-        let solids = Solids::new(mesh);
-        let patch_component = solids.patch_components(tiling);
+        solids: &'a SceneSolids,
+    ) -> Probe<'a> {
         let distance = f64::from(options.shell.unwrap_or_else(|| params.distance()));
         Probe {
             radius: radius as usize,
@@ -110,8 +108,8 @@ impl Probe {
                 .band
                 .map(|[near, far]| [f64::from(near).min(distance), f64::from(far).max(distance)]),
             center: params.center.map(f64::from),
-            solids,
-            patch_component,
+            solids: &solids.solids,
+            patch_component: &solids.patch_component,
         }
     }
 

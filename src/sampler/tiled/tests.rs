@@ -198,6 +198,47 @@ fn a_tiny_memory_budget_maps_the_mesh_and_changes_nothing() {
 }
 
 #[test]
+fn passes_sharing_a_scene_sample_as_passes_of_their_own() {
+    // The passes of a bake in one scene (its set-up built by the first, in a mapped file under
+    // a tiny budget, and reused by the next, which would have kept it on the heap): each
+    // pass's rows equal a pass sampled alone, on the heap.
+    let (mesh, tiling, p) = small_bunny(1);
+    let probe = SamplingOptions {
+        probe: Some(1),
+        ..SamplingOptions::default()
+    };
+    let passes = [
+        SamplingOptions {
+            memory: Some(crate::memory::MemoryBudget::new(1).split().sampling),
+            ..SamplingOptions::default()
+        },
+        probe.clone(),
+        near(&p, 1.1, probe.clone()),
+        near(
+            &p,
+            2.0,
+            SamplingOptions {
+                band: Some([p.radius * 1.9, p.radius * 3.0]),
+                ..probe
+            },
+        ),
+    ];
+    let scene = Scene::new(&mesh, &tiling);
+    for options in &passes {
+        let shared = sample_scene(&scene, &p, options, &NoProgress).unwrap();
+        let alone = SamplingOptions {
+            memory: None,
+            ..options.clone()
+        };
+        assert_same(&shared, &tiled(&mesh, &tiling, &p, &alone));
+        let (rows, seen) = sample_scene_split(&scene, &p, options, &NoProgress).unwrap();
+        let (rows_alone, seen_alone) = tiled_split(&mesh, &tiling, &p, &alone);
+        assert_same(&rows, &rows_alone);
+        assert_same(&seen, &seen_alone);
+    }
+}
+
+#[test]
 fn tiled_equals_brute_force_on_generated_meshes() {
     let boxes = boxes_in_a_box();
     // Boxes: one patch per face pair, so a patch is a slab of a box; and a greedy tiling.
