@@ -201,8 +201,8 @@ pub struct BakeArgs {
     /// of up to 2,236,962 triangles (whose solids, about 60 bytes a triangle, fit any default
     /// --memory), and leaves it off past that, where --memory is too small, and on the GPU
     /// backend, saying so. `--probe PX` asks for it on any mesh --memory holds, for every
-    /// camera between a sphere of views and the next (with shells: 1.8–3.4 points less
-    /// culling on the bunny); `--probe off` turns it off.
+    /// camera between a sphere of views and the next (0.1–1.7 points less culling on the
+    /// bunny); `--probe off` turns it off.
     /// [default: 1, within those bounds]
     #[arg(long, value_name = "PX|off", value_parser = parse_probe, conflicts_with = "conservative",
           hide_short_help = true, help_heading = RESEARCH)]
