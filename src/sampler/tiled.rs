@@ -47,7 +47,9 @@
 //! `resolution² × 8`-byte buffer per thread, the result (one bit per view and patch), and
 //! the regrouped mesh (about 12 bytes per triangle) — on the heap, or in
 //! a mapped temporary file when it would take more than a quarter of
-//! [`SamplingOptions::memory`], so that the heap stays independent of the mesh size.
+//! [`SamplingOptions::memory`], so that the heap stays independent of the mesh size. The
+//! regrouped mesh, the boxes, the winding and the probe's solids belong to the [`Scene`]
+//! (`scene.rs`): the passes of one bake build them once.
 //! **Invariant**: the result is the same for any number of threads, and with or without a
 //! resumed checkpoint; a row rendered with `views` equals the row of a run without.
 
