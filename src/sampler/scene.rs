@@ -118,8 +118,8 @@ fn back_winding(mesh: &Mesh) -> i64 {
 }
 
 /// A ball (centre, radius) holding every patch's bounding ball: a camera for which it needs
-/// no clipping ([`sphere_needs_no_clip`], every sampling view's camera) needs none for any
-/// patch, which is then tested once per camera instead of once per patch drawn.
+/// no clipping ([`super::raster::sphere_needs_no_clip`], every sampling view's camera) needs
+/// none for any patch, which is then tested once per camera instead of once per patch drawn.
 fn patch_ball(tiling: &Tiling) -> ([f32; 3], f32) {
     let Some(first) = tiling.patches.first() else {
         return ([0.0; 3], 0.0);
