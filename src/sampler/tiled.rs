@@ -4,11 +4,13 @@
 //! Technique: the sphere's views come level by level (6, then 12, 48, 192 … new views). A
 //! view of level `l + 1` splits an edge between two views of coarser levels
 //! (`sphere::parents`), which are finished and lie next to it, so the patches they see are
-//! nearly the patches it sees. Each view draws those patches first (plus the always-visible
-//! ones; every patch in level 0) — but not those whose normal cone faces wholly away, nor
-//! their triangles that wind away from the eye (back faces, which on a closed mesh are
-//! hidden and make poor occluders) — builds the farthest
-//! depth of every 8×8-pixel tile from them (one level of a hierarchical Z-buffer; Greene,
+//! nearly the patches it sees. Each view draws those patches first — what the same camera of
+//! each of them showed before the probe pass (a near view's cube faces one by one; the probe
+//! adds patches that are mostly hidden, cheaper for the tiles to reject later), plus the
+//! always-visible ones, and every patch in level 0 — but not those whose normal cone faces
+//! wholly away, nor their triangles that wind away from the eye (back faces, which on a
+//! closed mesh are hidden and make poor occluders) — builds the farthest depth of every
+//! 8×8-pixel tile from them (one level of a hierarchical Z-buffer; Greene,
 //! Kass & Miller 1993), and then draws each put-off back face and each remaining patch only
 //! if the tiles cannot prove it hidden: a patch by its bounding sphere's screen rectangle and
 //! nearest depth, then by its oriented bounding box's (`patch_box.rs`), then each cluster of
@@ -44,7 +46,8 @@
 //! of the faces of the level below, each seeded by the face's three corners, `finer.rs`).
 //! Cost per view: a sphere test per patch, the triangles of the drawn patches (a tile test
 //! for those drawn after the tiles), one pass over the pixels. Memory: one
-//! `resolution² × 8`-byte buffer per thread, the result (one bit per view and patch), and
+//! `resolution² × 8`-byte buffer per thread, the result (one bit per view and patch), what
+//! each camera showed (one bit per camera, view and patch), and
 //! the regrouped mesh (about 12 bytes per triangle) — on the heap, or in
 //! a mapped temporary file when it would take more than a quarter of
 //! [`SamplingOptions::memory`], so that the heap stays independent of the mesh size. The
@@ -232,10 +235,8 @@ fn sample_rows(
         "sampling radius must be positive and finite, got {}",
         params.radius
     );
-    if let Some(distance) = options.shell {
-        // Checks the shell's distance (caller contract).
-        near_camera_count(params, distance);
-    }
+    // Checks the shell's distance (caller contract).
+    let cameras = options.shell.map_or(1, |d| near_camera_count(params, d));
     let views = view_count(params.level);
     let pass = PassViews::pass(params.level, options.finer);
     // Words of one row of the patches: the rows' prefix of the matrix's rows.
@@ -267,11 +268,15 @@ fn sample_rows(
     if first_level > 0 {
         progress.inc(u64::from(rendered_below(view_count(first_level - 1))));
     }
+    // What each camera of each view showed before its probe: the patches drawn first in the
+    // same camera of the views it seeds. Views loaded from a checkpoint have none; their
+    // rows seed instead (the drawing order never changes a row, only its cost).
+    let shown_words = cameras * words;
     let other_needs = crate::memory::FixedNeeds {
         triangles: mesh.triangle_count(),
         resolution: params.resolution,
         workers: rayon::current_num_threads(),
-        row_bytes: (matrix.words().len() * 8) as u64,
+        row_bytes: ((matrix.words().len() + views as usize * shown_words) * 8) as u64,
         probe: options.probe.is_some(),
     }
     .sampling();
@@ -295,31 +300,46 @@ fn sample_rows(
             .map(|radius| probe::Probe::new(radius, params, &pass, options, scene.solids())),
     };
     let words_per_row = matrix.words_per_row();
+    let mut shown = vec![0u64; views as usize * shown_words];
+    let shown_from = if first_level == 0 {
+        0
+    } else {
+        view_count(first_level - 1)
+    };
     for level in first_level..=params.level {
         let first_view = if level == 0 { 0 } else { view_count(level - 1) };
         let (done, rest) = matrix
             .words_mut()
             .split_at_mut(first_view as usize * words_per_row);
-        let done: &[u64] = done;
+        let (shown_done, shown_rest) = shown.split_at_mut(first_view as usize * shown_words);
+        let (done, shown_done): (&[u64], &[u64]) = (done, shown_done);
         let new_rows = (view_count(level) - first_view) as usize * words_per_row;
         rest[..new_rows]
             .par_chunks_mut(words_per_row)
+            .zip(shown_rest.par_chunks_mut(shown_words))
             .enumerate()
             .for_each_init(
                 || WorkerScratch::new(params.resolution, patch_count, options.probe.is_some()),
-                |scratch, (i, row)| {
+                |scratch, (i, (row, shown_row))| {
                     let view = first_view + i as u32;
                     if !pass.exists(view) || rendered.as_ref().is_some_and(|r| !r[view as usize]) {
                         return;
                     }
                     let seeds = pass.seeds(view);
                     let mut rows: [&[u64]; 3] = [&[]; 3];
-                    for (r, &s) in rows.iter_mut().zip(seeds.views()) {
+                    let mut first: [Option<&[u64]>; 3] = [None; 3];
+                    for ((r, f), &s) in rows.iter_mut().zip(&mut first).zip(seeds.views()) {
                         *r = &done[s as usize * words_per_row..][..words];
+                        *f = (s >= shown_from)
+                            .then(|| &shown_done[s as usize * shown_words..][..shown_words]);
                     }
                     let n = seeds.views().len();
-                    let hint = (n > 0).then(|| &rows[..n]);
-                    context.render_view(view, pass.direction(view), hint, scratch, row);
+                    let seeds = (n > 0).then(|| SeedRows {
+                        rows: &rows[..n],
+                        shown: &first[..n],
+                    });
+                    let direction = pass.direction(view);
+                    context.render_view(view, direction, seeds, scratch, row, shown_row);
                     progress.inc(1);
                 },
             );
@@ -327,6 +347,7 @@ fn sample_rows(
             checkpoint::save(path, hash, level + 1, view_count(level), &matrix)?;
         }
     }
+    drop(shown);
     progress.finish();
     if !split {
         return Ok((matrix, None));
@@ -499,6 +520,46 @@ impl WorkerScratch {
     }
 }
 
+/// A view's seeds (`PassViews::seeds`) as its render takes them.
+struct SeedRows<'r> {
+    /// Their rows: what the fold holds already (`SamplingOptions::folds_into`).
+    rows: &'r [&'r [u64]],
+    /// Per seed, what each of its cameras showed before the probe (one row a camera), or
+    /// `None` where that is not known (a view loaded from a checkpoint).
+    shown: &'r [Option<&'r [u64]>],
+}
+
+/// The rows whose OR a camera draws first (see [`SeedRows::first`]).
+struct FirstRows<'r> {
+    rows: [&'r [u64]; 3],
+    count: usize,
+}
+
+impl<'r> SeedRows<'r> {
+    /// What camera `c` of a view draws first: what camera `c` of each seed showed, or the
+    /// seed's row where that is not known. A probe adds patches that are mostly hidden, which
+    /// cost less in the tested pass, where the tiles reject them, than drawn first.
+    fn first(&self, c: usize, words: usize) -> FirstRows<'r> {
+        let mut rows: [&[u64]; 3] = [&[]; 3];
+        for ((r, &row), shown) in rows.iter_mut().zip(self.rows).zip(self.shown) {
+            *r = shown.map_or(row, |s| &s[c * words..][..words]);
+        }
+        FirstRows {
+            rows,
+            count: self.rows.len(),
+        }
+    }
+}
+
+/// How a camera chooses the patches it draws first, and those its probe leaves out.
+#[derive(Clone, Copy)]
+struct Drawn<'r> {
+    /// Rows whose OR is drawn first; `None`: every patch (the first level).
+    first: Option<&'r [&'r [u64]]>,
+    /// Rows whose patches the probe leaves out (`SamplingOptions::folds_into`).
+    known: Option<&'r [&'r [u64]]>,
+}
+
 /// The two drawing passes of a view (see `ViewContext::render_view`).
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Pass {
@@ -599,39 +660,62 @@ impl Placer<'_, '_> {
 }
 
 impl ViewContext<'_> {
-    /// Renders view `index` (unit direction `direction`) into `row`, `hint` giving its seeds'
+    /// Renders view `index` (unit direction `direction`) into `row`, `seeds` giving its seeds'
     /// rows (`None` in the first level): the sampling view's camera, or each camera of a near
-    /// view (`near.rs`), whose rows are ORed. A `row` of twice the words of the patches gets
-    /// the seen rows of [`sample_tiled_split`] in its second half.
+    /// view (`near.rs`), whose rows are ORed. Writes into `shown` what each camera showed
+    /// before its probe. A `row` of twice the words of the patches gets the seen rows of
+    /// [`sample_tiled_split`] in its second half.
     fn render_view(
         &self,
         index: u32,
         direction: [f32; 3],
-        hint: Option<&[&[u64]]>,
+        seeds: Option<SeedRows>,
         scratch: &mut WorkerScratch,
         row: &mut [u64],
+        shown: &mut [u64],
     ) {
-        let (row, seen) = row.split_at_mut(scratch.camera_row.len());
+        let words = scratch.camera_row.len();
+        let (row, seen) = row.split_at_mut(words);
         seen.fill(0);
         let d = normalize(widen(direction));
         // What the probe may leave out (`SamplingOptions::folds_into`): the views of the level
         // just finer than the stored one have their fold targets as seeds.
         let known = match self.options.folds_into {
-            Some(stored) if self.params.level == stored + 1 && index >= view_count(stored) => hint,
+            Some(stored) if self.params.level == stored + 1 && index >= view_count(stored) => {
+                seeds.as_ref().map(|s| s.rows)
+            }
             _ => None,
         };
         let Some(distance) = self.options.shell else {
             let camera = Camera::sampling(self.params, direction);
             let cell = self.probe.as_ref().map(|p| p.cell(d, camera.eye()));
-            self.render_camera(&camera, cell.as_ref(), hint, known, scratch, row, seen);
+            let first = seeds.map(|s| s.first(0, words));
+            let drawn = Drawn {
+                first: first.as_ref().map(|f| &f.rows[..f.count]),
+                known,
+            };
+            self.render_camera(&camera, cell.as_ref(), drawn, scratch, row, seen, shown);
             return;
         };
         let cameras = near_cameras(self.params, direction, distance);
         let cell = self.probe.as_ref().map(|p| p.cell(d, cameras[0].eye()));
         let mut part = std::mem::take(&mut scratch.camera_row);
         row.fill(0);
-        for camera in cameras.iter() {
-            self.render_camera(camera, cell.as_ref(), hint, known, scratch, &mut part, seen);
+        for (c, (camera, shown)) in cameras.iter().zip(shown.chunks_mut(words)).enumerate() {
+            let first = seeds.as_ref().map(|s| s.first(c, words));
+            let drawn = Drawn {
+                first: first.as_ref().map(|f| &f.rows[..f.count]),
+                known,
+            };
+            self.render_camera(
+                camera,
+                cell.as_ref(),
+                drawn,
+                scratch,
+                &mut part,
+                seen,
+                shown,
+            );
             for (r, p) in row.iter_mut().zip(&part) {
                 *r |= p;
             }
@@ -640,24 +724,24 @@ impl ViewContext<'_> {
     }
 
     /// Renders `camera`'s image into `row` (and the probe pass for the cameras of `cell`, when
-    /// there is one, leaving out the patches `known` holds), and ORs what the image showed,
-    /// before the probe, into `seen` (empty when not wanted). The patches its hints show
-    /// (every patch in the first level) are drawn first, except their triangles that face
-    /// away from the eye, which are put off; then the occlusion tiles are built, and the
-    /// put-off triangles and the other patches are drawn unless the tiles prove them hidden
-    /// (patches by their bounding sphere and box, then each cluster by its sphere, then each
-    /// triangle by its bounding box). The keys do not depend on drawing order, so the row
-    /// equals a brute-force render's.
+    /// there is one, leaving out the patches `drawn.known` holds), ORs what the image showed,
+    /// before the probe, into `seen` (empty when not wanted) and copies it into `shown`. The
+    /// patches `drawn.first` shows (every patch in the first level) are drawn first, except
+    /// their triangles that face away from the eye, which are put off; then the occlusion
+    /// tiles are built, and the put-off triangles and the other patches are drawn unless the
+    /// tiles prove them hidden (patches by their bounding sphere and box, then each cluster by
+    /// its sphere, then each triangle by its bounding box). The keys do not depend on drawing
+    /// order, so the row equals a brute-force render's.
     #[allow(clippy::too_many_arguments)]
     fn render_camera(
         &self,
         camera: &Camera,
         cell: Option<&Cell>,
-        hint: Option<&[&[u64]]>,
-        known: Option<&[&[u64]]>,
+        drawn: Drawn,
         scratch: &mut WorkerScratch,
         row: &mut [u64],
         seen: &mut [u64],
+        shown: &mut [u64],
     ) {
         let patch_count = self.mesh.patch_count();
         let near = self.options.shell.is_some();
@@ -670,8 +754,10 @@ impl ViewContext<'_> {
         // is left to the tested pass. Always-visible patches are always drawn first.
         let eye = camera.eye();
         for (w, d) in view.drawn.iter_mut().enumerate() {
-            let hinted =
-                hint.map_or(u64::MAX, |rows| rows.iter().fold(0, |a, r| a | r[w])) & valid(w);
+            let hinted = drawn
+                .first
+                .map_or(u64::MAX, |rows| rows.iter().fold(0, |a, r| a | r[w]))
+                & valid(w);
             let mut away = 0u64;
             for k in Patches::of_bits(&[hinted]) {
                 let k = k as usize;
@@ -722,8 +808,9 @@ impl ViewContext<'_> {
         for (s, &r) in seen.iter_mut().zip(row.iter()) {
             *s |= r;
         }
+        shown.copy_from_slice(row);
         if let Some(cell) = cell {
-            self.probe_row(camera, cell, known, scratch, row);
+            self.probe_row(camera, cell, drawn.known, scratch, row);
         }
     }
 

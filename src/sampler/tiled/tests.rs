@@ -680,40 +680,45 @@ fn a_near_checkpoint_resumes_and_refuses_another_shell() {
     let mesh = noisy_sphere(20, 40, 0.3, 4);
     let tiling = crate::tiling::tile(&mesh, 40).unwrap();
     let p = params_for(&mesh, 2, 32);
-    let options = near(
-        &p,
-        1.1,
-        SamplingOptions {
-            checkpoint: Some(path.clone()),
-            ..SamplingOptions::default()
-        },
-    );
-    let full = tiled(&mesh, &tiling, &p, &options);
-    // Interrupted after level 1, then resumed: the rows of an uninterrupted run.
-    let hash = checkpoint::input_hash(&mesh, &tiling, &p, &options, false);
-    checkpoint::save(&path, hash, 2, crate::sphere::view_count(1), &full).unwrap();
-    let resume = SamplingOptions {
-        resume: true,
-        ..options.clone()
-    };
-    assert_same(&tiled(&mesh, &tiling, &p, &resume), &full);
-    // Another shell, a band, or the sampling sphere: each another input.
-    for other in [
-        SamplingOptions {
-            shell: Some(p.radius * 1.2),
-            ..resume.clone()
-        },
-        SamplingOptions {
-            band: Some([p.radius, p.radius * 1.2]),
-            ..resume.clone()
-        },
-        SamplingOptions {
-            shell: None,
-            ..resume.clone()
-        },
-    ] {
-        let err = sample_tiled(&mesh, &tiling, &p, &other, &NoProgress).unwrap_err();
-        assert!(err.to_string().contains("stale checkpoint"), "{err}");
+    // With the probe, a resumed run seeds its cameras by the loaded rows, probe included,
+    // where a whole run seeds each camera by what the same camera of its seeds showed.
+    for probe in [None, Some(1)] {
+        let options = near(
+            &p,
+            1.1,
+            SamplingOptions {
+                checkpoint: Some(path.clone()),
+                probe,
+                ..SamplingOptions::default()
+            },
+        );
+        let full = tiled(&mesh, &tiling, &p, &options);
+        // Interrupted after level 1, then resumed: the rows of an uninterrupted run.
+        let hash = checkpoint::input_hash(&mesh, &tiling, &p, &options, false);
+        checkpoint::save(&path, hash, 2, crate::sphere::view_count(1), &full).unwrap();
+        let resume = SamplingOptions {
+            resume: true,
+            ..options.clone()
+        };
+        assert_same(&tiled(&mesh, &tiling, &p, &resume), &full);
+        // Another shell, a band, or the sampling sphere: each another input.
+        for other in [
+            SamplingOptions {
+                shell: Some(p.radius * 1.2),
+                ..resume.clone()
+            },
+            SamplingOptions {
+                band: Some([p.radius, p.radius * 1.2]),
+                ..resume.clone()
+            },
+            SamplingOptions {
+                shell: None,
+                ..resume.clone()
+            },
+        ] {
+            let err = sample_tiled(&mesh, &tiling, &p, &other, &NoProgress).unwrap_err();
+            assert!(err.to_string().contains("stale checkpoint"), "{err}");
+        }
     }
 }
 
