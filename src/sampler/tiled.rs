@@ -47,9 +47,9 @@
 //! Cost per view: a sphere test per patch, the triangles of the drawn patches (a tile test
 //! for those drawn after the tiles), one pass over the pixels. Memory: one
 //! `resolution² × 8`-byte buffer per thread, the result (one bit per view and patch), what
-//! each camera showed (one bit per camera, view and patch), and
-//! the regrouped mesh (about 12 bytes per triangle) — on the heap, or in
-//! a mapped temporary file when it would take more than a quarter of
+//! each camera of a view that seeds others showed (one bit per camera, view and patch: a
+//! quarter of the views), and the regrouped mesh (about 12 bytes per triangle) — on the
+//! heap, or in a mapped temporary file when it would take more than a quarter of
 //! [`SamplingOptions::memory`], so that the heap stays independent of the mesh size. The
 //! regrouped mesh, the boxes, the winding and the probe's solids belong to the [`Scene`]
 //! (`scene.rs`): the passes of one bake build them once.
@@ -268,15 +268,21 @@ fn sample_rows(
     if first_level > 0 {
         progress.inc(u64::from(rendered_below(view_count(first_level - 1))));
     }
-    // What each camera of each view showed before its probe: the patches drawn first in the
-    // same camera of the views it seeds. Views loaded from a checkpoint have none; their
-    // rows seed instead (the drawing order never changes a row, only its cost).
+    // What each camera of each view that seeds others (all but the finest level's) showed
+    // before its probe: the patches drawn first in the same camera of the views it seeds.
+    // Views loaded from a checkpoint have none; their rows seed instead (the drawing order
+    // never changes a row, only its cost).
     let shown_words = cameras * words;
+    let seed_views = if params.level == 0 {
+        0
+    } else {
+        view_count(params.level - 1)
+    };
     let other_needs = crate::memory::FixedNeeds {
         triangles: mesh.triangle_count(),
         resolution: params.resolution,
         workers: rayon::current_num_threads(),
-        row_bytes: ((matrix.words().len() + views as usize * shown_words) * 8) as u64,
+        row_bytes: ((matrix.words().len() + seed_views as usize * shown_words) * 8) as u64,
         probe: options.probe.is_some(),
     }
     .sampling();
@@ -300,7 +306,7 @@ fn sample_rows(
             .map(|radius| probe::Probe::new(radius, params, &pass, options, scene.solids())),
     };
     let words_per_row = matrix.words_per_row();
-    let mut shown = vec![0u64; views as usize * shown_words];
+    let mut shown = vec![0u64; seed_views as usize * shown_words];
     let shown_from = if first_level == 0 {
         0
     } else {
@@ -311,16 +317,27 @@ fn sample_rows(
         let (done, rest) = matrix
             .words_mut()
             .split_at_mut(first_view as usize * words_per_row);
-        let (shown_done, shown_rest) = shown.split_at_mut(first_view as usize * shown_words);
+        let first_kept = (first_view as usize * shown_words).min(shown.len());
+        let (shown_done, shown_rest) = shown.split_at_mut(first_kept);
         let (done, shown_done): (&[u64], &[u64]) = (done, shown_done);
-        let new_rows = (view_count(level) - first_view) as usize * words_per_row;
-        rest[..new_rows]
+        let new_views = (view_count(level) - first_view) as usize;
+        // The finest level seeds no view: its cameras' rows go to a worker's spare one.
+        let kept = if level < params.level { new_views } else { 0 };
+        let shown_rows = shown_rest[..kept * shown_words]
+            .par_chunks_mut(shown_words)
+            .map(Some)
+            .chain((kept..new_views).into_par_iter().map(|_| None));
+        rest[..new_views * words_per_row]
             .par_chunks_mut(words_per_row)
-            .zip(shown_rest.par_chunks_mut(shown_words))
+            .zip(shown_rows)
             .enumerate()
             .for_each_init(
-                || WorkerScratch::new(params.resolution, patch_count, options.probe.is_some()),
-                |scratch, (i, (row, shown_row))| {
+                || {
+                    let probe = options.probe.is_some();
+                    let scratch = WorkerScratch::new(params.resolution, patch_count, probe);
+                    (scratch, vec![0u64; shown_words])
+                },
+                |(scratch, spare), (i, (row, shown_row))| {
                     let view = first_view + i as u32;
                     if !pass.exists(view) || rendered.as_ref().is_some_and(|r| !r[view as usize]) {
                         return;
@@ -339,6 +356,7 @@ fn sample_rows(
                         shown: &first[..n],
                     });
                     let direction = pass.direction(view);
+                    let shown_row = shown_row.unwrap_or(spare);
                     context.render_view(view, direction, seeds, scratch, row, shown_row);
                     progress.inc(1);
                 },
