@@ -305,62 +305,25 @@ fn sample_rows(
             .probe
             .map(|radius| probe::Probe::new(radius, params, &pass, options, scene.solids())),
     };
-    let words_per_row = matrix.words_per_row();
-    let mut shown = vec![0u64; seed_views as usize * shown_words];
-    let shown_from = if first_level == 0 {
-        0
-    } else {
-        view_count(first_level - 1)
+    let mut shown = ShownRows {
+        rows: vec![0u64; seed_views as usize * shown_words],
+        words: shown_words,
+        from: if first_level == 0 {
+            0
+        } else {
+            view_count(first_level - 1)
+        },
     };
     for level in first_level..=params.level {
-        let first_view = if level == 0 { 0 } else { view_count(level - 1) };
-        let (done, rest) = matrix
-            .words_mut()
-            .split_at_mut(first_view as usize * words_per_row);
-        let first_kept = (first_view as usize * shown_words).min(shown.len());
-        let (shown_done, shown_rest) = shown.split_at_mut(first_kept);
-        let (done, shown_done): (&[u64], &[u64]) = (done, shown_done);
-        let new_views = (view_count(level) - first_view) as usize;
-        // The finest level seeds no view: its cameras' rows go to a worker's spare one.
-        let kept = if level < params.level { new_views } else { 0 };
-        let shown_rows = shown_rest[..kept * shown_words]
-            .par_chunks_mut(shown_words)
-            .map(Some)
-            .chain((kept..new_views).into_par_iter().map(|_| None));
-        rest[..new_views * words_per_row]
-            .par_chunks_mut(words_per_row)
-            .zip(shown_rows)
-            .enumerate()
-            .for_each_init(
-                || {
-                    let probe = options.probe.is_some();
-                    let scratch = WorkerScratch::new(params.resolution, patch_count, probe);
-                    (scratch, vec![0u64; shown_words])
-                },
-                |(scratch, spare), (i, (row, shown_row))| {
-                    let view = first_view + i as u32;
-                    if !pass.exists(view) || rendered.as_ref().is_some_and(|r| !r[view as usize]) {
-                        return;
-                    }
-                    let seeds = pass.seeds(view);
-                    let mut rows: [&[u64]; 3] = [&[]; 3];
-                    let mut first: [Option<&[u64]>; 3] = [None; 3];
-                    for ((r, f), &s) in rows.iter_mut().zip(&mut first).zip(seeds.views()) {
-                        *r = &done[s as usize * words_per_row..][..words];
-                        *f = (s >= shown_from)
-                            .then(|| &shown_done[s as usize * shown_words..][..shown_words]);
-                    }
-                    let n = seeds.views().len();
-                    let seeds = (n > 0).then(|| SeedRows {
-                        rows: &rows[..n],
-                        shown: &first[..n],
-                    });
-                    let direction = pass.direction(view);
-                    let shown_row = shown_row.unwrap_or(spare);
-                    context.render_view(view, direction, seeds, scratch, row, shown_row);
-                    progress.inc(1);
-                },
-            );
+        render_level(
+            &context,
+            &pass,
+            rendered.as_deref(),
+            level,
+            &mut matrix,
+            &mut shown,
+            progress,
+        );
         if let (Some(path), Some(hash)) = (&options.checkpoint, hash) {
             checkpoint::save(path, hash, level + 1, view_count(level), &matrix)?;
         }
@@ -380,6 +343,85 @@ fn sample_rows(
         seen.row_mut(v).copy_from_slice(s);
     }
     Ok((rows, Some(seen)))
+}
+
+/// What each camera of the views that seed others showed before its probe (see
+/// [`SeedRows`]), one row a camera, `words` words a view.
+struct ShownRows {
+    rows: Vec<u64>,
+    words: usize,
+    /// The views below this one have none: their rows came from a checkpoint.
+    from: u32,
+}
+
+/// Renders the views of `level` of `pass` (those `rendered` wants, all if `None`) into their
+/// rows of `matrix`, whose coarser levels are done, and keeps what their cameras showed in
+/// `shown` when they seed the next level.
+fn render_level(
+    context: &ViewContext,
+    pass: &PassViews,
+    rendered: Option<&[bool]>,
+    level: u32,
+    matrix: &mut VisibilityMatrix,
+    shown: &mut ShownRows,
+    progress: &dyn Progress,
+) {
+    let patch_count = context.mesh.patch_count() as u32;
+    let words = (patch_count as usize).div_ceil(64);
+    let words_per_row = matrix.words_per_row();
+    let (resolution, probe) = (context.params.resolution, context.options.probe.is_some());
+    let first_view = if level == 0 { 0 } else { view_count(level - 1) };
+    let (done, rest) = matrix
+        .words_mut()
+        .split_at_mut(first_view as usize * words_per_row);
+    let (shown_words, shown_from) = (shown.words, shown.from);
+    let first_kept = (first_view as usize * shown_words).min(shown.rows.len());
+    let (shown_done, shown_rest) = shown.rows.split_at_mut(first_kept);
+    let (done, shown_done): (&[u64], &[u64]) = (done, shown_done);
+    let new_views = (view_count(level) - first_view) as usize;
+    // The finest level seeds no view: its cameras' rows go to a worker's spare one.
+    let kept = if level < context.params.level {
+        new_views
+    } else {
+        0
+    };
+    let shown_rows = shown_rest[..kept * shown_words]
+        .par_chunks_mut(shown_words)
+        .map(Some)
+        .chain((kept..new_views).into_par_iter().map(|_| None));
+    rest[..new_views * words_per_row]
+        .par_chunks_mut(words_per_row)
+        .zip(shown_rows)
+        .enumerate()
+        .for_each_init(
+            || {
+                let scratch = WorkerScratch::new(resolution, patch_count, probe);
+                (scratch, vec![0u64; shown_words])
+            },
+            |(scratch, spare), (i, (row, shown_row))| {
+                let view = first_view + i as u32;
+                if !pass.exists(view) || rendered.is_some_and(|r| !r[view as usize]) {
+                    return;
+                }
+                let seeds = pass.seeds(view);
+                let mut rows: [&[u64]; 3] = [&[]; 3];
+                let mut first: [Option<&[u64]>; 3] = [None; 3];
+                for ((r, f), &s) in rows.iter_mut().zip(&mut first).zip(seeds.views()) {
+                    *r = &done[s as usize * words_per_row..][..words];
+                    *f = (s >= shown_from)
+                        .then(|| &shown_done[s as usize * shown_words..][..shown_words]);
+                }
+                let n = seeds.views().len();
+                let seeds = (n > 0).then(|| SeedRows {
+                    rows: &rows[..n],
+                    shown: &first[..n],
+                });
+                let direction = pass.direction(view);
+                let shown_row = shown_row.unwrap_or(spare);
+                context.render_view(view, direction, seeds, scratch, row, shown_row);
+                progress.inc(1);
+            },
+        );
 }
 
 /// How many views of the pass `pass` a run with [`SamplingOptions::views`] `wanted`
