@@ -801,6 +801,7 @@ fn bake_help_fits_a_screen_and_help_all_adds_the_research_options() {
         "--fold-min-pixels",
         "--sampled-rows",
         "--probe",
+        "--apertures",
         "--conservative-raster",
         "--view-supersample",
         "--shell-min",

@@ -297,3 +297,49 @@ fn out_of_range_supersampling_is_a_usage_error() {
         assert!(!baked.pvis.exists());
     }
 }
+
+#[test]
+fn apertures_only_add_what_the_fm1_box_shows_through_its_holes() {
+    // The sheet-metal box with holes: each view's probe opens the gaps between parts, and
+    // the all-corner fold keeps every view's additions, so every row only grows.
+    let fm1 = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/fm1_satellite.glb");
+    let dir = tempfile::TempDir::new().unwrap();
+    let baked = |more: &[&str]| {
+        let out = dir.path().join(format!("fm1-{}.pvis", more.len()));
+        let mut args = vec!["bake", fm1, "-o", common::path_str(&out), "-q"];
+        args.extend([
+            "--level",
+            "1",
+            "--resolution",
+            "128",
+            "--shells",
+            "0",
+            "--far-shells",
+            "none",
+            "--probe",
+            "1",
+            "--fold-corners",
+            "all",
+            "--sampled-rows",
+            "--patches",
+            "300",
+            "--patch-order",
+            "spatial",
+        ]);
+        args.extend(more);
+        let run = common::patchvis(&args);
+        assert!(run.status.success(), "{}", stderr(&run));
+        common::rows(&std::fs::read(&out).unwrap()).1
+    };
+    let (plain, opened) = (baked(&[]), baked(&["--apertures", "2"]));
+    let mut grew = 0;
+    for v in 0..plain.views() {
+        let (p, o) = (plain.row(v), opened.row(v));
+        assert!(
+            p.iter().zip(o).all(|(p, o)| p & !o == 0),
+            "view {v} lost a patch"
+        );
+        grew += usize::from(p != o);
+    }
+    assert!(grew > 0, "no view saw anything more through the holes");
+}

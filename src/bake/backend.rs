@@ -36,6 +36,8 @@ pub(crate) fn cpu_only_option(settings: &BakeSettings) -> Option<&'static str> {
         Some("--conservative")
     } else if matches!(research.probe, super::Probe::Pixels(_)) {
         Some("--probe")
+    } else if research.apertures.is_some_and(|px| px > 0) {
+        Some("--apertures")
     } else if research.conservative_raster {
         Some("--conservative-raster")
     } else if settings.resume {

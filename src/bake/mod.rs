@@ -80,8 +80,8 @@ pub use rows::{SampledRows, SampledSphere};
 pub use settings::{
     BakeSettings, CONSERVATIVE_FOLD_CORNERS, CONSERVATIVE_LEVEL, CONSERVATIVE_PROBE_PIXELS,
     DEFAULT_FOLD_MIN_PIXELS, DEFAULT_LEVEL, DEFAULT_PROBE_PIXELS, DEFAULT_VIEW_SUPERSAMPLE,
-    MAX_PROBE_PIXELS, MIN_RESOLUTION, PROBE_FOLD_CORNERS, PatchOrder, Preset, Probe, Research,
-    RowSettings, SettingsError, UNPROBED_FOLD_CORNERS, WARN_RESOLUTION,
+    MAX_APERTURE_PIXELS, MAX_PROBE_PIXELS, MIN_RESOLUTION, PROBE_FOLD_CORNERS, PatchOrder, Preset,
+    Probe, Research, RowSettings, SettingsError, UNPROBED_FOLD_CORNERS, WARN_RESOLUTION,
 };
 pub use shard::{SHARD_COUNT_ENV, Shard, ShardError};
 pub use shard_run::ShardBaked;

@@ -46,7 +46,7 @@ use xxhash_rust::xxh64::xxh64;
 const MAGIC: &[u8; 8] = b"PVISPART";
 /// The layout's version; bumped with the sampler checkpoint's whenever the rows change for
 /// the same settings, and whenever the layout or the settings' codec does.
-const VERSION: u32 = 9;
+const VERSION: u32 = 10;
 const CRC_BYTES: usize = 4;
 /// Bytes of the magic and the version, which [`Part::check_head`] checks.
 pub const HEAD_BYTES: usize = 12;

@@ -89,6 +89,9 @@ pub struct SphereSampling {
     pub supersample: Supersample,
     /// The probe pass's occluder shrink in pixels, or `None`.
     pub probe: Option<u32>,
+    /// The widest gap the probe opens as an aperture, in pixels (`SamplingOptions::apertures`);
+    /// 0: none.
+    pub apertures: u32,
 }
 
 /// Which sphere of views a [`Sphere`] is.
@@ -182,12 +185,19 @@ impl Plan {
                     .into(),
             );
         }
+        let apertures = r.apertures.unwrap_or(0);
         let probe = match r.probe {
             Probe::Off => None,
             Probe::Pixels(pixels) => Some(pixels),
             Probe::Default if conservative => Some(CONSERVATIVE_PROBE_PIXELS),
             Probe::Default => Some(DEFAULT_PROBE_PIXELS),
         };
+        if apertures > 0 && probe.is_none() {
+            return fail(format!(
+                "--apertures {apertures} with --probe off: expected the probe pass, which opens \
+                 the apertures (the default's, --probe or --conservative)"
+            ));
+        }
         if r.min_pixels > 1 && probe.is_some() {
             // The probe adds back what the threshold drops: the file would be the same.
             let which = match r.probe {
@@ -266,6 +276,7 @@ impl Plan {
                     ..supersample(extra_levels)
                 },
                 probe,
+                apertures,
             },
             // The shells probe and fold as the sampling sphere does, their supersampling
             // capped at the finest level; their finer views are the vertices.
@@ -273,6 +284,7 @@ impl Plan {
                 level: shell_level,
                 supersample: supersample(extra_levels.min(MAX_LEVEL - shell_level)),
                 probe,
+                apertures,
             },
             // Split needs the probe's rows: asking for it makes the probe a must.
             default_probe: r.probe == Probe::Default

@@ -109,6 +109,7 @@ impl Run<'_> {
             memory: Some(self.settings.memory.split().sampling),
             views,
             probe: sphere.sampling.probe,
+            apertures: sphere.sampling.apertures,
             // `None` for the sampling sphere.
             shell: sphere.shell,
             band: sphere.probe_band,

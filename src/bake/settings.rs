@@ -59,6 +59,10 @@ pub const PROBE_FOLD_CORNERS: FoldCorners = FoldCorners::Cover;
 /// for finer views, the exposed engine needed 2 (97.3 % identical at 0, 98.7 % at 1 and
 /// 99.3 % at 2; BENCHMARKS.md, "Quality on the model zoo").
 pub const CONSERVATIVE_PROBE_PIXELS: u32 = 1;
+/// The largest `--apertures PX`: past it nearly every rim of an assembly is a gap (at 2 the
+/// exposed engine already culls 7–10 points less with `--conservative`,
+/// docs/benchmarks/far-cameras.md, "Apertures").
+pub const MAX_APERTURE_PIXELS: u32 = 16;
 /// The default bake's probe pass shrinks occluders by this many pixels. With the cover fold,
 /// every zoo model misses at most 0.4 pixels a view on average at 1× and 2× the resolution
 /// (p99 ≤ 2), the bunny culls 45.3 % (45.4 % without the probe); at 0 pixels the exposed
@@ -167,6 +171,8 @@ pub struct Research {
     pub dilate: bool,
     /// The probe pass (`--probe`).
     pub probe: Probe,
+    /// The widest gap the probe opens as an aperture, in pixels (`--apertures`); `None`: none.
+    pub apertures: Option<u32>,
     /// A triangle marks every pixel it touches (`--conservative-raster`).
     pub conservative_raster: bool,
     /// Extra sphere levels sampled and folded into the stored ones (`--view-supersample`);
@@ -332,6 +338,15 @@ impl RowSettings {
                 self.fov_deg
             ));
         }
+        if let Some(px) = self
+            .research
+            .apertures
+            .filter(|&px| px > MAX_APERTURE_PIXELS)
+        {
+            return fail(format!(
+                "--apertures {px}: expected 0 (none) to {MAX_APERTURE_PIXELS} pixels"
+            ));
+        }
         if self.shells > MAX_SHELLS {
             return fail(format!(
                 "--shells {}: expected 0 (no near views) to {MAX_SHELLS}",
@@ -407,6 +422,7 @@ impl RowSettings {
             min_pixels,
             dilate,
             probe,
+            apertures,
             conservative_raster,
             view_supersample,
             fold_min_pixels,
@@ -462,6 +478,7 @@ impl RowSettings {
             }),
         );
         b.put_u8(u8::from(sampled_rows));
+        put_option(&mut b, apertures);
         b
     }
 
@@ -535,6 +552,7 @@ impl RowSettings {
                     Some(_) => return None,
                 },
                 sampled_rows: flag(f.u8()?)?,
+                apertures: option(&mut f)?,
             },
         };
         (f.offset() == bytes.len()).then_some(settings)
@@ -631,6 +649,7 @@ pub(crate) mod tests {
                 s.research.finer_views = Some(FinerViews::Centroids)
             }),
             ("sampled_rows", |s| s.research.sampled_rows = true),
+            ("apertures", |s| s.research.apertures = Some(1)),
         ]
     }
 

@@ -207,6 +207,15 @@ pub struct BakeArgs {
     #[arg(long, value_name = "PX|off", value_parser = parse_probe, conflicts_with = "conservative",
           hide_short_help = true, help_heading = RESEARCH)]
     pub probe: Option<Probe>,
+    /// With the probe pass (the default's, --probe or --conservative): a pixel with a rim of
+    /// another part within PX pixels on both sides (a hole in a sheet, a slit between parts)
+    /// is an aperture, and every patch a camera near the view may see through it by parallax
+    /// is added too. For parts seen through holes: with --conservative at 2, the FM1 box (a
+    /// sheet-metal box with holes) keeps 98.7–100 % identical views at every distance
+    /// (95.3–99.3 % without) for 8–13 points of culling; an assembly with gaps everywhere loses
+    /// as much (the exposed engine 7–10 points) for no fewer misses. [default: 0, none]
+    #[arg(long, value_name = "PX", hide_short_help = true, help_heading = RESEARCH)]
+    pub apertures: Option<u32>,
     /// Conservative rasterization: a triangle marks every pixel square it touches, at its
     /// nearest depth there (one winner per pixel). Measured no better than point sampling.
     #[arg(long, hide_short_help = true, help_heading = RESEARCH)]

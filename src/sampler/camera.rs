@@ -177,6 +177,11 @@ impl Camera {
         self.scale / dot(sub(widen(p), self.eye), self.forward)
     }
 
+    /// Pixels one world unit spans at view depth 1.
+    pub(crate) fn scale(&self) -> f64 {
+        self.scale
+    }
+
     /// Image width and height in pixels.
     pub fn resolution(&self) -> u32 {
         self.resolution

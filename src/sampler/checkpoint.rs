@@ -30,8 +30,9 @@ const MAGIC: &[u8; 8] = b"PVISCKPT";
 /// and (until 10) render far views, 8 since a finer view's probe may leave
 /// out what its parents hold (`SamplingOptions::folds_into`), 9 since a pass's finer views
 /// may be face centroids (`SamplingOptions::finer`), 10 since the far views went (the far band
-/// is shells beyond the sampling sphere).
-const VERSION: u32 = 10;
+/// is shells beyond the sampling sphere), 11 since the probe may open apertures
+/// (`SamplingOptions::apertures`).
+const VERSION: u32 = 11;
 const HEADER_BYTES: usize = 8 + 4 + 4 + 8 + 4 + 4;
 const CRC_BYTES: usize = 4;
 /// What a refused checkpoint's message tells the user to do.
@@ -77,6 +78,7 @@ pub(crate) fn input_hash(
         memory: _,
         ref views,
         probe,
+        apertures,
         shell,
         band,
         folds_into,
@@ -89,6 +91,7 @@ pub(crate) fn input_hash(
         h.word(u64::from(p));
     }
     h.word(probe.map_or(0, |r| u64::from(r) + 1));
+    h.word(u64::from(apertures));
     // A tag per option, so that a shell and a band of the same bits hash apart.
     h.word(shell.map_or(0, |r| u64::from(r.to_bits()) | 1 << 32));
     h.word(band.map_or(0, |[near, far]| {

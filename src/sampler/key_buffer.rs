@@ -220,7 +220,6 @@ impl<P: Pixel> KeyBuffer<P> {
 
 impl KeyBuffer {
     /// The packed keys, row by row from the top.
-    #[cfg(test)]
     pub(crate) fn keys(&self) -> &[u64] {
         &self.keys
     }
@@ -653,7 +652,7 @@ impl<P: Pixel> KeyBuffer<P> {
 
 /// The snapped screen rectangle `[min_x, max_x, min_y, max_y]` of triangle `tri`'s corners.
 #[inline(always)]
-fn extent_of(tri: [ScreenVertex; 3]) -> [i32; 4] {
+pub(crate) fn extent_of(tri: [ScreenVertex; 3]) -> [i32; 4] {
     let [a, b, c] = tri;
     [
         a.x.min(b.x).min(c.x),

@@ -14,6 +14,7 @@ use crate::tiling::{PatchId, Tiling};
 /// The marks of one sampling run: the patch graph when dilating, the always-visible row.
 pub(crate) struct Marks {
     graph: Option<PatchGraph>,
+    dilate: bool,
     always: Vec<u64>,
 }
 
@@ -32,11 +33,17 @@ impl Marks {
             always[p as usize / 64] |= 1 << (p % 64);
         }
         Marks {
-            graph: options
-                .dilate
+            // The probe's apertures tell a gap from a fold by it too.
+            graph: (options.dilate || (options.probe.is_some() && options.apertures > 0))
                 .then(|| PatchGraph::new(mesh, &tiling.patch_of, patch_count)),
+            dilate: options.dilate,
             always,
         }
+    }
+
+    /// The patch graph, if built.
+    pub(crate) fn graph(&self) -> Option<&PatchGraph> {
+        self.graph.as_ref()
     }
 
     /// The always-visible patches as a row.
@@ -47,7 +54,7 @@ impl Marks {
     /// Sets in `row` (which holds `seen` or more) the marks of a view from `eye` that saw
     /// the patches in `seen`.
     pub(crate) fn apply(&self, tiling: &Tiling, eye: [f64; 3], seen: &[u64], row: &mut [u64]) {
-        if let Some(graph) = &self.graph {
+        if let Some(graph) = self.graph.as_ref().filter(|_| self.dilate) {
             for p in Patches::of_bits(seen) {
                 for &q in graph.neighbours(p as PatchId) {
                     let (w, bit) = (q as usize / 64, 1u64 << (q % 64));

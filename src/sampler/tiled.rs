@@ -112,6 +112,10 @@ pub struct SamplingOptions {
     /// this many pixels, skipping the triangles no camera near the view can see the visible
     /// side of (`solid.rs`); a patch with a fragment in front is added. `None`: no probe.
     pub probe: Option<u32>,
+    /// With the probe: gaps between parts up to this many pixels wide (a hole in a sheet, a
+    /// slit between two parts) are apertures, and every patch a camera of the view's cell may
+    /// see through one by parallax is added too (`tiled/aperture.rs`). 0: none.
+    pub apertures: u32,
     /// A shell's pass: the views' eyes lie on a sphere of this radius around `params.center`
     /// (at least the bounding radius: nearer than the sampling distance for the shells, beyond
     /// it for the far band) instead of at the sampling distance, and each view records every
@@ -862,7 +866,7 @@ impl ViewContext<'_> {
                 }
             }
         }
-        self.probe_prepare(scratch);
+        self.probe_prepare(camera, scratch);
         // Resolving empties the key buffer for the worker's next view.
         self.resolve(camera, &mut scratch.view.keys, &mut scratch.resolve, row);
         for (s, &r) in seen.iter_mut().zip(row.iter()) {
@@ -1044,6 +1048,7 @@ fn valid_bits(w: usize, patch_count: usize) -> u64 {
     }
 }
 
+mod aperture;
 mod probe;
 #[cfg(test)]
 mod tests;

@@ -37,6 +37,21 @@ fn min_pixels_under_the_probe_pass_is_refused_not_ignored() {
 }
 
 #[test]
+fn apertures_without_the_probe_or_too_wide_are_refused() {
+    let dir = TempDir::new().unwrap();
+    // The probe pass opens the apertures: without it they would do nothing.
+    let out = bake(&dir, &["--apertures", "2", "--probe", "off"]);
+    assert_refused(&out, 2, &["--apertures 2", "--probe off"]);
+    assert_refused(
+        &bake(&dir, &["--apertures", "17"]),
+        2,
+        &["--apertures 17", "16"],
+    );
+    let out = bake(&dir, &["--apertures", "0", "--probe", "off"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+}
+
+#[test]
 fn a_wide_fov_blames_the_fov_not_a_flag_never_given() {
     let dir = TempDir::new().unwrap();
     for fov in ["170", "179"] {

@@ -31,13 +31,14 @@
 //! every back face show. Without a band, the ball of radius `φ · distance` around the eye.
 //! Every camera of a near view's cube map is probed, each against its own shrunk occluders.
 
+use super::aperture::Apertures;
 use super::{FEW_TRIANGLES, ViewContext, WorkerScratch, hidden, project_up_to, valid_bits};
 use crate::runtime::Patches;
 use crate::sampler::SamplingOptions;
 use crate::sampler::camera::{Camera, SphereBounds};
 use crate::sampler::conservative::scan_triangle_conservative;
 use crate::sampler::finer::PassViews;
-use crate::sampler::key_buffer::DepthBuffer;
+use crate::sampler::key_buffer::{DepthBuffer, extent_of};
 use crate::sampler::raster::{
     ScreenVertex, draw_triangle, project, sphere_needs_no_clip, view_planes,
 };
@@ -61,6 +62,8 @@ pub(super) struct Probe<'a> {
     solids: &'a Solids,
     /// Per patch: [`crate::sampler::solid::Solids::patch_components`].
     patch_component: &'a [u32],
+    /// Widest gap taken as an aperture, in pixels (0: none).
+    aperture_width: usize,
 }
 
 /// One worker's probe buffers.
@@ -70,6 +73,7 @@ pub(super) struct ProbeScratch {
     openings: Openings,
     /// The patches the view did not show, one bit each.
     unseen: Vec<u64>,
+    apertures: Apertures,
 }
 
 impl ProbeScratch {
@@ -79,6 +83,7 @@ impl ProbeScratch {
             ring: Vec::new(),
             openings: Default::default(),
             unseen: Vec::new(),
+            apertures: Apertures::default(),
         }
     }
 }
@@ -110,6 +115,7 @@ impl<'a> Probe<'a> {
             center: params.center.map(f64::from),
             solids: &solids.solids,
             patch_component: &solids.patch_component,
+            aperture_width: options.apertures as usize,
         }
     }
 
@@ -132,10 +138,22 @@ impl<'a> Probe<'a> {
 
 impl ViewContext<'_> {
     /// Builds the shrunk occluders of the view just rendered (before resolving empties it).
-    pub(super) fn probe_prepare(&self, scratch: &mut WorkerScratch) {
+    pub(super) fn probe_prepare(&self, camera: &Camera, scratch: &mut WorkerScratch) {
         if let (Some(probe), Some(ps)) = (&self.probe, &mut scratch.probe) {
             ps.guard
                 .shrink_from(&scratch.view.keys, probe.radius, &mut ps.ring);
+            // The cell's radius at the eye's distance, also for a band (`aperture.rs`).
+            let rho = probe.radius_at(probe.distance);
+            let slope = (1.0 / (camera.scale() * rho)) as f32;
+            let n = camera.resolution() as usize;
+            ps.apertures.build(
+                scratch.view.keys.keys(),
+                n,
+                probe.aperture_width,
+                slope,
+                self.marks.graph(),
+                self.mesh.patch_count() as u32,
+            );
         }
     }
 
@@ -167,11 +185,19 @@ impl ViewContext<'_> {
         // it: anywhere for its outward side, through an opening of its component for its
         // inward side.
         let openings = &ps.openings;
+        let aps = &ps.apertures;
+        let last = n as i32 - 1;
+        let rect_of = |e: [i32; 4]| {
+            let c = |v: i32, d: i32| (v.div_euclid(256) + d).clamp(0, last) as usize;
+            [c(e[0], -1), c(e[2], -1), c(e[1], 1), c(e[3], 1)]
+        };
         // The screen test first: it rejects most triangles of a hidden patch, and costs less
         // than the facing test's look-ups by triangle and square root (a 1,000,000-triangle
         // bunny grid's default bake: 0.87× the CPU time with this order, BENCHMARKS.md).
         let in_front = |t: u32, world: [[f32; 3]; 3], st: [ScreenVertex; 3]| {
-            if guard.triangle_hidden(st, true) {
+            if guard.triangle_hidden(st, true)
+                && !(aps.any() && aps.touches(rect_of(extent_of(st))))
+            {
                 return false;
             }
             let side = probe.solids.side(t, world, cell);
@@ -182,7 +208,7 @@ impl ViewContext<'_> {
             }
             let mut hit = false;
             scan_triangle_conservative(st, n as u32, |index, q, _| {
-                hit |= q.to_bits() > guard.depth_bits(index)
+                hit |= (q.to_bits() > guard.depth_bits(index) || aps.reveals(index, q))
                     && match side {
                         Side::Outward => true,
                         Side::Inward(c) => openings.covers(c, index % n, index / n),
@@ -190,19 +216,7 @@ impl ViewContext<'_> {
             });
             hit
         };
-        ps.unseen.clear();
-        ps.unseen.extend(
-            row.iter()
-                .enumerate()
-                .map(|(w, r)| !r & valid_bits(w, patch_count)),
-        );
-        for rows in known.into_iter() {
-            for r in rows {
-                for (u, &k) in ps.unseen.iter_mut().zip(r.iter()) {
-                    *u &= !k;
-                }
-            }
-        }
+        unseen_of(&mut ps.unseen, row, known, patch_count);
         for p in Patches::of_bits(&ps.unseen) {
             let p = p as usize;
             let patch = &self.tiling.patches[p];
@@ -211,6 +225,7 @@ impl ViewContext<'_> {
                 SphereBounds::Rect { rect, .. } => Some(rect),
                 _ => None,
             };
+            let open = aps.any() && rect.is_none_or(|r| aps.touches(r));
             if probe.solids.patch_hidden_side(
                 probe.patch_component[p],
                 patch.center,
@@ -220,9 +235,10 @@ impl ViewContext<'_> {
                 rect,
                 cell,
                 openings,
-            ) || hidden(bounds, guard)
-                || (patch.count > FEW_TRIANGLES
-                    && hidden(camera.hull_bounds(&self.boxes[p].corners()), guard))
+            ) || (!open
+                && (hidden(bounds, guard)
+                    || (patch.count > FEW_TRIANGLES
+                        && hidden(camera.hull_bounds(&self.boxes[p].corners()), guard))))
             {
                 continue;
             }
@@ -239,7 +255,9 @@ impl ViewContext<'_> {
                         let vertex_end = cluster.vertex_end as usize;
                         project_up_to(screen, camera, &section, &mut projected_to, vertex_end);
                         let (extent, q_max) = screen.extent(cluster.vertices());
-                        if guard.extent_hidden(extent, q_max, true) {
+                        if guard.extent_hidden(extent, q_max, true)
+                            && !(open && aps.touches(rect_of(extent)))
+                        {
                             k += run.len();
                             continue;
                         }
@@ -286,6 +304,21 @@ impl ViewContext<'_> {
             if found {
                 row[p / 64] |= 1 << (p % 64);
             }
+        }
+    }
+}
+
+/// Into `unseen`, the patches (of `patch_count`) neither `row` nor any of `known` holds.
+fn unseen_of(unseen: &mut Vec<u64>, row: &[u64], known: Option<&[&[u64]]>, patch_count: usize) {
+    unseen.clear();
+    unseen.extend(
+        row.iter()
+            .enumerate()
+            .map(|(w, r)| !r & valid_bits(w, patch_count)),
+    );
+    for r in known.into_iter().flatten() {
+        for (u, &k) in unseen.iter_mut().zip(r.iter()) {
+            *u &= !k;
         }
     }
 }
