@@ -60,7 +60,7 @@ pub const PROBE_FOLD_CORNERS: FoldCorners = FoldCorners::Cover;
 /// 99.3 % at 2; BENCHMARKS.md, "Quality on the model zoo").
 pub const CONSERVATIVE_PROBE_PIXELS: u32 = 1;
 /// The largest `--apertures PX`: past it nearly every rim of an assembly is a gap (at 2 the
-/// exposed engine already culls 7–10 points less with `--conservative`,
+/// cycloidal drive already culls 13–25 points less with `--conservative`,
 /// docs/benchmarks/far-cameras.md, "Apertures").
 pub const MAX_APERTURE_PIXELS: u32 = 16;
 /// The default bake's probe pass shrinks occluders by this many pixels. With the cover fold,

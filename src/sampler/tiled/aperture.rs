@@ -16,8 +16,8 @@
 //!
 //! Asked for with `--apertures PX`: with `--conservative` at 2 pixels, the FM1 box (a
 //! sheet-metal box with holes) keeps 98.7–100 % identical views at every distance against
-//! 95.3–99.3 %, for 8–13 points of culling; the exposed engine, whose parts meet at gaps
-//! everywhere, loses 7–10 points for no fewer misses (docs/benchmarks/far-cameras.md,
+//! 95.3–99.3 %, for 8–13 points of culling; assemblies whose parts meet at gaps everywhere
+//! lose 7–25 points (the exposed engine and the cycloidal drive, docs/benchmarks/far-cameras.md,
 //! "Apertures"), so no preset opens them.
 
 use crate::sampler::key_buffer::{TILE, patch_slot};
