@@ -75,6 +75,9 @@ pub const SAMPLING_BYTES_PER_PIXEL: u64 = 12;
 /// image; the openings' distance grids, a quarter of a byte; the tiles and a ring of a few
 /// rows.
 pub const PROBE_BYTES_PER_PIXEL: u64 = 9;
+/// Heap per worker and pixel of `--apertures` (`sampler/tiled/aperture.rs`): each pixel's
+/// revealed depth, an `f32`.
+pub const APERTURE_BYTES_PER_PIXEL: u64 = 4;
 
 /// Heap a bake takes whatever its budget: the out-of-core tiling's merge buffers and patch
 /// graph (3.0 to 4.0 MB measured on the bunny and a 400K-triangle mesh at budgets of 1 to
@@ -97,6 +100,8 @@ pub struct FixedNeeds {
     pub row_bytes: u64,
     /// Whether some pass runs the probe pass ([`PROBE_BYTES_PER_PIXEL`] more per worker).
     pub probe: bool,
+    /// Whether its probe opens apertures ([`APERTURE_BYTES_PER_PIXEL`] more per worker).
+    pub apertures: bool,
 }
 
 impl FixedNeeds {
@@ -105,8 +110,13 @@ impl FixedNeeds {
     pub fn sampling(&self) -> u64 {
         let batch = u64::from(self.triangles).min(SAMPLING_BATCH_TRIANGLES);
         let pixels = u64::from(self.resolution).pow(2);
-        let per_pixel =
-            SAMPLING_BYTES_PER_PIXEL + if self.probe { PROBE_BYTES_PER_PIXEL } else { 0 };
+        let per_pixel = SAMPLING_BYTES_PER_PIXEL
+            + if self.probe { PROBE_BYTES_PER_PIXEL } else { 0 }
+            + if self.probe && self.apertures {
+                APERTURE_BYTES_PER_PIXEL
+            } else {
+                0
+            };
         SAMPLING_SLACK_BYTES
             .saturating_add(batch.saturating_mul(SAMPLING_BUILD_BYTES_PER_TRIANGLE))
             .saturating_add((self.workers as u64).saturating_mul(pixels.saturating_mul(per_pixel)))
@@ -260,6 +270,7 @@ mod tests {
             workers: 2,
             row_bytes: 66 * 1000 / 8,
             probe: false,
+            apertures: false,
         };
         let m = MemoryBudget::minimum(&bunny);
         assert_eq!(m % (1 << 20), 0);
@@ -288,6 +299,7 @@ mod tests {
             workers: 1,
             row_bytes: 1,
             probe: false,
+            apertures: false,
         };
         assert_eq!(MemoryBudget::minimum(&tiny), MIN_FIXED_BYTES);
         let huge = FixedNeeds {

@@ -1,4 +1,4 @@
-//! What a bake refuses before any work, once the mesh is open: a `--dilate` patch graph or
+//! What a bake refuses before any work, once the mesh is open: a `--dilate` or `--apertures` patch graph or
 //! the probe's solids past the budget, a mesh of zero-area triangles, and a `--memory` below
 //! what the stages need whatever the budget ([`MemoryBudget::minimum`]). A tiling alone
 //! (`patchvis tile`) needs no sampling: [`check_tiling`] asks only what tiling needs.
@@ -16,9 +16,15 @@ pub(super) fn check_mesh(
     mesh: &Mesh,
 ) -> Result<(), BakeError> {
     let memory = settings.memory;
-    if plan.rows.research.dilate && !memory.fits_patch_graph(mesh.triangle_count()) {
+    let apertures = plan.probes() && plan.main.apertures > 0;
+    if (plan.rows.research.dilate || apertures) && !memory.fits_patch_graph(mesh.triangle_count()) {
+        let flag = if plan.rows.research.dilate {
+            "--dilate"
+        } else {
+            "--apertures"
+        };
         return Err(BakeError::Budget(format!(
-            "--dilate builds a patch graph of about {} MiB for {} triangles, more than --memory {} MiB",
+            "{flag} builds a patch graph of about {} MiB for {} triangles, more than --memory {} MiB",
             (u64::from(mesh.triangle_count()) * crate::memory::PATCH_GRAPH_BYTES_PER_TRIANGLE)
                 >> 20,
             mesh.triangle_count(),
@@ -45,6 +51,7 @@ pub(super) fn check_mesh(
         workers: rayon::current_num_threads(),
         row_bytes: views * patches.div_ceil(64) * 8,
         probe: plan.probes(),
+        apertures,
     };
     let minimum = MemoryBudget::minimum(&needs);
     if memory.total() < minimum {

@@ -11,7 +11,8 @@ use crate::ooc::Mesh;
 use crate::runtime::Patches;
 use crate::tiling::{PatchId, Tiling};
 
-/// The marks of one sampling run: the patch graph when dilating, the always-visible row.
+/// The marks of one sampling run: the patch graph when dilating (or opening the probe's
+/// apertures), the always-visible row.
 pub(crate) struct Marks {
     graph: Option<PatchGraph>,
     dilate: bool,

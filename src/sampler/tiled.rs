@@ -288,6 +288,7 @@ fn sample_rows(
         workers: rayon::current_num_threads(),
         row_bytes: ((matrix.words().len() + seed_views as usize * shown_words) * 8) as u64,
         probe: options.probe.is_some(),
+        apertures: options.apertures > 0,
     }
     .sampling();
     let storage = Storage::for_budget(
