@@ -308,7 +308,7 @@ fn merge_refuses_missing_repeated_foreign_and_damaged_parts() {
         1,
         &[
             s(&old_part),
-            "part file version 2, expected 9",
+            "part file version 2, expected 10",
             "bake this shard again",
         ],
     );
