@@ -50,22 +50,24 @@ impl Apertures {
         graph: Option<&PatchGraph>,
         patch_count: u32,
     ) {
+        if self.any {
+            // Only the last view's written rectangle holds values.
+            let [x0, y0, x1, y1] = self.written;
+            for y in y0..=y1 {
+                self.reveal[y * self.n + x0..=y * self.n + x1].fill(0.0);
+            }
+            self.tiles.fill(0.0);
+            self.any = false;
+        }
+        // No buffers without apertures: the default's probe runs this after every view.
+        if width == 0 || slope.is_nan() || slope <= 0.0 {
+            return;
+        }
         let tiles_per_row = n.div_ceil(TILE);
         if self.n != n {
             self.n = n;
             self.reveal = vec![0.0; n * n];
             self.tiles = vec![0.0; tiles_per_row * tiles_per_row];
-        } else if self.any {
-            // Only the last view's written rectangle holds values.
-            let [x0, y0, x1, y1] = self.written;
-            for y in y0..=y1 {
-                self.reveal[y * n + x0..=y * n + x1].fill(0.0);
-            }
-            self.tiles.fill(0.0);
-        }
-        self.any = false;
-        if width == 0 || slope <= 0.0 {
-            return;
         }
         let depth = |i: usize| f32::from_bits((keys[i] >> 32) as u32);
         let pc = patch_count as usize;

@@ -40,7 +40,7 @@ use crate::sampler::conservative::scan_triangle_conservative;
 use crate::sampler::finer::PassViews;
 use crate::sampler::key_buffer::{DepthBuffer, extent_of};
 use crate::sampler::raster::{
-    ScreenVertex, draw_triangle, project, sphere_needs_no_clip, view_planes,
+    SUBPIXEL_BITS, ScreenVertex, draw_triangle, project, sphere_needs_no_clip, view_planes,
 };
 use crate::sampler::scene::SceneSolids;
 use crate::sampler::solid::{Cell, Openings, Side, Solids};
@@ -187,17 +187,16 @@ impl ViewContext<'_> {
         let openings = &ps.openings;
         let aps = &ps.apertures;
         let last = n as i32 - 1;
+        // The pixels around a snapped screen extent `[min_x, max_x, min_y, max_y]`.
         let rect_of = |e: [i32; 4]| {
-            let c = |v: i32, d: i32| (v.div_euclid(256) + d).clamp(0, last) as usize;
+            let c = |v: i32, d: i32| ((v >> SUBPIXEL_BITS) + d).clamp(0, last) as usize;
             [c(e[0], -1), c(e[2], -1), c(e[1], 1), c(e[3], 1)]
         };
         // The screen test first: it rejects most triangles of a hidden patch, and costs less
         // than the facing test's look-ups by triangle and square root (a 1,000,000-triangle
         // bunny grid's default bake: 0.87× the CPU time with this order, BENCHMARKS.md).
         let in_front = |t: u32, world: [[f32; 3]; 3], st: [ScreenVertex; 3]| {
-            if guard.triangle_hidden(st, true)
-                && !(aps.any() && aps.touches(rect_of(extent_of(st))))
-            {
+            if guard.triangle_hidden(st, true) && !aps.touches(rect_of(extent_of(st))) {
                 return false;
             }
             let side = probe.solids.side(t, world, cell);
