@@ -119,6 +119,7 @@ def bake(
     far_shells: Union[Sequence[float], str, None] = None,
     view_supersample: Optional[int] = None,
     probe: Union[int, str, None] = None,
+    apertures: Optional[int] = None,
     patch_order: Optional[str] = None,
     encoding: Optional[str] = None,
 ) -> BakeReport:
@@ -130,7 +131,8 @@ def bake(
     reordered by patch: ``.glb``/``.gltf`` or PLY), ``level``, ``resolution``, ``fov``,
     ``shells``, ``shell_min``, ``shell_level``, ``shell_resolution``, ``far_shells`` (a list of
     multiples of the sampling distance, or ``"none"``), ``view_supersample``, ``probe``
-    (pixels or ``"off"``), ``patch_order`` (``"covisibility"``/``"spatial"``), ``encoding``
+    (pixels or ``"off"``), ``apertures`` (pixels; the probe also looks through gaps up to that
+    wide), ``patch_order`` (``"covisibility"``/``"spatial"``), ``encoding``
     (``"tree"``/``"table"``/``"raw"``). ``None`` keeps the command's default.
 
     ``progress``: a callable ``progress(step, done, total)``, called at the start and end of
@@ -147,8 +149,8 @@ def bake(
         patches=patches, conservative=conservative, memory=memory, mesh_out=mesh_out,
         level=level, resolution=resolution, fov=fov, shells=shells, shell_min=shell_min,
         shell_level=shell_level, shell_resolution=shell_resolution, far_shells=far_shells,
-        view_supersample=view_supersample, probe=probe, patch_order=patch_order,
-        encoding=encoding,
+        view_supersample=view_supersample, probe=probe, apertures=apertures,
+        patch_order=patch_order, encoding=encoding,
     )
     d = _native.bake(os.fspath(mesh_path), os.fspath(out_path), options, _progress(progress))
     return _report(d)
@@ -203,7 +205,7 @@ def bake_arrays(
 
 _BAKE_OPTIONS = frozenset(
     "patches conservative memory mesh_out level resolution fov shells shell_min shell_level "
-    "shell_resolution far_shells view_supersample probe patch_order encoding".split()
+    "shell_resolution far_shells view_supersample probe apertures patch_order encoding".split()
 )
 
 

@@ -306,6 +306,7 @@ fn settings(options: &Bound<'_, PyDict>) -> PyResult<BakeSettings> {
             }
             "view_supersample" => rows.research.view_supersample = Some(value.extract()?),
             "probe" => rows.research.probe = probe(&value)?,
+            "apertures" => rows.research.apertures = Some(value.extract()?),
             "patch_order" => {
                 rows.patch_order = match value.extract::<String>()?.as_str() {
                     "covisibility" => PatchOrder::Covisibility,

@@ -93,6 +93,10 @@ def test_bad_arguments(tmp_path):
         patchvis.bake_arrays(v, [[0, 1, 2]], out, patchez=3)
     with pytest.raises(ValueError, match="probe"):
         patchvis.bake(BUNNY, out, probe=patchvis._native.MAX_PROBE_PIXELS + 1)
+    with pytest.raises(ValueError, match="--apertures 17"):
+        patchvis.bake(BUNNY, out, apertures=17)
+    with pytest.raises(ValueError, match="apertures"):
+        patchvis.bake(BUNNY, out, apertures=2, probe="off")
     with pytest.raises(ValueError, match="level"):
         patchvis.bake(BUNNY, out, level=9)
     with pytest.raises(ValueError):
@@ -136,3 +140,16 @@ def test_default_pipeline_is_the_commands_bytes(cli, tmp_path, conservative):
     patchvis.bake_arrays(vertices, faces, tmp_path / "arrays.pvis", conservative=conservative,
                          progress=False, **options)
     assert (tmp_path / "arrays.pvis").read_bytes() == (tmp_path / "cli.pvis").read_bytes()
+
+
+def test_apertures_are_the_commands_bytes(cli, tmp_path):
+    """`apertures` reaches the bake as `--apertures` does, and changes the rows."""
+    ant = BUNNY.with_name("ant.ply")
+    options = dict(patches=100, level=2, resolution=64, apertures=4)
+    cli("bake", ant, "-o", tmp_path / "cli.pvis", "--quiet", "--conservative",
+        *cli_flags(options))
+    patchvis.bake(ant, tmp_path / "py.pvis", conservative=True, progress=False, **options)
+    assert (tmp_path / "py.pvis").read_bytes() == (tmp_path / "cli.pvis").read_bytes()
+    del options["apertures"]
+    patchvis.bake(ant, tmp_path / "none.pvis", conservative=True, progress=False, **options)
+    assert (tmp_path / "none.pvis").read_bytes() != (tmp_path / "py.pvis").read_bytes()
