@@ -2,17 +2,19 @@
 //! built the first time a pass needs it and shared by every pass after.
 //!
 //! A default bake samples five spheres of views (the sampling sphere, two near shells, two far
-//! shells), each in its own pass over the same mesh and tiling. Each pass used to regroup the
-//! mesh by patch (`patch_mesh.rs`), fit every patch's box (`patch_box.rs`), find the mesh's
-//! winding and, with the probe, its solids (`solid.rs`): at 20M triangles 3.7 s a pass on one
-//! thread, on a budget that maps the regrouped mesh to a temporary file. None of it depends
-//! on the pass (camera distance, level, probe cell), so a [`Scene`] builds it once.
+//! shells), each in its own pass over the same mesh and tiling. Every pass needs the mesh
+//! regrouped by patch (`patch_mesh.rs`), every patch's box (`patch_box.rs`) and the mesh's
+//! winding; with the probe its solids (`solid.rs`); with `--dilate` or `--apertures` the patch
+//! graph (`patch_graph.rs`). At 20M triangles the first three take 3.7 s on one thread, on a
+//! budget that maps the regrouped mesh to a temporary file. None of it depends on the pass
+//! (camera distance, level, probe cell), so a [`Scene`] builds each once.
 //!
 //! Where the regrouped mesh lives (heap or mapped file) is decided by the first pass that
 //! builds it, within that pass's sampling share of the memory budget: every pass of a bake has
 //! the same share, resolution and threads, and where it lives changes no row.
 
 use super::patch_box::{PatchBox, patch_boxes};
+use super::patch_graph::PatchGraph;
 use super::patch_mesh::{PatchMesh, Storage};
 use super::solid::Solids;
 use crate::ooc::Mesh;
@@ -27,6 +29,7 @@ pub struct Scene<'a> {
     tiling: &'a Tiling,
     setup: OnceLock<Setup>,
     solids: OnceLock<SceneSolids>,
+    graph: OnceLock<PatchGraph>,
 }
 
 /// The CPU sampler's per-mesh set-up.
@@ -58,6 +61,7 @@ impl<'a> Scene<'a> {
             tiling,
             setup: OnceLock::new(),
             solids: OnceLock::new(),
+            graph: OnceLock::new(),
         }
     }
 
@@ -97,6 +101,14 @@ impl<'a> Scene<'a> {
                 patch_component,
             }
         })
+    }
+}
+
+impl Scene<'_> {
+    /// The patch graph (`--dilate`, `--apertures`), built on first use.
+    pub(super) fn patch_graph(&self) -> &PatchGraph {
+        self.graph
+            .get_or_init(|| super::marks::patch_graph(self.mesh, self.tiling))
     }
 }
 

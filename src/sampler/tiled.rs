@@ -60,7 +60,7 @@ use super::camera::{Camera, SphereBounds, normalize, widen};
 use super::checkpoint;
 use super::finer::{FinerViews, PassViews};
 use super::key_buffer::{KeyBuffer, Pixel, low_half, patch_slot};
-use super::marks::Marks;
+use super::marks::{Marks, needs_graph};
 use super::near::{near_camera_count, near_cameras};
 use super::patch_box::PatchBox;
 use super::patch_graph::faces_away;
@@ -257,7 +257,11 @@ fn sample_rows(
             r[..view as usize].iter().filter(|&&b| b).count() as u32
         })
     };
-    let marks = Marks::new(mesh, tiling, options);
+    let marks = Marks::new(
+        tiling,
+        options,
+        needs_graph(options).then(|| scene.patch_graph()),
+    );
     let hash = options
         .checkpoint
         .as_ref()
@@ -508,7 +512,7 @@ struct ViewContext<'a> {
     params: &'a SamplingParams,
     options: &'a SamplingOptions,
     /// The dilation and always-visible marks.
-    marks: Marks,
+    marks: Marks<'a>,
     /// Every patch's oriented bounding box, the tight bound of the occlusion test.
     boxes: &'a [PatchBox],
     /// The screen winding of back faces (`scene.rs`).

@@ -29,7 +29,7 @@
 //! submission and `views × ⌈patches / 64⌉ × 8` bytes read back. GPU memory besides the mesh:
 //! `resolution² × 8` bytes per batched view, capped at [`BATCH_TARGET_BYTES`].
 
-use super::marks::Marks;
+use super::marks::{Marks, needs_graph, patch_graph};
 use super::{Camera, SamplingOptions, SamplingParams, VisibilityMatrix, near_cameras};
 pub use crate::gpu::GpuError;
 use crate::gpu::mesh::{self as upload};
@@ -564,7 +564,8 @@ fn post_process(
     eyes: &[[f64; 3]],
     matrix: &mut VisibilityMatrix,
 ) {
-    let marks = Marks::new(mesh, tiling, options);
+    let graph = needs_graph(options).then(|| patch_graph(mesh, tiling));
+    let marks = Marks::new(tiling, options, graph.as_ref());
     for (view, &eye) in (0..matrix.views()).zip(eyes) {
         let seen = matrix.row(view).to_vec();
         marks.apply(tiling, eye, &seen, matrix.row_mut(view));
