@@ -177,6 +177,11 @@ impl ScreenBatch {
         ([min_x, max_x, min_y, max_y], q)
     }
 
+    /// The farthest depth (smallest `1/w`) of the vertices in `range`.
+    pub(crate) fn q_far(&self, range: std::ops::Range<usize>) -> f32 {
+        self.qs[range].iter().copied().fold(f32::INFINITY, f32::min)
+    }
+
     /// Whether the bounding box of the screen triangle `tri` holds no pixel centre, from its
     /// corners' codes alone ([`codes_hold_no_centre`]).
     #[inline(always)]

@@ -184,8 +184,10 @@ impl Apertures {
         }
     }
 
-    /// Whether some pixel of the inclusive rectangle `[x0, y0, x1, y1]` reveals anything.
-    pub(super) fn touches(&self, rect: [usize; 4]) -> bool {
+    /// Whether some pixel of the inclusive rectangle `[x0, y0, x1, y1]` may reveal a fragment
+    /// at depth `q_far` (`1/w`) or nearer ([`Self::reveals`]): what lies wholly in front of
+    /// every aperture's cone there (its farthest depth `q_far`) never shows through one.
+    pub(super) fn may_reveal(&self, rect: [usize; 4], q_far: f32) -> bool {
         if !self.any {
             return false;
         }
@@ -193,7 +195,7 @@ impl Apertures {
         let last = tiles_per_row - 1;
         for ty in (rect[1] / TILE).min(last)..=(rect[3] / TILE).min(last) {
             for tx in (rect[0] / TILE).min(last)..=(rect[2] / TILE).min(last) {
-                if self.tiles[ty * tiles_per_row + tx] > 0.0 {
+                if q_far < self.tiles[ty * tiles_per_row + tx] {
                     return true;
                 }
             }
@@ -304,7 +306,10 @@ mod tests {
         assert!(!a.reveals(at(26), 0.0001));
         // Diagonally as far as along the row (the Chebyshev step).
         assert!(a.reveals(11 * N + 20, 0.49));
-        assert!(a.touches([20, 10, 20, 10]));
+        assert!(a.may_reveal([20, 10, 20, 10], 0.0));
+        // Nothing nearer than the rim shows anywhere.
+        assert!(!a.may_reveal([0, 0, N - 1, N - 1], 1.0));
+        assert!(a.may_reveal([15, 16, 15, 16], 0.99) && !a.may_reveal([26, 16, 26, 16], 0.2));
     }
 
     #[test]
@@ -333,7 +338,9 @@ mod tests {
         // Apertures of the view before are gone.
         a.build(&slit(1), N, 2, 0.1, None, PATCHES);
         a.build(&slit(5), N, 2, 0.1, None, PATCHES);
-        assert!(!a.any() && !a.reveals(16 * N + 15, 0.0) && !a.touches([0, 0, N - 1, N - 1]));
+        assert!(
+            !a.any() && !a.reveals(16 * N + 15, 0.0) && !a.may_reveal([0, 0, N - 1, N - 1], 0.0)
+        );
     }
 
     #[test]

@@ -196,7 +196,9 @@ impl ViewContext<'_> {
         // than the facing test's look-ups by triangle and square root (a 1,000,000-triangle
         // bunny grid's default bake: 0.87× the CPU time with this order, BENCHMARKS.md).
         let in_front = |t: u32, world: [[f32; 3]; 3], st: [ScreenVertex; 3]| {
-            if guard.triangle_hidden(st, true) && !aps.touches(rect_of(extent_of(st))) {
+            // A fragment is never farther than the triangle's farthest corner (`conservative.rs`).
+            let q_far = st[0].q.min(st[1].q).min(st[2].q);
+            if guard.triangle_hidden(st, true) && !aps.may_reveal(rect_of(extent_of(st)), q_far) {
                 return false;
             }
             let side = probe.solids.side(t, world, cell);
@@ -224,7 +226,7 @@ impl ViewContext<'_> {
                 SphereBounds::Rect { rect, .. } => Some(rect),
                 _ => None,
             };
-            let open = aps.any() && rect.is_none_or(|r| aps.touches(r));
+            let open = aps.any() && rect.is_none_or(|r| aps.may_reveal(r, 0.0));
             if probe.solids.patch_hidden_side(
                 probe.patch_component[p],
                 patch.center,
@@ -255,7 +257,9 @@ impl ViewContext<'_> {
                         project_up_to(screen, camera, &section, &mut projected_to, vertex_end);
                         let (extent, q_max) = screen.extent(cluster.vertices());
                         if guard.extent_hidden(extent, q_max, true)
-                            && !(open && aps.touches(rect_of(extent)))
+                            && !(open
+                                && aps
+                                    .may_reveal(rect_of(extent), screen.q_far(cluster.vertices())))
                         {
                             k += run.len();
                             continue;
