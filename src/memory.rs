@@ -76,8 +76,8 @@ pub const SAMPLING_BYTES_PER_PIXEL: u64 = 12;
 /// rows.
 pub const PROBE_BYTES_PER_PIXEL: u64 = 9;
 /// Heap per worker and pixel of `--apertures` (`sampler/tiled/aperture.rs`): each pixel's
-/// revealed depth, an `f32`.
-pub const APERTURE_BYTES_PER_PIXEL: u64 = 4;
+/// revealed depth, and three `f32` images of scratch (the depths, then the spread's wedges).
+pub const APERTURE_BYTES_PER_PIXEL: u64 = 16;
 
 /// Heap a bake takes whatever its budget: the out-of-core tiling's merge buffers and patch
 /// graph (3.0 to 4.0 MB measured on the bunny and a 400K-triangle mesh at budgets of 1 to

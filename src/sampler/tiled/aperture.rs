@@ -35,6 +35,14 @@ pub(super) struct Apertures {
     any: bool,
     /// The inclusive rectangle `[x0, y0, x1, y1]` holding every non-zero `reveal`.
     written: [usize; 4],
+    /// Scratch: the image's depths while finding apertures, then the values to spread.
+    values: Vec<f32>,
+    /// Scratch of the spread: each wedge of the cone, and their maximum.
+    wedge: Vec<f32>,
+    cone: Vec<f32>,
+    /// Scratch: per pixel of a line, the nearest depth within the width before and after.
+    before: Vec<f32>,
+    after: Vec<f32>,
 }
 
 impl Apertures {
@@ -69,7 +77,10 @@ impl Apertures {
             self.reveal = vec![0.0; n * n];
             self.tiles = vec![0.0; tiles_per_row * tiles_per_row];
         }
-        let depth = |i: usize| f32::from_bits((keys[i] >> 32) as u32);
+        let values = &mut self.values;
+        values.clear();
+        values.extend(keys.iter().map(|&k| f32::from_bits((k >> 32) as u32)));
+        let depth = &values[..];
         let pc = patch_count as usize;
         // Whether the patches of pixels `i` and `j` are one surface (the same patch or
         // patches sharing an edge): a fold of it, not a gap.
@@ -84,85 +95,105 @@ impl Apertures {
                     || graph
                         .is_some_and(|g| g.neighbours(a as u32).binary_search(&(b as u32)).is_ok()))
         };
+        // The value of the pixel at `i` of a line whose pixel `j` is `base + j · step`: the
+        // nearer rim if it has one within `width` on both sides, else 0. (A line's empty ends
+        // hold no rim, so a pixel outside its first and last fragment is no aperture.)
+        let aperture = |i: usize, base: usize, step: usize| {
+            let p = base + i * step;
+            let need = depth[p] + slope;
+            let rim = |j: usize| {
+                let d = depth[base + j * step];
+                if d >= need && !joined(p, base + j * step) {
+                    d
+                } else {
+                    0.0
+                }
+            };
+            let left = (i.saturating_sub(width)..i).map(rim).fold(0.0f32, f32::max);
+            if left < need {
+                return 0.0;
+            }
+            let right = (i + 1..=(i + width).min(n - 1))
+                .map(rim)
+                .fold(0.0f32, f32::max);
+            if right < need { 0.0 } else { left.max(right) }
+        };
         let reveal = &mut self.reveal;
-        // Along rows, then along columns; only between a line's first and last fragment,
-        // the columns only within the rows' extent of fragments.
         let mut bounds = [usize::MAX, usize::MAX, 0, 0];
         let mut top = 0.0f32;
-        let mut extent = [n, n, 0, 0]; // Columns and rows holding fragments, half-open.
-        for pass in 0..2 {
-            let (lines, across) = if pass == 0 {
-                (0..n, 0..n)
-            } else {
-                (extent[0]..extent[2], extent[1]..extent[3])
-            };
-            for line in lines {
-                let at = |i: usize| {
-                    if pass == 0 {
-                        line * n + i
-                    } else {
-                        i * n + line
-                    }
-                };
-                let (mut first, mut last) = (usize::MAX, 0);
-                for i in across.clone() {
-                    if depth(at(i)) > 0.0 {
-                        first = first.min(i);
-                        last = i;
-                    }
+        let mut found = |p: usize, a: f32| {
+            if a > reveal[p] {
+                reveal[p] = a;
+                top = top.max(a);
+                let (x, y) = (p % n, p / n);
+                bounds = [
+                    bounds[0].min(x),
+                    bounds[1].min(y),
+                    bounds[2].max(x),
+                    bounds[3].max(y),
+                ];
+            }
+        };
+        // By depth alone first, a line at a time (the nearest depth within the width before
+        // and after each pixel), so that only pixels with a deep enough step on both sides
+        // look up patches: along each row, then along the columns, a row of them at a time.
+        let (before, after) = (&mut self.before, &mut self.after);
+        let reach = width.min(n - 1);
+        for y in 0..n {
+            let row = &depth[y * n..][..n];
+            if row.iter().all(|&d| d == 0.0) {
+                continue;
+            }
+            before.clear();
+            before.resize(n, 0.0);
+            after.clear();
+            after.resize(n, 0.0);
+            for k in 1..=reach {
+                for (b, &d) in before[k..].iter_mut().zip(row) {
+                    *b = b.max(d);
                 }
-                if first == usize::MAX {
-                    continue;
+                for (a, &d) in after.iter_mut().zip(&row[k..]) {
+                    *a = a.max(d);
                 }
-                if pass == 0 {
-                    extent = [
-                        extent[0].min(first),
-                        extent[1].min(line),
-                        extent[2].max(last + 1),
-                        extent[3].max(line + 1),
-                    ];
-                }
-                if first >= last {
-                    continue;
-                }
-                for i in first + 1..last {
-                    let q = depth(at(i));
-                    let need = q + slope;
-                    let lo = i.saturating_sub(width).max(first);
-                    let hi = (i + width).min(last);
-                    let p = at(i);
-                    let rim = |j: usize| {
-                        let d = depth(at(j));
-                        if d >= need && !joined(p, at(j)) {
-                            d
-                        } else {
-                            0.0
-                        }
-                    };
-                    let left = (lo..i).map(rim).fold(0.0f32, f32::max);
-                    if left < need {
-                        continue;
-                    }
-                    let right = (i + 1..=hi).map(rim).fold(0.0f32, f32::max);
-                    if right < need {
-                        continue;
-                    }
-                    let a = left.max(right);
-                    if a > reveal[p] {
-                        reveal[p] = a;
-                        top = top.max(a);
-                        let (x, y) = (p % n, p / n);
-                        bounds = [
-                            bounds[0].min(x),
-                            bounds[1].min(y),
-                            bounds[2].max(x),
-                            bounds[3].max(y),
-                        ];
-                        self.any = true;
+            }
+            for i in 0..n {
+                let need = row[i] + slope;
+                if before[i] >= need && after[i] >= need {
+                    let a = aperture(i, y * n, 1);
+                    if a > 0.0 {
+                        found(y * n + i, a);
                     }
                 }
             }
         }
+        for y in 0..n {
+            before.clear();
+            before.resize(n, 0.0);
+            after.clear();
+            after.resize(n, 0.0);
+            for k in 1..=reach {
+                if let Some(other) = y.checked_sub(k) {
+                    for (b, &d) in before.iter_mut().zip(&depth[other * n..][..n]) {
+                        *b = b.max(d);
+                    }
+                }
+                if y + k < n {
+                    for (a, &d) in after.iter_mut().zip(&depth[(y + k) * n..][..n]) {
+                        *a = a.max(d);
+                    }
+                }
+            }
+            for x in 0..n {
+                let need = depth[y * n + x] + slope;
+                if before[x] >= need && after[x] >= need {
+                    let a = aperture(y, x, n);
+                    if a > 0.0 {
+                        found(y * n + x, a);
+                    }
+                }
+            }
+        }
+        self.any = top > 0.0;
         if !self.any {
             return;
         }
@@ -175,7 +206,13 @@ impl Apertures {
             (bounds[3] + reach).min(n - 1),
         ];
         self.written = [x0, y0, x1, y1];
-        spread(reveal, n, self.written, slope);
+        spread(
+            reveal,
+            n,
+            self.written,
+            slope,
+            [&mut self.values, &mut self.wedge, &mut self.cone],
+        );
         for y in y0..=y1 {
             for x in x0..=x1 {
                 let t = (y / TILE) * tiles_per_row + x / TILE;
@@ -217,36 +254,78 @@ impl Apertures {
 
 /// Spreads each value of `reveal` (`n` pixels a row) by a cone of `slope` a pixel within the
 /// inclusive rectangle `[x0, y0, x1, y1]`: each pixel becomes the largest `v − slope · d` over
-/// the pixels of the rectangle, `v` their value and `d` their Chebyshev distance (two chamfer
-/// passes over the 8-neighbourhood, exact for that metric).
-fn spread(reveal: &mut [f32], n: usize, rect: [usize; 4], slope: f32) {
+/// the pixels of the rectangle, `v` their value and `d` their Chebyshev distance, `slope`
+/// subtracted once a step. The cone is four wedges, each swept one row (or column) at a time
+/// from the one before, its three neighbours there one step away: down, up, right, left.
+/// Within a row (or column) no pixel waits for another. `scratch`: three buffers.
+fn spread(reveal: &mut [f32], n: usize, rect: [usize; 4], slope: f32, scratch: [&mut Vec<f32>; 3]) {
     let [x0, y0, x1, y1] = rect;
+    let w = x1 - x0 + 1;
+    let [values, wedge, cone] = scratch;
+    values.clear();
     for y in y0..=y1 {
-        for x in x0..=x1 {
-            let mut r = reveal[y * n + x];
-            if x > x0 {
-                r = r.max(reveal[y * n + x - 1] - slope);
-            }
-            if y > y0 {
-                for xx in x.saturating_sub(1).max(x0)..=(x + 1).min(x1) {
-                    r = r.max(reveal[(y - 1) * n + xx] - slope);
-                }
-            }
-            reveal[y * n + x] = r;
+        values.extend_from_slice(&reveal[y * n + x0..=y * n + x1]);
+    }
+    cone.clear();
+    cone.extend_from_slice(values);
+    sweep_rows(cone, w, slope, true);
+    for (pass, down) in [(0, false), (1, true), (1, false)] {
+        wedge.clear();
+        wedge.extend_from_slice(values);
+        if pass == 0 {
+            sweep_rows(wedge, w, slope, down);
+        } else {
+            sweep_columns(wedge, w, slope, down);
+        }
+        for (c, &v) in cone.iter_mut().zip(wedge.iter()) {
+            *c = c.max(v);
         }
     }
-    for y in (y0..=y1).rev() {
-        for x in (x0..=x1).rev() {
-            let mut r = reveal[y * n + x];
-            if x < x1 {
-                r = r.max(reveal[y * n + x + 1] - slope);
-            }
-            if y < y1 {
-                for xx in x.saturating_sub(1).max(x0)..=(x + 1).min(x1) {
-                    r = r.max(reveal[(y + 1) * n + xx] - slope);
-                }
-            }
-            reveal[y * n + x] = r;
+    for (y, row) in (y0..=y1).zip(cone.chunks_exact(w)) {
+        reveal[y * n + x0..=y * n + x1].copy_from_slice(row);
+    }
+}
+
+/// One wedge of [`spread`] over `buf` (`w` wide): each row, in order (`forward`) or in
+/// reverse, takes the largest of its value and its three neighbours' in the row before less
+/// `slope`.
+fn sweep_rows(buf: &mut [f32], w: usize, slope: f32, forward: bool) {
+    let h = buf.len() / w;
+    for k in 1..h {
+        let (before, row) = if forward {
+            let (head, tail) = buf.split_at_mut(k * w);
+            (&head[(k - 1) * w..], &mut tail[..w])
+        } else {
+            let (head, tail) = buf.split_at_mut((h - k) * w);
+            (&tail[..w], &mut head[(h - k - 1) * w..])
+        };
+        row[0] = row[0].max(before[0].max(before[w.min(2) - 1]) - slope);
+        if w > 1 {
+            row[w - 1] = row[w - 1].max(before[w - 2].max(before[w - 1]) - slope);
+        }
+        for (r, b) in row[1..w.max(2) - 1].iter_mut().zip(before.windows(3)) {
+            *r = r.max(b[0].max(b[1]).max(b[2]) - slope);
+        }
+    }
+}
+
+/// [`sweep_rows`] along the columns: each column, left to right (`forward`) or right to left,
+/// from the column before.
+fn sweep_columns(buf: &mut [f32], w: usize, slope: f32, forward: bool) {
+    let h = buf.len() / w;
+    for k in 1..w {
+        let (from, to) = if forward {
+            (k - 1, k)
+        } else {
+            (w - k, w - k - 1)
+        };
+        for y in 0..h {
+            let (lo, hi) = (y.saturating_sub(1), (y + 1).min(h - 1));
+            let m = buf[lo * w + from]
+                .max(buf[y * w + from])
+                .max(buf[hi * w + from]);
+            let r = &mut buf[y * w + to];
+            *r = r.max(m - slope);
         }
     }
 }
@@ -356,22 +435,24 @@ mod tests {
 
     proptest! {
         #[test]
-        fn the_spread_is_the_largest_value_less_its_chebyshev_distance(
+        fn the_spread_is_the_largest_value_less_a_slope_a_chebyshev_step(
             values in proptest::collection::vec(
                 prop_oneof![3 => Just(0.0f32), 1 => 0.0f32..2.0], 12 * 12),
             slope in 0.05f32..1.0,
         ) {
             let n = 12;
             let mut reveal = values.clone();
-            spread(&mut reveal, n, [0, 0, n - 1, n - 1], slope);
+            let mut scratch = [Vec::new(), Vec::new(), Vec::new()];
+            let [a, b, c] = &mut scratch;
+            spread(&mut reveal, n, [0, 0, n - 1, n - 1], slope, [a, b, c]);
             for y in 0..n {
                 for x in 0..n {
                     let mut want = 0.0f32;
                     for (i, &v) in values.iter().enumerate() {
                         let d = (i % n).abs_diff(x).max((i / n).abs_diff(y));
-                        want = want.max(v - slope * d as f32);
+                        want = want.max((0..d).fold(v, |v, _| v - slope));
                     }
-                    prop_assert!((reveal[y * n + x] - want).abs() <= 1e-5 * (1.0 + want));
+                    prop_assert_eq!(reveal[y * n + x], want);
                 }
             }
         }
