@@ -150,10 +150,10 @@ impl Apertures {
             after.resize(n, 0.0);
             for k in 1..=reach {
                 for (b, &d) in before[k..].iter_mut().zip(row) {
-                    *b = b.max(d);
+                    *b = max(*b, d);
                 }
                 for (a, &d) in after.iter_mut().zip(&row[k..]) {
-                    *a = a.max(d);
+                    *a = max(*a, d);
                 }
             }
             for i in 0..n {
@@ -174,12 +174,12 @@ impl Apertures {
             for k in 1..=reach {
                 if let Some(other) = y.checked_sub(k) {
                     for (b, &d) in before.iter_mut().zip(&depth[other * n..][..n]) {
-                        *b = b.max(d);
+                        *b = max(*b, d);
                     }
                 }
                 if y + k < n {
                     for (a, &d) in after.iter_mut().zip(&depth[(y + k) * n..][..n]) {
-                        *a = a.max(d);
+                        *a = max(*a, d);
                     }
                 }
             }
@@ -278,12 +278,19 @@ fn spread(reveal: &mut [f32], n: usize, rect: [usize; 4], slope: f32, scratch: [
             sweep_columns(wedge, w, slope, down);
         }
         for (c, &v) in cone.iter_mut().zip(wedge.iter()) {
-            *c = c.max(v);
+            *c = max(*c, v);
         }
     }
     for (y, row) in (y0..=y1).zip(cone.chunks_exact(w)) {
         reveal[y * n + x0..=y * n + x1].copy_from_slice(row);
     }
+}
+
+/// The larger of `a` and `b`, neither NaN: one `maxss` (`f32::max` also handles NaN, which
+/// keeps the loops here from vectorizing).
+#[inline(always)]
+fn max(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
 }
 
 /// One wedge of [`spread`] over `buf` (`w` wide): each row, in order (`forward`) or in
@@ -299,12 +306,12 @@ fn sweep_rows(buf: &mut [f32], w: usize, slope: f32, forward: bool) {
             let (head, tail) = buf.split_at_mut((h - k) * w);
             (&tail[..w], &mut head[(h - k - 1) * w..])
         };
-        row[0] = row[0].max(before[0].max(before[w.min(2) - 1]) - slope);
+        row[0] = max(row[0], max(before[0], before[w.min(2) - 1]) - slope);
         if w > 1 {
-            row[w - 1] = row[w - 1].max(before[w - 2].max(before[w - 1]) - slope);
+            row[w - 1] = max(row[w - 1], max(before[w - 2], before[w - 1]) - slope);
         }
         for (r, b) in row[1..w.max(2) - 1].iter_mut().zip(before.windows(3)) {
-            *r = r.max(b[0].max(b[1]).max(b[2]) - slope);
+            *r = max(*r, max(max(b[0], b[1]), b[2]) - slope);
         }
     }
 }
@@ -321,11 +328,11 @@ fn sweep_columns(buf: &mut [f32], w: usize, slope: f32, forward: bool) {
         };
         for y in 0..h {
             let (lo, hi) = (y.saturating_sub(1), (y + 1).min(h - 1));
-            let m = buf[lo * w + from]
-                .max(buf[y * w + from])
-                .max(buf[hi * w + from]);
-            let r = &mut buf[y * w + to];
-            *r = r.max(m - slope);
+            let m = max(
+                max(buf[lo * w + from], buf[y * w + from]),
+                buf[hi * w + from],
+            );
+            buf[y * w + to] = max(buf[y * w + to], m - slope);
         }
     }
 }
