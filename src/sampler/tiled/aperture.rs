@@ -134,65 +134,19 @@ impl Apertures {
                 ];
             }
         };
-        // By depth alone first, a line at a time (the nearest depth within the width before
-        // and after each pixel), so that only pixels with a deep enough step on both sides
-        // look up patches: along each row, then along the columns, a row of them at a time.
-        let (before, after) = (&mut self.before, &mut self.after);
-        let reach = width.min(n - 1);
-        for y in 0..n {
-            let row = &depth[y * n..][..n];
-            if row.iter().all(|&d| d == 0.0) {
-                continue;
-            }
-            before.clear();
-            before.resize(n, 0.0);
-            after.clear();
-            after.resize(n, 0.0);
-            for k in 1..=reach {
-                for (b, &d) in before[k..].iter_mut().zip(row) {
-                    *b = max(*b, d);
+        deep_steps(
+            depth,
+            n,
+            width,
+            slope,
+            [&mut self.before, &mut self.after],
+            |i, base, stride| {
+                let a = aperture(i, base, stride);
+                if a > 0.0 {
+                    found(base + i * stride, a);
                 }
-                for (a, &d) in after.iter_mut().zip(&row[k..]) {
-                    *a = max(*a, d);
-                }
-            }
-            for i in 0..n {
-                let need = row[i] + slope;
-                if before[i] >= need && after[i] >= need {
-                    let a = aperture(i, y * n, 1);
-                    if a > 0.0 {
-                        found(y * n + i, a);
-                    }
-                }
-            }
-        }
-        for y in 0..n {
-            before.clear();
-            before.resize(n, 0.0);
-            after.clear();
-            after.resize(n, 0.0);
-            for k in 1..=reach {
-                if let Some(other) = y.checked_sub(k) {
-                    for (b, &d) in before.iter_mut().zip(&depth[other * n..][..n]) {
-                        *b = max(*b, d);
-                    }
-                }
-                if y + k < n {
-                    for (a, &d) in after.iter_mut().zip(&depth[(y + k) * n..][..n]) {
-                        *a = max(*a, d);
-                    }
-                }
-            }
-            for x in 0..n {
-                let need = depth[y * n + x] + slope;
-                if before[x] >= need && after[x] >= need {
-                    let a = aperture(y, x, n);
-                    if a > 0.0 {
-                        found(y * n + x, a);
-                    }
-                }
-            }
-        }
+            },
+        );
         self.any = top > 0.0;
         if !self.any {
             return;
@@ -249,6 +203,67 @@ impl Apertures {
     /// Whether anything is revealed at all.
     pub(super) fn any(&self) -> bool {
         self.any
+    }
+}
+
+/// Calls `visit(i, base, stride)` for each pixel `base + i · stride` of a row (`stride` 1) or
+/// a column (`stride` `n`) of the `n`² depths `depth` that has, within `width` pixels on both
+/// sides along that line, a depth at least `slope` nearer than its own: the only pixels that
+/// may be apertures, found by depth alone before any patch is looked up. A line at a time:
+/// the nearest depth within the width before and after each pixel, the rows first, then the
+/// columns a row of them at a time (the image is stored by rows). `lines`: scratch.
+fn deep_steps(
+    depth: &[f32],
+    n: usize,
+    width: usize,
+    slope: f32,
+    lines: [&mut Vec<f32>; 2],
+    mut visit: impl FnMut(usize, usize, usize),
+) {
+    let [before, after] = lines;
+    let reach = width.min(n - 1);
+    let row = |y: usize| &depth[y * n..][..n];
+    for pass in 0..2 {
+        for y in 0..n {
+            if pass == 0 && row(y).iter().all(|&d| d == 0.0) {
+                continue;
+            }
+            before.clear();
+            before.resize(n, 0.0);
+            after.clear();
+            after.resize(n, 0.0);
+            for k in 1..=reach {
+                if pass == 0 {
+                    for (b, &d) in before[k..].iter_mut().zip(row(y)) {
+                        *b = max(*b, d);
+                    }
+                    for (a, &d) in after.iter_mut().zip(&row(y)[k..]) {
+                        *a = max(*a, d);
+                    }
+                    continue;
+                }
+                if let Some(other) = y.checked_sub(k) {
+                    for (b, &d) in before.iter_mut().zip(row(other)) {
+                        *b = max(*b, d);
+                    }
+                }
+                if y + k < n {
+                    for (a, &d) in after.iter_mut().zip(row(y + k)) {
+                        *a = max(*a, d);
+                    }
+                }
+            }
+            for (x, &d) in row(y).iter().enumerate() {
+                let need = d + slope;
+                if before[x] >= need && after[x] >= need {
+                    if pass == 0 {
+                        visit(x, y * n, 1);
+                    } else {
+                        visit(y, x, n);
+                    }
+                }
+            }
+        }
     }
 }
 
