@@ -102,9 +102,7 @@ impl<'a> Scene<'a> {
             }
         })
     }
-}
 
-impl Scene<'_> {
     /// The patch graph (`--dilate`, `--apertures`), built on first use.
     pub(super) fn patch_graph(&self) -> &PatchGraph {
         self.graph

@@ -284,14 +284,15 @@ fn spread(reveal: &mut [f32], n: usize, rect: [usize; 4], slope: f32, scratch: [
     cone.clear();
     cone.extend_from_slice(values);
     sweep_rows(cone, w, slope, true);
-    for (pass, down) in [(0, false), (1, true), (1, false)] {
+    let others: [(Sweep, bool); 3] = [
+        (sweep_rows, false),
+        (sweep_columns, true),
+        (sweep_columns, false),
+    ];
+    for (sweep, forward) in others {
         wedge.clear();
         wedge.extend_from_slice(values);
-        if pass == 0 {
-            sweep_rows(wedge, w, slope, down);
-        } else {
-            sweep_columns(wedge, w, slope, down);
-        }
+        sweep(wedge, w, slope, forward);
         for (c, &v) in cone.iter_mut().zip(wedge.iter()) {
             *c = max(*c, v);
         }
@@ -307,6 +308,9 @@ fn spread(reveal: &mut [f32], n: usize, rect: [usize; 4], slope: f32, scratch: [
 fn max(a: f32, b: f32) -> f32 {
     if a > b { a } else { b }
 }
+
+/// A wedge's sweep: [`sweep_rows`] or [`sweep_columns`].
+type Sweep = fn(&mut [f32], usize, f32, bool);
 
 /// One wedge of [`spread`] over `buf` (`w` wide): each row, in order (`forward`) or in
 /// reverse, takes the largest of its value and its three neighbours' in the row before less
