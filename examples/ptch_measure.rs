@@ -81,6 +81,7 @@ fn main() {
         patches: &patches,
         visibility: &matrix,
         shells: &[],
+        reach: 0.0,
     };
     let full = encode_as(&contents, VisibilityEncoding::Tree, PatchTableLayout::Full);
     let compact = encode_as(

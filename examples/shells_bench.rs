@@ -101,6 +101,7 @@ fn main() {
             patches: &list,
             visibility: &main_rows,
             shells,
+            reach: 0.0,
         })
     };
     let (v4, v5) = (file(&[]), file(&shells));

@@ -136,6 +136,11 @@ uint32_t patchvis_shell_count(const PatchvisFile *file);
  * distance (0 without them, every file of version 1-5); 0 for a NULL or unparsed file. */
 uint32_t patchvis_sampling_shell(const PatchvisFile *file);
 
+/* SHEL's reach: out to this distance from the centre, an eye between the sampling sphere and the
+ * first far shell is answered by the sampling sphere alone (0: none, every file before version
+ * 6 and one without a far band); 0 for a NULL or unparsed file. */
+float patchvis_sampling_reach(const PatchvisFile *file);
+
 /* Describes shell s (0..K, outermost first; J is the sampling sphere) in *out. Returns
  * PATCHVIS_OK, PATCHVIS_ERR_ARGUMENT (out NULL), PATCHVIS_ERR_NOT_PARSED or PATCHVIS_ERR_RANGE
  * (s > K). */

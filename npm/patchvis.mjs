@@ -389,7 +389,7 @@ const RULE_TEXTS = [
   "VISB code length",
   "VISB code must not end in a zero byte",
   "SHEL shell_count must be in 1..=8",
-  "SHEL reserved field must be 0",
+  "SHEL reach must be 0, or finite and above CAMR distance with a shell beyond it",
   "SHEL distance must be finite, below the previous shell's (CAMR distance for the first before version 6), not CAMR distance and >= CAMR radius",
   "SHEL shell level",
   "SHEL payload reserved field must be 0",

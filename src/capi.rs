@@ -485,6 +485,18 @@ pub unsafe extern "C" fn patchvis_sampling_shell(file: *const PatchvisFile) -> u
     unsafe { handle(file) }.map_or(0, |pvis| pvis.sampling_shell())
 }
 
+/// SHEL's reach: how far from the centre an eye between the sampling sphere and the first far
+/// shell is answered by the sampling sphere alone (spec § SHEL); 0 where the file has none, and
+/// for a null or an unparsed `file`.
+///
+/// # Safety
+/// `file` as for every call.
+#[cfg_attr(not(feature = "wasm"), unsafe(no_mangle))]
+pub unsafe extern "C" fn patchvis_sampling_reach(file: *const PatchvisFile) -> f32 {
+    // SAFETY: caller contract on `file`.
+    unsafe { handle(file) }.map_or(0.0, |pvis| pvis.sampling_reach())
+}
+
 /// Describes shell `s` (`0..=K`, outermost first; `J` is the sampling sphere) in `*out`.
 /// Returns 0, `PATCHVIS_ERR_ARGUMENT` (`out` null), `PATCHVIS_ERR_NOT_PARSED` or
 /// `PATCHVIS_ERR_RANGE` (`s > K`).

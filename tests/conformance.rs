@@ -165,6 +165,9 @@ fn dump(pvis: &Pvis<'_>) -> String {
         if pvis.version() >= 6 {
             let _ = writeln!(out, "sampling shell: {j}");
         }
+        if pvis.sampling_reach() != 0.0 {
+            let _ = writeln!(out, "sampling reach: {}", pvis.sampling_reach());
+        }
         for shell in records() {
             let sh = pvis.shell(shell);
             let _ = writeln!(
@@ -231,7 +234,7 @@ fn dump(pvis: &Pvis<'_>) -> String {
             patches.join(",")
         );
         if k > 0 {
-            let _ = writeln!(out, "{}", far_query(pvis, eye, visible.band > j));
+            let _ = writeln!(out, "{}", far_query(pvis, eye));
         }
     }
     out
@@ -240,12 +243,13 @@ fn dump(pvis: &Pvis<'_>) -> String {
 /// The answer of a far-only reader (spec § Far-only readers) to `eye`, as a `far-query` line
 /// in the `query` format of a file without shells: § Query's rule on the sampling sphere
 /// alone, taken literally from the sampling sphere's rows, with `inside` for every eye nearer
-/// than the sampling distance (`nearer`: the full reader's band is above the sampling
-/// shell's number).
-fn far_query(pvis: &Pvis<'_>, eye: [f32; 3], nearer: bool) -> String {
+/// than the sampling distance (`q < D²` in binary64, every product exact).
+fn far_query(pvis: &Pvis<'_>, eye: [f32; 3]) -> String {
     let s = pvis.sampling();
     let c = s.center;
     let d = [eye[0] - c[0], eye[1] - c[1], eye[2] - c[2]];
+    let square = |x: f32| f64::from(x) * f64::from(x);
+    let nearer = (square(d[0]) + square(d[1])) + square(d[2]) < square(s.distance);
     let mut answer = vec![0u64; pvis.row_words()];
     let mut row = vec![0u64; pvis.row_words()];
     let (inside, leaf) = if d.iter().all(|x| x.is_finite()) {
@@ -320,6 +324,10 @@ fn far_positions() -> Vec<[f32; 3]> {
         [0.0, 5.9, 0.0],
         [-2.0, -3.0, 2.0],
         [0.0, 0.0, -3.0],
+        // Between the sampling distance and 026's reach (3.0625), and exactly on the reach.
+        [0.0, 0.0, 3.05],
+        [1.75, -1.75, 1.75],
+        [0.0, 3.0625, 0.0],
     ]
 }
 
@@ -383,6 +391,8 @@ struct ValidSpec {
     /// Each shell's payload encoding, where they differ from `encoding` (empty: all
     /// `encoding`): the payloads are taken from the file written in each encoding.
     shell_encodings: Vec<VisibilityEncoding>,
+    /// SHEL's `reach` (0: none; only with a shell beyond the sampling distance).
+    reach: f32,
 }
 
 fn valid_specs() -> Vec<ValidSpec> {
@@ -401,6 +411,7 @@ fn valid_specs() -> Vec<ValidSpec> {
         facing: false,
         shells: Vec::new(),
         shell_encodings: Vec::new(),
+        reach: 0.0,
     };
     // Versions 5 and 6: sampling shells, around the origin with the sampling sphere at
     // distance 3.
@@ -621,6 +632,29 @@ fn valid_specs() -> Vec<ValidSpec> {
                 ],
             )
         },
+        // SHEL's reach: 023's shells with the spec's example's reach (band 3 nearer than 3.0625
+        // answered by the sampling sphere alone), and 022's with a reach past the nearest far
+        // shell (all of band 2 so answered).
+        ValidSpec {
+            reach: 3.0625,
+            ..v6(
+                "026-v6-level2-sampling-reach",
+                2,
+                (1..=40).map(|i| i % 4 + 1).collect(),
+                26,
+                vec![(768.0, 1), (12.0, 3), (6.0, 2), (2.5, 2), (1.75, 0)],
+            )
+        },
+        ValidSpec {
+            reach: 7.0,
+            ..v6(
+                "027-v6-level2-reach-past-the-next-shell",
+                2,
+                (1..=65).map(|i| i % 3 + 1).collect(),
+                27,
+                vec![(12.0, 2), (6.0, 1)],
+            )
+        },
     ]
 }
 
@@ -720,6 +754,7 @@ fn build_valid(spec: &ValidSpec) -> Vec<u8> {
         patches: &patches,
         visibility: &matrix,
         shells: &shells,
+        reach: spec.reach,
     };
     let mut bytes = encode_as(&contents, spec.encoding, spec.layout);
     if !spec.shell_encodings.is_empty() {
@@ -1396,6 +1431,27 @@ fn invalid_v6_specs() -> Vec<(&'static str, Corruption)> {
         ("194-v6-distance-nan", |b| {
             (u32_at(&b, 8) == 6).then_some(())?;
             in_shel(b, |b, shel| put_u32(b, record(shel, 2), f32::NAN.to_bits()))
+        }),
+        // SHEL's reach: above the sampling distance (3), finite, or 0.
+        ("195-v6-reach-at-sampling-distance", |b| {
+            (u32_at(&b, 8) == 6).then_some(())?;
+            in_shel(b, |b, shel| put_u32(b, shel + 4, 3.0f32.to_bits()))
+        }),
+        ("196-v6-reach-below-sampling-distance", |b| {
+            (u32_at(&b, 8) == 6).then_some(())?;
+            in_shel(b, |b, shel| put_u32(b, shel + 4, 2.0f32.to_bits()))
+        }),
+        ("197-v6-reach-nan", |b| {
+            (u32_at(&b, 8) == 6).then_some(())?;
+            in_shel(b, |b, shel| put_u32(b, shel + 4, f32::NAN.to_bits()))
+        }),
+        ("198-v6-reach-negative-zero", |b| {
+            (u32_at(&b, 8) == 6).then_some(())?;
+            in_shel(b, |b, shel| put_u32(b, shel + 4, (-0.0f32).to_bits()))
+        }),
+        ("199-v6-reach-infinite", |b| {
+            (u32_at(&b, 8) == 6).then_some(())?;
+            in_shel(b, |b, shel| put_u32(b, shel + 4, f32::INFINITY.to_bits()))
         }),
     ]
 }

@@ -72,6 +72,7 @@ fn parse_query_streaming_expanded_and_iteration_allocate_nothing() {
             patches: &patches,
             visibility: &matrix,
             shells,
+            reach: 0.0,
         });
         assert_eq!(
             Pvis::parse(&bytes).unwrap().shell_count() as usize,

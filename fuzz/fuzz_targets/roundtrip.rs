@@ -93,6 +93,7 @@ fuzz_target!(|input: Contents| {
         patches: &patches,
         visibility: &matrix,
         shells: &[],
+        reach: 0.0,
     });
     let pvis = Pvis::parse(&bytes).expect("the reader accepts the writer's output");
     let s = pvis.sampling();
@@ -153,6 +154,7 @@ fuzz_target!(|input: Contents| {
         patches: &patches,
         visibility: &matrix,
         shells: &[],
+        reach: 0.0,
     });
     assert_eq!(bytes, again);
 });

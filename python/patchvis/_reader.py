@@ -79,7 +79,7 @@ class Reader:
         """What the file holds, as ``patchvis info --json`` prints it: ``version``,
         ``patches``, ``triangles``, ``level``, ``views``, ``camera`` (``center``, ``radius``,
         ``distance``, ``fov_deg``, ``resolution``), ``bytes`` (``total``, ``visibility``,
-        ``patch_table``, ``shells``), ``sampling_shell`` and ``shells``."""
+        ``patch_table``, ``shells``), ``sampling_shell``, ``sampling_reach`` and ``shells``."""
         return self._native.info
 
     @property

@@ -128,6 +128,7 @@ impl Reader {
         info.set_item("bytes", bytes)?;
         let sampling = pvis.sampling_shell();
         info.set_item("sampling_shell", sampling)?;
+        info.set_item("sampling_reach", pvis.sampling_reach())?;
         let shells = PyList::empty(py);
         for k in (0..=pvis.shell_count()).filter(|&k| k != sampling) {
             let shell = pvis.shell(k);

@@ -48,7 +48,8 @@ pub(crate) fn number(
 }
 
 /// The `.pvis` bytes of the patch records `patches` and the stored rows, in the file's
-/// numbering: the sampling sphere's `visibility` and the shells' `shells`, outermost first.
+/// numbering: the sampling sphere's `visibility` and the shells' `shells`, outermost first,
+/// with SHEL's `reach` (0 for none, `Plan::sampling_reach`).
 pub(crate) fn encode(
     encoding: VisibilityEncoding,
     params: &SamplingParams,
@@ -56,6 +57,7 @@ pub(crate) fn encode(
     patches: &[Patch],
     visibility: &VisibilityMatrix,
     shells: &[ShellRows],
+    reach: f32,
 ) -> Vec<u8> {
     try_encode(
         encoding,
@@ -64,6 +66,7 @@ pub(crate) fn encode(
         patches,
         visibility,
         shells,
+        reach,
     )
     .unwrap_or_else(|e| panic!("the bake's own records break the format: {e}"))
 }
@@ -76,6 +79,7 @@ pub(crate) fn try_encode(
     patches: &[Patch],
     visibility: &VisibilityMatrix,
     shells: &[ShellRows],
+    reach: f32,
 ) -> Result<Vec<u8>, crate::runtime::Error> {
     format::try_encode_with(
         &BakeContents {
@@ -84,6 +88,7 @@ pub(crate) fn try_encode(
             patches,
             visibility,
             shells,
+            reach,
         },
         encoding,
     )

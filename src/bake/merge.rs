@@ -370,6 +370,7 @@ fn encode_passes(
         &patches,
         &visibility,
         &shell_rows,
+        plan.sampling_reach(params.distance(), &distances),
     )
     .map_err(|e| {
         MergeError::part(

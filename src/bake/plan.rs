@@ -22,7 +22,7 @@ use super::settings::{
 use super::shells;
 use crate::memory::MemoryBudget;
 use crate::ooc::Mesh;
-use crate::sampler::{FinerViews, FoldCorners, MAX_VIEW_SUPERSAMPLE};
+use crate::sampler::{FinerViews, FoldCorners, MAX_VIEW_SUPERSAMPLE, PassViews, probe_reach};
 use crate::sphere::{MAX_LEVEL, view_count};
 use crate::visibility::SamplingParams;
 use std::path::{Path, PathBuf};
@@ -346,6 +346,33 @@ impl Plan {
     /// Whether the bake runs the probe pass (the shells probe as the sampling sphere does).
     pub fn probes(&self) -> bool {
         self.main.probe.is_some()
+    }
+
+    /// SHEL's `reach` for a file whose sampling sphere is at `distance` and whose SHEL
+    /// records are at `shells`: `distance` times how far out the probe cells of the sampling
+    /// sphere's finest pass hold every camera whose query uses its rows
+    /// ([`crate::sampler::probe_reach`]), rounded down to binary32, so that the sampling
+    /// sphere alone answers every eye out to there (spec § Query) and culls as it did before
+    /// the far band. 0 without the probe or without a far shell.
+    pub fn sampling_reach(&self, distance: f32, shells: &[f32]) -> f32 {
+        if !self.probes() || !shells.iter().any(|&s| s > distance) {
+            return 0.0;
+        }
+        let main = &self.main;
+        let fine = (main.level + main.supersample.extra_levels).min(MAX_LEVEL);
+        let pass = PassViews::pass(fine, main.supersample.finer_views(main.level, fine));
+        let exact = f64::from(distance) * probe_reach(&pass);
+        let reach = exact as f32;
+        let reach = if f64::from(reach) > exact {
+            reach.next_down()
+        } else {
+            reach
+        };
+        if reach > distance && reach <= f32::MAX {
+            reach
+        } else {
+            0.0
+        }
     }
 
     /// The sphere level of each sampling pass, in order: the sampling sphere's passes, then

@@ -269,7 +269,8 @@ impl Recipe {
     }
 
     /// The `.pvis` bytes of a bake with the sampling shells `shells` (outermost first, in the
-    /// file's patch numbering; none for a file without shells).
+    /// file's patch numbering; none for a file without shells), and SHEL's reach where they
+    /// include a far band ([`Plan::sampling_reach`]).
     pub fn encode(
         &self,
         params: &SamplingParams,
@@ -278,6 +279,7 @@ impl Recipe {
         visibility: &VisibilityMatrix,
         shells: &[ShellRows],
     ) -> Vec<u8> {
+        let distances: Vec<f32> = shells.iter().map(|s| s.distance).collect();
         encode::encode(
             self.plan.rows.encoding,
             params,
@@ -285,6 +287,7 @@ impl Recipe {
             &tiling.patches,
             visibility,
             shells,
+            self.plan.sampling_reach(params.distance(), &distances),
         )
     }
 

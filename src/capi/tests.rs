@@ -88,6 +88,9 @@ fn shells_and_their_answers_match_the_dump() {
     // SAFETY: as above; null is answered too. Version 5: the sampling sphere is shell 0.
     assert_eq!(unsafe { patchvis_sampling_shell(&file) }, 0);
     assert_eq!(unsafe { patchvis_sampling_shell(core::ptr::null()) }, 0);
+    // SAFETY: as above. No far band: no reach.
+    assert_eq!(unsafe { patchvis_sampling_reach(&file) }, 0.0);
+    assert_eq!(unsafe { patchvis_sampling_reach(core::ptr::null()) }, 0.0);
     let mut shell = PatchvisShell::default();
     for k in 1..=count {
         // SAFETY: as above.
@@ -746,10 +749,14 @@ fn far_band_shells_and_their_answers_are_the_readers() {
         patches: &patches,
         visibility: &sampling,
         shells: &shells,
+        // The sampling sphere alone answers out to 1.5·D (of the band out to 2·D).
+        reach: 1.5 * d,
     });
     let pvis = Pvis::parse(&bytes).unwrap();
     let (code, file) = parsed(&bytes);
     assert_eq!((code, pvis.version()), (PATCHVIS_OK, 6));
+    // SAFETY: `file` was parsed from `bytes`, which outlive it.
+    assert_eq!(unsafe { patchvis_sampling_reach(&file) }, 1.5 * d);
     // SAFETY: `file` was parsed from `bytes`, which outlive it; outputs are writable.
     let (count, j) = unsafe { (patchvis_shell_count(&file), patchvis_sampling_shell(&file)) };
     assert_eq!((count, j), (5, 3));
@@ -769,7 +776,7 @@ fn far_band_shells_and_their_answers_are_the_readers() {
     let mut rust_scratch = vec![0u64; words];
     let (_stream_scratch, mut stream) = stream_over(&file);
     let mut bands = [false; 7];
-    let radii = [1000.0, 300.0, 30.0, 3.0, 1.5, 1.0, 0.9, 0.7, 0.5, 0.0].map(|x| x * d);
+    let radii = [1000.0, 300.0, 30.0, 3.0, 1.5, 1.2, 1.0, 0.9, 0.7, 0.5, 0.0].map(|x| x * d);
     for (i, r) in radii.iter().enumerate() {
         for u in [[0.36f32, 0.48, 0.8], [-0.6, 0.64, -0.48], [0.0, -0.6, 0.8]] {
             let eye = u.map(|x| x * r);

@@ -67,6 +67,7 @@ pub fn info(args: &InfoArgs) -> Result<()> {
                 "shells": pvis.shells_bytes(),
             },
             "sampling_shell": pvis.sampling_shell(),
+            "sampling_reach": pvis.sampling_reach(),
             "shells": records(&pvis).map(|k| {
                 let shell = pvis.shell(k);
                 json!({
@@ -129,6 +130,13 @@ pub fn info(args: &InfoArgs) -> Result<()> {
                 outln!(
                     "    the sampling sphere is shell {}, the shells before it lie beyond it",
                     pvis.sampling_shell()
+                )?;
+            }
+            if pvis.sampling_reach() > 0.0 {
+                outln!(
+                    "    the sampling sphere alone answers out to {} ({:.4} sampling distances)",
+                    pvis.sampling_reach(),
+                    pvis.sampling_reach() / s.distance
                 )?;
             }
             for k in records(&pvis) {

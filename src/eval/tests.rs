@@ -72,6 +72,7 @@ fn bake_numbered(mesh: &Mesh, patches: u32, level: u32, covisibility: bool) -> V
         patches: &tiling.patches,
         visibility: &visibility,
         shells: &[],
+        reach: 0.0,
     })
 }
 
@@ -221,6 +222,7 @@ fn a_mesh_in_the_files_patch_order_evaluates_without_tiling_and_like_the_origina
         patches: &tiling.patches,
         visibility: &rows.with_patch_order(&order),
         shells: &[],
+        reach: 0.0,
     });
     let pvis = Pvis::parse(&bytes).unwrap();
     let positions = (0..mesh.vertex_count()).map(|v| mesh.position(v)).collect();

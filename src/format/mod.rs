@@ -52,6 +52,10 @@ pub struct BakeContents<'a> {
     /// (beyond the sampling distance) first, then those nearer the model; empty for a file
     /// without them.
     pub shells: &'a [ShellRows<'a>],
+    /// SHEL's `reach` (spec § SHEL): out to this distance from the centre, an eye between the
+    /// sampling sphere and the first far shell is answered by the sampling sphere alone. 0 for
+    /// none; otherwise above the sampling distance, with a far shell.
+    pub reach: f32,
 }
 
 /// The rows of one sampling shell: views on a sphere of radius `distance` around the
@@ -204,7 +208,13 @@ fn try_encode_as(
         PatchTableLayout::Compact => contents.shells,
         PatchTableLayout::Full => &[],
     };
-    let shel = shel(shells, patch_count, &body);
+    // A reach needs the far band, which the full table's fallback leaves out.
+    let reach = if shells.is_empty() {
+        0.0
+    } else {
+        contents.reach
+    };
+    let shel = shel(shells, reach, patch_count, &body);
     let bodies: &[&Vec<u8>] = match shel {
         Some(ref shel) => &[&camr, &ptch, &visb, shel],
         None => &[&camr, &ptch, &visb],
@@ -279,15 +289,16 @@ fn check_ranges(triangle_count: u64, patches: &[Patch]) -> Result<(), crate::run
     Ok(())
 }
 
-/// § SHEL: the shell count, a record per shell (distance, level, payload length) and the
-/// payloads, each the VISB body `body` codes for the shell's matrix and level; `None` without
-/// shells.
+/// § SHEL: the shell count, `reach`, a record per shell (distance, level, payload length) and
+/// the payloads, each the VISB body `body` codes for the shell's matrix and level; `None`
+/// without shells.
 ///
 /// # Panics
 /// If there are more than `MAX_SHELLS` shells or a shell's matrix has a view count of no level
 /// or rows of another patch count (broken caller contracts).
 fn shel(
     shells: &[ShellRows],
+    reach: f32,
     patch_count: u64,
     body: &dyn Fn(&VisibilityMatrix, u32) -> Vec<u8>,
 ) -> Option<Vec<u8>> {
@@ -320,7 +331,7 @@ fn shel(
         .collect();
     let mut out = Vec::new();
     out.extend_from_slice(&(shells.len() as u32).to_le_bytes());
-    out.extend_from_slice(&0u32.to_le_bytes());
+    out.extend_from_slice(&reach.to_le_bytes());
     for (shell, (level, payload)) in shells.iter().zip(&payloads) {
         out.extend_from_slice(&shell.distance.to_le_bytes());
         out.extend_from_slice(&level.to_le_bytes());

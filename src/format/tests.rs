@@ -70,6 +70,7 @@ fn round_trip_with(
                 patches: &patches(counts),
                 visibility: matrix,
                 shells: &[],
+                reach: 0.0,
             },
             encoding
         ),
@@ -96,6 +97,7 @@ fn round_trip_as(
         patches: &patches,
         visibility: matrix,
         shells: &[],
+        reach: 0.0,
     };
     let bytes = encode_as(&contents, encoding, layout);
     if (encoding, layout) == (VisibilityEncoding::Tree, PatchTableLayout::Compact) {
@@ -200,6 +202,7 @@ fn encode_patches(patches: &[Patch]) -> Vec<u8> {
         patches,
         visibility: &matrix,
         shells: &[],
+        reach: 0.0,
     })
 }
 
@@ -274,6 +277,7 @@ proptest! {
             patches: &patches,
             visibility: &matrix,
             shells: &[],
+            reach: 0.0,
         };
         let bytes = encode(&contents);
         let pvis = Pvis::parse(&bytes).expect("the writer's output parses");
@@ -439,6 +443,7 @@ fn encode_refuses_non_contiguous_ranges() {
         patches: &patches,
         visibility: &matrix,
         shells: &[],
+        reach: 0.0,
     });
 }
 
@@ -683,6 +688,7 @@ fn encode_shells(
         patches: &list,
         visibility: matrix,
         shells,
+        reach: 0.0,
     };
     encode_with(&contents, encoding)
 }

@@ -271,8 +271,8 @@ pub enum Rule {
     CodeEnd,
     /// `SHEL shell_count must be in 1..=8`
     ShellCount,
-    /// `SHEL reserved field must be 0`
-    ShelReserved,
+    /// `SHEL reach must be 0, or finite and above CAMR distance with a shell beyond it`
+    ShelReach,
     /// `SHEL distance must be finite, below the previous shell's (CAMR distance for the
     /// first before version 6), not CAMR distance and >= CAMR radius`
     ShellDistance,
@@ -392,7 +392,7 @@ pub const RULE_TEXTS: [&str; 62] = [
     "VISB code length",
     "VISB code must not end in a zero byte",
     "SHEL shell_count must be in 1..=8",
-    "SHEL reserved field must be 0",
+    "SHEL reach must be 0, or finite and above CAMR distance with a shell beyond it",
     "SHEL distance must be finite, below the previous shell's \
      (CAMR distance for the first before version 6), not CAMR distance and >= CAMR radius",
     "SHEL shell level",

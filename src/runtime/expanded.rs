@@ -31,7 +31,7 @@
 use super::consts::MAX_SHELLS;
 use super::frustum::{Bounds, Frustum};
 use super::query::{Eye, Place, classify, everything, origin_leaf, visible};
-use super::shells::shells_of_band;
+use super::shells::Band;
 use super::streaming::{choose, octant, planes};
 use super::{Pvis, Visible};
 use crate::sphere::{Face, children, parents, root_faces, view_count};
@@ -335,11 +335,11 @@ fn locate<'t>(
     t: &'t [u64],
     words: usize,
     d: [f32; 3],
-    band: u32,
+    band: Band,
     k: u32,
 ) -> (Place, [&'t [u64]; 2]) {
     let part = |from: usize, to: usize| t.get(from - words..to - words).unwrap_or(&[]);
-    let [outer, inner] = shells_of_band(band, k);
+    let [outer, inner] = band.shells(k);
     let [so, si] = [outer, inner].map(|s| at.shells[(s as usize).min(MAX_SHELLS as usize)]);
     let level = so.level.max(si.level);
     let (mut start, mut index) = grid_start(d, part(at.grid, at.grid + GRID_WORDS));

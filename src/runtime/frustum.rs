@@ -725,6 +725,7 @@ mod tests {
             patches: &patches,
             visibility: &matrix,
             shells: &[],
+            reach: 0.0,
         });
         let pvis = Pvis::parse(&bytes).unwrap();
         let words = pvis.row_words();

@@ -254,6 +254,18 @@ impl<'a> Pvis<'a> {
         self.shells.sampling()
     }
 
+    /// SHEL's `reach` (spec § SHEL): an eye between the sampling sphere and the first far shell
+    /// (band [`Pvis::sampling_shell`]) nearer the centre than this is answered by the sampling
+    /// sphere alone. 0 where there is none: without a far band, where the file stores none, and
+    /// in a far-only reader.
+    pub fn sampling_reach(&self) -> f32 {
+        if self.shells.sampling() > 0 {
+            self.shells.reach
+        } else {
+            0.0
+        }
+    }
+
     /// Length of the SHEL section in bytes (0 without one).
     pub fn shells_bytes(&self) -> u64 {
         self.shells.section_bytes()

@@ -264,7 +264,8 @@ fn parse_shel<'a>(
             value: count as u64,
         });
     }
-    reserved(&mut s, have, Rule::ShelReserved)?;
+    // Checked once `J` is known, after the records.
+    let reach = read::<u32>(&mut s, have)?;
     // Cannot overflow: count ≤ 8.
     let records_end = SHEL_HEADER_LEN + SHELL_RECORD_LEN * count as u64;
     if section.length < records_end {
@@ -313,6 +314,17 @@ fn parse_shel<'a>(
             });
         }
         payloads = payloads.saturating_add(shells.payload_length(k));
+    }
+    // `reach`: 0, or (with a far band) a finite binary32 above the sampling distance.
+    shells.reach = f32::from_bits(reach);
+    if reach != 0
+        && !(shells.sampling_at > 0 && shells.reach > sampling.distance && shells.reach <= f32::MAX)
+    {
+        return Err(Error::InvalidFloat {
+            what: Rule::ShelReach,
+            offset: section.offset + 4,
+            bits: reach,
+        });
     }
     if section.length - records_end != payloads {
         return Err(Error::SectionLength {

@@ -7,6 +7,7 @@
 //! per visible patch. No allocation.
 
 use super::Pvis;
+use super::shells::Band;
 use crate::sphere;
 
 /// The answer to a query: which patches are visible, and which shells' views answered (spec
@@ -23,6 +24,9 @@ use crate::sphere;
 /// | `1..=K`      | inside shell `band − 1`, not inside `band`| `[band − 1, band]` | false         |
 /// | `K + 1`      | inside the innermost shell (shell `K`)    | `[K, K]`         | true            |
 ///
+/// An eye of band `J` (between the sampling sphere and the first far shell) nearer than SHEL's
+/// reach ([`super::Pvis::sampling_reach`]) is answered by the sampling sphere alone: `[J, J]`.
+///
 /// A file without shells (`K = 0`, every version-1–4 file) has bands 0 and 1, as before: inside
 /// the sampling sphere is `inside_sphere`. An eye with a non-finite offset gets every patch,
 /// band `K + 1`.
@@ -36,7 +40,8 @@ pub struct Visible<'s> {
     /// above.
     pub band: u32,
     /// The shells whose rows were combined, outer first: `[band − 1, band]` between two
-    /// shells, the same shell twice where only one answered.
+    /// shells, the same shell twice where only one answered (band 0, band `K + 1`, and band
+    /// `J` inside SHEL's reach: `[J, J]`).
     pub shells: [u32; 2],
     /// The three views of shell `shells[0]` whose rows were combined (the corners of that
     /// shell's face under the eye).
@@ -77,7 +82,10 @@ impl<'s> Visible<'s> {
     /// Where the answer came from, to wrap other bits (a frustum's cut) with it.
     pub(super) fn place(&self) -> Place {
         Place {
-            band: self.band,
+            band: Band {
+                band: self.band,
+                outer: self.shells[0],
+            },
             leaves: [self.leaf, self.inner_leaf],
         }
     }
@@ -186,7 +194,7 @@ pub fn ranges_of_bits<'v>(pvis: &'v Pvis<'_>, bits: &'v [u64]) -> TriangleRanges
 /// Where the eye is relative to the sampling sphere and shells (spec § Query steps 1–3).
 pub(super) enum Eye {
     /// A finite offset `d = eye − center`, and its band.
-    Direction([f32; 3], u32),
+    Direction([f32; 3], Band),
     /// A non-finite offset: no direction to look up.
     Unknown,
 }
@@ -208,11 +216,10 @@ pub(super) fn classify(pvis: &Pvis<'_>, eye: [f32; 3]) -> Eye {
 }
 
 /// Where an answer comes from: the eye's band and the leaf (three corner views) on each of the
-/// band's two shells ([`super::shells::shells_of_band`]; the same leaf twice where one shell
-/// answers).
+/// band's two shells ([`Band::shells`]; the same leaf twice where one shell answers).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) struct Place {
-    pub band: u32,
+    pub band: Band,
     pub leaves: [[u32; 3]; 2],
 }
 
@@ -232,7 +239,7 @@ pub(super) fn fill_all(out: &mut [u64], patch_count: u32) {
 pub(super) fn everything<'s>(pvis: &Pvis<'_>, out: &'s mut [u64], leaf: [u32; 3]) -> Visible<'s> {
     fill_all(out, pvis.patch_count);
     let place = Place {
-        band: pvis.shells.count() + 1,
+        band: Band::innermost(pvis.shells.count()),
         leaves: [leaf; 2],
     };
     visible(pvis, place, out)
@@ -248,9 +255,9 @@ pub(super) fn origin_leaf(pvis: &Pvis<'_>) -> [u32; 3] {
 pub(super) fn visible<'s>(pvis: &Pvis<'_>, place: Place, bits: &'s [u64]) -> Visible<'s> {
     let k = pvis.shells.count();
     Visible {
-        inside_sphere: place.band > k,
-        band: place.band,
-        shells: super::shells::shells_of_band(place.band, k),
+        inside_sphere: place.band.band > k,
+        band: place.band.band,
+        shells: place.band.shells(k),
         leaf: place.leaves[0],
         inner_leaf: place.leaves[1],
         bits,
@@ -272,7 +279,7 @@ pub(super) fn query<'s>(pvis: &Pvis<'_>, eye: [f32; 3], scratch: &'s mut [u64]) 
     // § Query steps 4–5, on each shell of the band; its rows are OR-ed into the one answer row
     // (lock step: no scratch beyond it).
     out.fill(0);
-    let shells = super::shells::shells_of_band(band, pvis.shells.count());
+    let shells = band.shells(pvis.shells.count());
     let mut leaves = [[0; 3]; 2];
     for (i, &s) in shells.iter().enumerate() {
         if i == 1 && s == shells[0] {

@@ -32,6 +32,8 @@ struct Synthetic {
     bytes: Vec<u8>,
     sampling: Sphere,
     records: Vec<Sphere>,
+    /// SHEL's reach (0: none).
+    reach: f32,
 }
 
 impl Synthetic {
@@ -81,6 +83,19 @@ fn build(
     center: [f32; 3],
     encoding: VisibilityEncoding,
     seed: u64,
+) -> Synthetic {
+    build_with_reach(level, records, patches, center, encoding, seed, 0.0)
+}
+
+/// [`build`] with SHEL's `reach` (0 for none; above [`OUTER`] with a far record).
+fn build_with_reach(
+    level: u32,
+    records: &[(f32, u32)],
+    patches: u32,
+    center: [f32; 3],
+    encoding: VisibilityEncoding,
+    seed: u64,
+    reach: f32,
 ) -> Synthetic {
     let mut rng = Rng::new(seed);
     let params = SamplingParams {
@@ -141,12 +156,14 @@ fn build(
         patches: &list,
         visibility: &sampling.rows,
         shells: &shells,
+        reach,
     };
     let bytes = encode_with(&contents, encoding);
     Synthetic {
         bytes,
         sampling,
         records,
+        reach,
     }
 }
 
@@ -210,8 +227,9 @@ struct Answer {
 }
 
 /// § Query applied literally: the band from binary64 squares over the spheres numbered by
-/// decreasing distance, each answering shell's leaf by `sphere::locate` at its level, and the
-/// OR of the written rows of its corners.
+/// decreasing distance (band `J` within the reach answered by the sampling sphere alone),
+/// each answering shell's leaf by `sphere::locate` at its level, and the OR of the written
+/// rows of its corners.
 fn reference(f: &Synthetic, center: [f32; 3], eye: [f32; 3]) -> Answer {
     let shells = f.shells();
     let words = f.sampling.rows.words_per_row();
@@ -235,9 +253,12 @@ fn reference(f: &Synthetic, center: [f32; 3], eye: [f32; 3]) -> Answer {
         .iter()
         .filter(|s| q < f64::from(s.distance) * f64::from(s.distance))
         .count() as u32;
+    let j = f.sampling_shell();
+    let square = |x: f32| f64::from(x) * f64::from(x);
     let answering = match band {
         0 => [0, 0],
         b if b > k => [k, k],
+        b if b == j && q < square(f.reach) => [j, j],
         b => [b - 1, b],
     };
     let mut bits = vec![0u64; words];
@@ -269,6 +290,11 @@ fn eyes(f: &Synthetic, center: [f32; 3], rng: &mut Rng) -> Vec<[f32; 3]> {
     let mut radii: Vec<(f32, f32)> = [2.0 * distances[0], 1e30, f32::MAX, 0.0, 1.0]
         .map(|r| (r, 0.02))
         .to_vec();
+    if f.reach > 0.0 {
+        // Around the reach, exactly on it along an axis, and between it and the sampling sphere.
+        radii.push((f.reach, 0.02));
+        radii.push((0.5 * f.reach + 0.5 * OUTER, 0.0));
+    }
     for w in distances.windows(2) {
         radii.push((0.5 * w[0] + 0.5 * w[1], 0.0));
     }
@@ -298,8 +324,12 @@ fn check_file(f: &Synthetic, center: [f32; 3], rng: &mut Rng, case: &str) -> Vec
     let pvis = Pvis::parse(&f.bytes).unwrap();
     assert_eq!(pvis.version(), if j > 0 { 6 } else { 5 }, "{case}");
     assert_eq!(
-        (pvis.shell_count(), pvis.sampling_shell()),
-        (k, j),
+        (
+            pvis.shell_count(),
+            pvis.sampling_shell(),
+            pvis.sampling_reach()
+        ),
+        (k, j, f.reach),
         "{case}"
     );
     for (s, sphere) in shells.iter().enumerate() {
@@ -415,7 +445,7 @@ fn far_and_near_shells_answer_like_the_band_rule() {
         VisibilityEncoding::Raw,
         VisibilityEncoding::Table,
     ];
-    let mut far_files = 0;
+    let (mut far_files, mut reaches) = (0, 0);
     for case in 0..12 {
         let records = random_records(&mut rng);
         let level = (rng.next_u64() % 4) as u32;
@@ -425,13 +455,24 @@ fn far_and_near_shells_answer_like_the_band_rule() {
             [0.0; 3]
         };
         let patches = [40, 70, 9][case % 3];
-        let f = build(
+        // A reach in every other file with a far band: a fifth to six fifths of the way
+        // to the nearest far shell (so sometimes past it).
+        let nearest_far = records.iter().rev().find(|r| r.0 > OUTER).map(|r| r.0);
+        let reach = match nearest_far {
+            Some(far) if case % 2 == 1 => {
+                reaches += 1;
+                OUTER + (far.min(1e6) - OUTER) * (0.2 + rng.unit() as f32)
+            }
+            _ => 0.0,
+        };
+        let f = build_with_reach(
             level,
             &records,
             patches,
             center,
             encodings[case % 3],
             200 + case as u64,
+            reach,
         );
         far_files += usize::from(f.sampling_shell() > 0);
         let name = format!("case {case} {records:?}");
@@ -439,6 +480,7 @@ fn far_and_near_shells_answer_like_the_band_rule() {
         assert!(seen.iter().all(|&s| s), "{name}: bands seen {seen:?}");
     }
     assert!(far_files >= 6, "{far_files} files with a far band");
+    assert!(reaches >= 3, "{reaches} files with a reach");
 }
 
 /// The far band's fixed cases: far shells only (the sampling sphere innermost, so its

@@ -7,7 +7,9 @@
 //! and the records nearer the model are shells `J + 1..=K` (without outer records `J = 0`, as
 //! in version 5). An eye's *band* is the number of shells it is strictly inside (`|d|² <
 //! D_s²`, exact as in § Query step 3); band `b` answers with the OR of the leaf rows of
-//! shells `b − 1` and `b` (one shell at either end). A shell's payload is a VISB body; a
+//! shells `b − 1` and `b` (one shell at either end), except that an eye of band `J` inside
+//! SHEL's `reach` is answered by the sampling sphere alone (its probe cells hold every camera
+//! out to there, so the next shell out would only cost culling). A shell's payload is a VISB body; a
 //! `Pvis` keeps only where SHEL is, so it stays a few words however many shells it has, and a
 //! shell's rows are opened again when they are needed (`Pvis::visb_of`) by `Visb::at`, the one
 //! reading of a checked VISB body, which parse uses too, for VISB and for each payload it checks
@@ -34,6 +36,9 @@ pub(crate) struct Shells<'a> {
     /// `J`: the records beyond the sampling distance, which come first (shell `J` is the
     /// sampling sphere).
     pub(crate) sampling_at: u32,
+    /// SHEL's `reach` (0: none): an eye of band `J` nearer than it is answered by the
+    /// sampling sphere alone.
+    pub(crate) reach: f32,
     /// The finest level of the SHEL records (0 without shells).
     pub(crate) max_level: u32,
     /// Whether a shell's payload uses VISB encoding 2 (a tree, whose lookups the streaming
@@ -48,6 +53,7 @@ impl<'a> Shells<'a> {
         offset: 0,
         count: 0,
         sampling_at: 0,
+        reach: 0.0,
         max_level: 0,
         tree: false,
     };
@@ -60,6 +66,7 @@ impl<'a> Shells<'a> {
             offset,
             count,
             sampling_at: 0,
+            reach: 0.0,
             max_level: 0,
             tree: false,
         }
@@ -142,19 +149,47 @@ impl<'a> Shells<'a> {
     }
 }
 
+/// An eye's band (§ Query step 3) and the shells that answer it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Band {
+    /// How many of the shells `0..=K` the eye is strictly inside.
+    pub(crate) band: u32,
+    /// The outer answering shell: `band − 1` (0 for band 0), or `J` for an eye of band `J`
+    /// inside SHEL's `reach`, which the sampling sphere alone answers.
+    pub(crate) outer: u32,
+}
+
+impl Band {
+    /// The answering shells `[outer, inner]` in a file with `k` shells, equal where one shell
+    /// answers (band 0: the sampling sphere; band `K + 1`: shell `K`; an eye within the
+    /// reach: the sampling sphere).
+    pub(crate) fn shells(self, k: u32) -> [u32; 2] {
+        [self.outer, self.band.min(k)]
+    }
+
+    /// Band `K + 1` of a file with `k` shells: inside the innermost, which alone answers.
+    pub(crate) fn innermost(k: u32) -> Band {
+        Band {
+            band: k + 1,
+            outer: k,
+        }
+    }
+}
+
 /// The band of an eye at offset `d` from the centre (§ Query): how many of the shells
 /// `0..=K` it is strictly inside, `outer` being CAMR's distance (the sampling sphere's).
 /// Distances decrease, so the count stops at the first shell the eye is not inside.
-pub(crate) fn band(d: [f32; 3], outer: f32, shells: &Shells<'_>) -> u32 {
+pub(crate) fn band(d: [f32; 3], outer: f32, shells: &Shells<'_>) -> Band {
     let mut b = 0;
     while b <= shells.count() && norm_below(d, shells.shell_distance(b, outer)) {
         b += 1;
     }
-    b
-}
-
-/// The two shells whose rows answer band `b` of a file with `k` shells: `[outer, inner]`,
-/// equal where one shell answers (band 0: the sampling sphere; band `K + 1`: shell `K`).
-pub(crate) fn shells_of_band(b: u32, k: u32) -> [u32; 2] {
-    [b.saturating_sub(1), b.min(k)]
+    // Within the reach, band `J`'s eye is answered by the sampling sphere alone (a reach of 0
+    // holds no eye).
+    let j = shells.sampling();
+    let alone = b == j && b > 0 && norm_below(d, shells.reach);
+    Band {
+        band: b,
+        outer: if alone { j } else { b.saturating_sub(1) },
+    }
 }

@@ -21,7 +21,6 @@
 
 use super::model::TreeCache;
 use super::query::{Eye, Place, classify, everything, visible};
-use super::shells::shells_of_band;
 use super::visb::Visb;
 use super::{Frustum, Pvis, Visible};
 use crate::sphere::{Face, LatticePoint, MAX_LEVEL, children, cross, dot, root_face};
@@ -215,14 +214,14 @@ impl<'a, 's> Streaming<'a, 's> {
             let leaf = origin_leaf_at(pvis.shell_level(pvis.shell_count()));
             return everything(&pvis, &mut self.rows[..words], leaf);
         };
-        let [outer, inner] = shells_of_band(band, pvis.shell_count());
+        let [outer, inner] = band.shells(pvis.shell_count());
         let po = self.walk(outer, d);
         let pi = if inner == outer {
             po
         } else {
             self.walk(inner, d)
         };
-        if self.answer != Some((band, [po, pi])) {
+        if self.answer != Some((band.band, [po, pi])) {
             let (answer, rest) = self.rows.split_at_mut(words);
             answer.fill(0);
             for p in [po, pi] {
@@ -238,7 +237,7 @@ impl<'a, 's> Streaming<'a, 's> {
                     }
                 }
             }
-            self.answer = Some((band, [po, pi]));
+            self.answer = Some((band.band, [po, pi]));
         }
         let leaf = |p: usize| {
             let path = &self.paths[p];

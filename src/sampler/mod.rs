@@ -52,8 +52,8 @@ pub use supersample::{
     fold_targets, fold_views, split_fold, split_fold_views, supersample_rows,
 };
 pub use tiled::{
-    SamplingError, SamplingOptions, rendered_view_count, sample_scene, sample_scene_split,
-    sample_tiled, sample_tiled_split,
+    SamplingError, SamplingOptions, probe_reach, rendered_view_count, sample_scene,
+    sample_scene_split, sample_tiled, sample_tiled_split,
 };
 
 mod bounding;

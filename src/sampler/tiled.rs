@@ -1055,5 +1055,7 @@ fn valid_bits(w: usize, patch_count: usize) -> u64 {
 
 mod aperture;
 mod probe;
+
+pub use probe::probe_reach;
 #[cfg(test)]
 mod tests;

@@ -273,6 +273,10 @@ int main(int argc, char **argv) {
         shell.views != info.views || shell.distance != info.distance)
         return 3;
     if (shells > 0) printf("shells: %u\nsampling shell: %u\n", shells, sampling);
+    float reach = patchvis_sampling_reach(&file);
+    if (patchvis_sampling_reach(NULL) != 0 || (reach != 0 && !(sampling > 0 && reach > info.distance)))
+        return 3;
+    if (reach != 0) printf("sampling reach: %g\n", reach);
     for (uint32_t s = 0; s <= shells; s++) {
         if (patchvis_shell(&file, s, &shell) != PATCHVIS_OK) return 3;
         distances[s] = shell.distance;

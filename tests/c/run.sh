@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds libpatchvis.a (feature `capi`), compiles tests/c/query.c against include/patchvis.h
 # with `cc`, and compares its output with every conformance vector's expectation: the header
-# counts, patch ranges, shells (in order; the dump's `sampling shell` line where it has one),
+# counts, patch ranges, shells (in order; the dump's `sampling shell` and `sampling reach` lines),
 # view rows and every query line of each valid vector's dump (other dump lines are not
 # compared), and the exact error line of each invalid vector; tests/c/serve.c through
 # `patchvis conformance`. Then, against the Rust reader's
@@ -54,10 +54,11 @@ for vector in tests/conformance/valid/*.pvis; do
     if [[ "$actual" != "$expected" ]]; then
         echo "FAIL $vector:"; diff <(echo "$expected") <(echo "$actual") | head -20 || true; fail=1
     fi
-    if grep -q '^sampling shell: ' "$dump" &&
-        [[ $(grep '^sampling shell: ' "$dump") != $(grep '^sampling shell: ' <<< "$output") ]]; then
-        echo "FAIL $vector: $(grep '^sampling shell: ' <<< "$output"), the dump says otherwise"; fail=1
-    fi
+    for line in 'sampling shell' 'sampling reach'; do
+        if [[ $(grep "^$line: " "$dump") != $(grep "^$line: " <<< "$output") ]]; then
+            echo "FAIL $vector: '$(grep "^$line: " <<< "$output")', the dump says '$(grep "^$line: " "$dump")'"; fail=1
+        fi
+    done
     queries=$((queries + ${#positions[@]}))
 done
 # The frustum queries of $1 from the positions after it against `patchvis query`.

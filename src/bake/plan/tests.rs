@@ -404,3 +404,23 @@ fn min_pixels_under_a_probe_pass_is_refused() {
         .is_ok()
     );
 }
+
+#[test]
+fn the_sampling_reach_is_where_the_finest_probe_cells_hold() {
+    let c = plan(|_| {}).unwrap();
+    // A sampling sphere at 4, with a far shell at 8.
+    let reach = c.sampling_reach(4.0, &[8.0, 3.0]);
+    assert!(reach > 4.0 * 1.011 && reach < 4.0 * 1.012, "{reach}");
+    // The finest pass's cells, rounded down to binary32.
+    let fine = (c.level() + c.main.supersample.extra_levels).min(MAX_LEVEL);
+    let exact = 4.0 * probe_reach(&PassViews::pass(fine, c.main.supersample.finer));
+    assert!(f64::from(reach) <= exact && f64::from(reach.next_up()) > exact);
+    // None without a far shell or without the probe.
+    assert_eq!(c.sampling_reach(4.0, &[3.0, 2.0]), 0.0);
+    assert_eq!(c.sampling_reach(4.0, &[]), 0.0);
+    let off = plan(|s| s.research.probe = Probe::Off).unwrap();
+    assert_eq!(off.sampling_reach(4.0, &[8.0]), 0.0);
+    // `--conservative` probes too.
+    let conservative = plan(|s| s.preset = Preset::Conservative).unwrap();
+    assert!(conservative.sampling_reach(4.0, &[8.0]) > 4.0);
+}

@@ -92,7 +92,21 @@ impl ProbeScratch {
 /// joins the rows of its corners, which hold its finer views' rows, and every point of a face
 /// lies within `1/√3 ≈ 0.577 · edge` of one of them (`PassViews::max_seed_angle`); 0.6
 /// leaves a margin.
-const CELL_PER_EDGE: f64 = 0.6;
+pub(super) const CELL_PER_EDGE: f64 = 0.6;
+
+/// How far out, in units of the pass's camera distance, the probe cells of a pass laid out as
+/// `pass` (without a band) hold every camera whose query uses their rows: a camera at angle
+/// `θ` from a view's direction and distance `x` lies in the view's ball, of radius `φ` around
+/// the unit eye, while `x² − 2x cos θ + 1 ≤ φ²`. With `θ = edge / √3`, the farthest any
+/// direction lies from a view of the pass, and `φ = CELL_PER_EDGE · edge`, every camera out to
+/// `cos θ + √(φ² − sin² θ)` does (1.0115 for the default's finest pass). SHEL's `reach`
+/// (`Plan::sampling_reach`).
+pub fn probe_reach(pass: &PassViews) -> f64 {
+    let edge = pass.max_seed_angle();
+    let theta = edge / 3f64.sqrt();
+    let phi = CELL_PER_EDGE * edge;
+    theta.cos() + (phi * phi - theta.sin().powi(2)).max(0.0).sqrt()
+}
 
 impl<'a> Probe<'a> {
     /// The probe of a pass sampling `params` (its views laid out as `pass`) with `options` (its

@@ -429,6 +429,39 @@ fn tiled_output_is_identical_for_one_and_two_threads() {
     }
 }
 
+/// `probe_reach`: every camera out to it, in any direction, lies in the probe cell of the
+/// pass's view nearest its direction (a ball of `CELL_PER_EDGE · edge` around the unit eye),
+/// for plain and centroid finer views.
+#[test]
+fn the_probe_reach_puts_every_camera_out_to_it_in_a_cell() {
+    let mut rng = Rng::new(0x2EAC);
+    for (level, finer) in [
+        (3, FinerViews::Midpoints),
+        (5, FinerViews::Midpoints),
+        (4, FinerViews::Centroids),
+    ] {
+        let pass = PassViews::pass(level, finer);
+        let reach = probe::probe_reach(&pass);
+        let phi = probe::CELL_PER_EDGE * pass.max_seed_angle();
+        assert!(reach > 1.0 && reach < 1.0 + phi, "level {level}: {reach}");
+        let views: Vec<[f64; 3]> = (0..pass.end())
+            .map(|u| pass.direction(u).map(f64::from))
+            .collect();
+        let mut worst = 0f64;
+        for _ in 0..2000 {
+            let v = [rng.signed(), rng.signed(), rng.signed()].map(f64::from);
+            let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt().max(1e-3);
+            let eye = v.map(|x| x / n * reach);
+            let nearest = views
+                .iter()
+                .map(|w| (0..3).map(|k| (eye[k] - w[k]).powi(2)).sum::<f64>().sqrt())
+                .fold(f64::INFINITY, f64::min);
+            worst = worst.max(nearest);
+        }
+        assert!(worst <= phi, "level {level}: {worst} > {phi}");
+    }
+}
+
 #[test]
 fn the_probe_pass_keeps_every_row_and_finds_more() {
     // The bunny at 64 px: thin ears, and surfaces turning away at the silhouettes.
