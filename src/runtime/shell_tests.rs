@@ -75,20 +75,9 @@ fn rows(level: u32, axes: &[[f32; 3]], near: f32, rng: &mut Rng) -> VisibilityMa
 
 /// A file with the sampling sphere at `level` and SHEL records `(distance, level)` in file
 /// order (decreasing; beyond [`OUTER`] for the far band), `patches` patches, centred at
-/// `center`, in `encoding`.
+/// `center`, in `encoding`, with SHEL's `reach` (0 for none; above [`OUTER`] with a far
+/// record).
 fn build(
-    level: u32,
-    records: &[(f32, u32)],
-    patches: u32,
-    center: [f32; 3],
-    encoding: VisibilityEncoding,
-    seed: u64,
-) -> Synthetic {
-    build_with_reach(level, records, patches, center, encoding, seed, 0.0)
-}
-
-/// [`build`] with SHEL's `reach` (0 for none; above [`OUTER`] with a far record).
-fn build_with_reach(
     level: u32,
     records: &[(f32, u32)],
     patches: u32,
@@ -183,7 +172,7 @@ fn synthetic(
             (OUTER + (1.55 - OUTER) * t, levels[s])
         })
         .collect();
-    build(levels[0], &records, patches, center, encoding, seed)
+    build(levels[0], &records, patches, center, encoding, seed, 0.0)
 }
 
 /// Random SHEL records around the sampling sphere at [`OUTER`]: 0–4 far ones (sometimes the
@@ -465,7 +454,7 @@ fn far_and_near_shells_answer_like_the_band_rule() {
             }
             _ => 0.0,
         };
-        let f = build_with_reach(
+        let f = build(
             level,
             &records,
             patches,
@@ -510,7 +499,7 @@ fn far_band_edge_cases_answer_like_the_band_rule() {
         ),
     ];
     for (case, &(records, encoding)) in cases.iter().enumerate() {
-        let f = build(2, records, 30, [0.0; 3], encoding, 300 + case as u64);
+        let f = build(2, records, 30, [0.0; 3], encoding, 300 + case as u64, 0.0);
         let seen = check_file(&f, [0.0; 3], &mut rng, &format!("edge case {case}"));
         assert!(
             seen.iter().all(|&s| s),
@@ -519,7 +508,15 @@ fn far_band_edge_cases_answer_like_the_band_rule() {
     }
     // On the outermost sphere exactly (band 0, that shell alone), just inside it, and a far
     // eye between the sampling sphere and the innermost far shell (both answer).
-    let f = build(2, cases[2].0, 30, [0.0; 3], VisibilityEncoding::Raw, 302);
+    let f = build(
+        2,
+        cases[2].0,
+        30,
+        [0.0; 3],
+        VisibilityEncoding::Raw,
+        302,
+        0.0,
+    );
     let pvis = Pvis::parse(&f.bytes).unwrap();
     let mut scratch = vec![0u64; pvis.scratch_words()];
     let v = pvis.query([f32::MAX, 0.0, 0.0], &mut scratch);
@@ -577,6 +574,7 @@ fn far_band_distance_rules() {
         [0.0; 3],
         VisibilityEncoding::Tree,
         9,
+        0.0,
     );
     let f = &far.bytes;
     assert_eq!(Pvis::parse(f).unwrap().version(), 6);
