@@ -92,13 +92,16 @@ static void view_projection(const double eye[3], const double target[3], double 
 /* The --bands mode: see the header comment. Eyes in three directions at radii in every band:
  * beyond the outermost shell (up to 1000 times the sampling distance), between each two
  * shells (their geometric mean), on the sampling sphere and inside the innermost shell. */
-static void band_positions(const PatchvisInfo *info, const float *distances, uint32_t shells) {
-    double radii[2 * MAX_SHELLS + 8];
+static void band_positions(const PatchvisInfo *info, const float *distances, uint32_t shells,
+                           float reach) {
+    double radii[2 * MAX_SHELLS + 9];
     size_t n = 0;
     radii[n++] = 1000.0 * info->distance;
     radii[n++] = 1.5 * distances[0];
     for (uint32_t s = 1; s <= shells; s++) radii[n++] = sqrt((double)distances[s - 1] * distances[s]);
     radii[n++] = info->distance;
+    /* Between the sampling distance and the reach, where the sampling sphere answers alone. */
+    if (reach > 0) radii[n++] = 0.5 * ((double)info->distance + reach);
     radii[n++] = 0.9 * distances[shells];
     radii[n++] = 0.5 * distances[shells];
     static const double directions[3][3] = {
@@ -117,9 +120,11 @@ static void band_positions(const PatchvisInfo *info, const float *distances, uin
 /* Checks an answer against the band rule (spec/FORMAT.md, section Query): the band counts the
  * shells the eye is inside (checked where the eye is not within a few ulps of a shell's
  * sphere, which the reader decides in its own float arithmetic); band 0 answers from shell 0,
- * 1..K from shells band - 1 and band, K + 1 from shell K with inside_sphere. */
+ * 1..K from shells band - 1 and band, K + 1 from shell K with inside_sphere; band J (the
+ * sampling shell) nearer than SHEL's reach from shell J alone. */
 static int check_band(const PatchvisInfo *info, const float eye[3], const float *distances,
-                      uint32_t shells, const PatchvisVisible *vis) {
+                      uint32_t shells, uint32_t sampling, float reach,
+                      const PatchvisVisible *vis) {
     if (!isfinite(eye[0]) || !isfinite(eye[1]) || !isfinite(eye[2]))
         return vis->band == shells + 1 && vis->inside_sphere ? 0 : 1;
     double d2 = 0;
@@ -131,6 +136,11 @@ static int check_band(const PatchvisInfo *info, const float eye[3], const float 
     }
     uint32_t outer = vis->band == 0 ? 0 : vis->band - 1;
     uint32_t inner = vis->band > shells ? shells : vis->band;
+    if (vis->band == sampling && sampling > 0) {
+        double r2 = (double)reach * reach;
+        if (d2 < r2 * (1 - 1e-5) || (d2 <= r2 * (1 + 1e-5) && vis->shells[0] == sampling))
+            outer = sampling;
+    }
     if (vis->band > shells + 1 || vis->shells[0] != outer || vis->shells[1] != inner ||
         vis->inside_sphere != (vis->band == shells + 1))
         return 1;
@@ -287,7 +297,7 @@ int main(int argc, char **argv) {
                (unsigned long long)shell.bytes);
     }
     if (argc >= 3 && strcmp(argv[2], "--bands") == 0) {
-        band_positions(&info, distances, shells);
+        band_positions(&info, distances, shells, reach);
         free(data);
         return 0;
     }
@@ -335,7 +345,7 @@ int main(int argc, char **argv) {
             memcmp(streamed.inner_leaf, vis.inner_leaf, sizeof vis.inner_leaf) != 0 ||
             memcmp(streamed.bits, vis.bits, words * sizeof *vis.bits) != 0)
             return 4;
-        if (check_band(&info, eye, distances, shells, &vis) != 0) return 4;
+        if (check_band(&info, eye, distances, shells, sampling, reach, &vis) != 0) return 4;
         printf("query %s -> inside %s", argv[i], vis.inside_sphere ? "true" : "false");
         /* A file with shells also says which band and shells answered. */
         if (shells > 0) printf(" band %u shells [%u,%u]", vis.band, vis.shells[0], vis.shells[1]);
