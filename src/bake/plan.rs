@@ -358,8 +358,10 @@ impl Plan {
         if !self.probes() || !shells.iter().any(|&s| s > distance) {
             return 0.0;
         }
+        // The finest pass: the last of the sampling sphere's.
         let main = &self.main;
-        let fine = (main.level + main.supersample.extra_levels).min(MAX_LEVEL);
+        let levels = main.supersample.pass_levels(main.level);
+        let fine = levels.last().copied().unwrap_or(main.level);
         let pass = PassViews::pass(fine, main.supersample.finer_views(main.level, fine));
         let exact = f64::from(distance) * probe_reach(&pass);
         let reach = exact as f32;

@@ -9,14 +9,15 @@
 //! D_s²`, exact as in § Query step 3); band `b` answers with the OR of the leaf rows of
 //! shells `b − 1` and `b` (one shell at either end), except that an eye of band `J` inside
 //! SHEL's `reach` is answered by the sampling sphere alone (its probe cells hold every camera
-//! out to there, so the next shell out would only cost culling). A shell's payload is a VISB body; a
-//! `Pvis` keeps only where SHEL is, so it stays a few words however many shells it has, and a
-//! shell's rows are opened again when they are needed (`Pvis::visb_of`) by `Visb::at`, the one
-//! reading of a checked VISB body, which parse uses too, for VISB and for each payload it checks
-//! (the embedded readers carry one VISB reader, not two). Cost: `band` is at most `K + 1` exact
-//! comparisons, almost all settled in binary32; opening a payload reads its fixed fields and,
-//! for a tree, its nodes (at most 1,024), not its records, which the stateless query pays per
-//! shell and the streaming and expanded modes once per shell they move to.
+//! out to there, so the next shell out would only cost culling). A shell's payload is a VISB
+//! body; a `Pvis` keeps only where SHEL is, so it stays a few words however many shells it has,
+//! and a shell's rows are opened again when they are needed (`Pvis::visb_of`) by `Visb::at`,
+//! the one reading of a checked VISB body, which parse uses too, for VISB and for each payload
+//! it checks (the embedded readers carry one VISB reader, not two). Cost: `band` is at most
+//! `K + 2` exact comparisons (one more for SHEL's reach), almost all settled in binary32;
+//! opening a payload reads its fixed fields and, for a tree, its nodes (at most 1,024), not its
+//! records, which the stateless query pays per shell and the streaming and expanded modes once
+//! per shell they move to.
 //!
 //! Without feature `shells` the reader is a far-only reader (spec § SHEL, far-only readers):
 //! parse skips SHEL's contents and `K` reads as the constant 0, so the compiler drops the shell

@@ -412,7 +412,7 @@ fn the_sampling_reach_is_where_the_finest_probe_cells_hold() {
     let reach = c.sampling_reach(4.0, &[8.0, 3.0]);
     assert!(reach > 4.0 * 1.011 && reach < 4.0 * 1.012, "{reach}");
     // The finest pass's cells, rounded down to binary32.
-    let fine = (c.level() + c.main.supersample.extra_levels).min(MAX_LEVEL);
+    let fine = DEFAULT_LEVEL + DEFAULT_VIEW_SUPERSAMPLE;
     let exact = 4.0 * probe_reach(&PassViews::pass(fine, c.main.supersample.finer));
     assert!(f64::from(reach) <= exact && f64::from(reach.next_up()) > exact);
     // None without a far shell or without the probe.
